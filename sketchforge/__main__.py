@@ -1,0 +1,5 @@
+import sys
+
+from sketchforge.cli import main
+
+sys.exit(main())

@@ -1,0 +1,145 @@
+"""Command line: ``sketchforge [DOC]`` (the app), ``replay``, ``info``, ``render``.
+
+Errors a user can cause print one line on stderr and exit with status 2; no traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from sketchforge.errors import SketchforgeError
+
+SUBCOMMANDS = ("replay", "info", "render")
+
+
+def _merge_visible(doc):
+    from sketchforge.geometry.merge import merge_meshes
+
+    meshes = [l.mesh for l in doc.layers if l.visible and l.mesh is not None]
+    if not meshes:
+        raise SketchforgeError("the document has no visible layer with a mesh to export")
+    return merge_meshes(meshes)
+
+
+def cmd_replay(args) -> int:
+    from sketchforge.document import fileformat as ff
+
+    data = ff.read_json(args.doc)
+    light, journal = ff.validate_header(data, str(args.doc))
+
+    def progress(i, n):
+        if args.verbose:
+            print(f"replayed {i}/{n}", file=sys.stderr)
+
+    doc = ff.replay_journal(light, journal, str(args.doc), progress=progress)
+    if args.check and data.get("snapshot") is not None:
+        snap = ff.document_from_dict(data, str(args.doc))
+        diffs = ff.compare(snap, doc)
+        if diffs:
+            raise SketchforgeError(f"{args.doc}: replay differs from the saved snapshot: " + "; ".join(diffs))
+        print("replay matches the snapshot", file=sys.stderr)
+    if args.export:
+        out = Path(args.export)
+        exporter = doc.host.exporter_for(out)
+        if args.layer:
+            mesh = doc.layer(args.layer).mesh
+            if mesh is None:
+                raise SketchforgeError(f"layer {args.layer!r} has no mesh (no contour was drawn)")
+        elif doc.host.has_assembler():
+            mesh = doc.assembled()
+            if mesh is None:
+                raise SketchforgeError("the document has no visible layer with a mesh to export")
+        else:
+            mesh = _merge_visible(doc)
+        exporter.write(out, mesh)
+        print(f"wrote {out} ({mesh.n_vertices} vertices, {mesh.n_faces} triangles)", file=sys.stderr)
+    if args.save:
+        ff.save(doc, args.save)
+    return 0
+
+
+def cmd_info(args) -> int:
+    from sketchforge.document import fileformat as ff
+
+    doc = ff.load(args.doc)
+    l = doc.light
+    print(f"{args.doc}: {len(doc.layers)} layers, light ({l.x:.4f}, {l.y:.4f}, 0), {len(doc.journal())} journal entries")
+    for i, layer in enumerate(doc.layers):
+        nv = layer.mesh.n_vertices if layer.mesh is not None else 0
+        nf = layer.mesh.n_faces if layer.mesh is not None else 0
+        kind = "closed" if layer.closed else "open"
+        vis = "" if layer.visible else " (hidden)"
+        print(f"  {i}: {layer.id} {layer.name!r}{vis} {kind}, {nv} vertices, {nf} triangles, {len(layer.edits)} sculpt edits")
+    return 0
+
+
+def cmd_render(args) -> int:
+    from sketchforge.document import fileformat as ff
+    from sketchforge.geometry.raster import render_top, write_png
+
+    doc = ff.load(args.doc)
+    meshes = [l.mesh for l in doc.layers if l.visible and l.mesh is not None]
+    if not meshes:
+        raise SketchforgeError(f"{args.doc}: no visible layer with a mesh to render")
+    if args.size < 16 or args.size > 8192:
+        raise SketchforgeError(f"--size must be between 16 and 8192, got {args.size}")
+    img = render_top(meshes, doc.light.direction, size=args.size, isophotes=args.isophotes, cel=args.cel)
+    write_png(args.png, img)
+    print(f"wrote {args.png} ({img.shape[1]}x{img.shape[0]})", file=sys.stderr)
+    return 0
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="sketchforge", description="Sculpt 3D shapes by drawing.")
+    sub = p.add_subparsers(dest="cmd", required=True)
+    r = sub.add_parser("replay", help="recompute a document from its journal, headlessly")
+    r.add_argument("doc", type=Path)
+    r.add_argument("--export", help="write the result (.obj .ply .stl .glb .gltf)")
+    r.add_argument("--layer", help="export this layer's own mesh instead of the assembled model")
+    r.add_argument("--check", action="store_true", help="compare the replay with the saved snapshot")
+    r.add_argument("--save", help="save the replayed document (with a fresh snapshot)")
+    r.add_argument("-v", "--verbose", action="store_true")
+    r.set_defaults(func=cmd_replay)
+    i = sub.add_parser("info", help="print layers and vertex counts")
+    i.add_argument("doc", type=Path)
+    i.set_defaults(func=cmd_info)
+    d = sub.add_parser("render", help="render the top view of the shaded layers to PNG (no OpenGL)")
+    d.add_argument("doc", type=Path)
+    d.add_argument("--png", required=True)
+    d.add_argument("--size", type=int, default=512)
+    d.add_argument("--isophotes", type=int, default=0, help="draw K isophote lines")
+    d.add_argument("--cel", action="store_true", help="three-tone cel shading")
+    d.set_defaults(func=cmd_render)
+    return p
+
+
+def build_app_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="sketchforge", description="Sculpt 3D shapes by drawing (desktop app).")
+    p.add_argument("doc", nargs="?", type=Path, help="document to open")
+    p.add_argument("--screenshot", metavar="OUT.png", help="render the window to a PNG and exit")
+    p.add_argument("--mode", choices=["editing", "observation"], default="editing")
+    return p
+
+
+def main(argv=None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    try:
+        if argv and argv[0] in SUBCOMMANDS:
+            args = build_parser().parse_args(argv)
+            return args.func(args)
+        args = build_app_parser().parse_args(argv)
+        from sketchforge.qt.app import run_app
+
+        return run_app(args.doc, screenshot=args.screenshot, mode=args.mode)
+    except SketchforgeError as exc:
+        print(f"sketchforge: error: {exc}", file=sys.stderr)
+        return 2
+    except KeyboardInterrupt:
+        print("sketchforge: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

@@ -1,0 +1,585 @@
+"""Commands: every change of a Document is one of these, pushed on its UndoStack.
+
+A command receives the document as an argument (it never captures an app), so a journal of
+command dicts replays headlessly. Contract for ``do``: either the change happens completely,
+or the document is left untouched and a :class:`~sketchforge.errors.SketchforgeError` is
+raised. Expensive results (an inflated mesh) are computed on the first ``do`` and kept, so
+redo is instant and bit-identical.
+
+Plugins add commands through the ``sketchforge_commands`` hook; a command that edits a
+layer's mesh after inflation (a sculpt edit) also implements :meth:`Command.reapply` so that
+changing the inflation parameters can re-apply it.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+from dataclasses import dataclass, field
+from typing import Any, ClassVar
+
+import numpy as np
+
+from sketchforge.document.layer import DEFAULT_INFLATE_PARAMS, Layer, Light
+from sketchforge.errors import (
+    DocumentFormatError,
+    ParameterError,
+    SketchforgeError,
+    SolverError,
+)
+
+_gesture_ids = itertools.count(1)
+
+
+def new_gesture_id() -> int:
+    """A fresh id for an interactive gesture whose commands merge into one undo step."""
+    return next(_gesture_ids)
+
+
+class Command:
+    """Base class. Subclasses set ``name`` (the journal's ``"command"`` field) and implement
+    ``do``, ``undo``, ``to_dict`` and ``from_dict``."""
+
+    name: ClassVar[str] = ""
+    #: Commands with the same non-None ``merge_id`` may merge (see :meth:`merge`).
+    merge_id: ClassVar[str | None] = None
+
+    def text(self) -> str:
+        """Human-readable name for menus ("Undo Set light")."""
+        return self.name.replace("_", " ").capitalize()
+
+    def prepare(self, doc) -> None:
+        """Do the expensive part (a solve) without changing the document, so a front end can
+        run it on a worker thread and then ``push`` the command on the GUI thread, where
+        ``do`` only swaps the result in. The default does nothing. Must not mutate ``doc``;
+        ``do`` recomputes if the document changed in between."""
+
+    def do(self, doc) -> None:  # also redo
+        raise NotImplementedError
+
+    def undo(self, doc) -> None:
+        raise NotImplementedError
+
+    def merge(self, other: "Command") -> bool:
+        """Absorb ``other`` (already done) into self; return True when merged."""
+        return False
+
+    def try_merge(self, other: "Command") -> bool:
+        if self.merge_id is None or self.merge_id != other.merge_id or type(self) is not type(other):
+            return False
+        return self.merge(other)
+
+    def to_dict(self) -> dict:
+        raise NotImplementedError
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "Command":
+        raise NotImplementedError
+
+    @classmethod
+    def reapply(cls, doc, layer: Layer, entry: dict) -> Layer:
+        """For edit commands: return ``layer`` with the edit ``entry`` applied to its mesh."""
+        raise NotImplementedError(f"command {cls.name!r} cannot be re-applied")
+
+
+# --- parsing helpers (journal entries are user-writable, so every field is checked) ---------
+
+
+def _field(d: dict, key: str, kind: type | tuple, cmd: str, default: Any = ...):
+    if key not in d:
+        if default is ...:
+            raise DocumentFormatError(f"command {cmd!r} needs the field {key!r}")
+        return default
+    v = d[key]
+    if kind is float and isinstance(v, int) and not isinstance(v, bool):
+        v = float(v)
+    if not isinstance(v, kind) or (kind is int and isinstance(v, bool)):
+        raise DocumentFormatError(f"command {cmd!r}: field {key!r} has the wrong type ({type(v).__name__})")
+    return v
+
+
+def _points_field(d: dict, cmd: str, key: str = "points") -> np.ndarray:
+    raw = _field(d, key, list, cmd)
+    try:
+        arr = np.array(raw, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise DocumentFormatError(f"command {cmd!r}: {key!r} must be a list of [x, y] number pairs") from None
+    if arr.ndim != 2 or arr.shape[1] != 2:
+        raise DocumentFormatError(f"command {cmd!r}: {key!r} must be a list of [x, y] number pairs")
+    return arr
+
+
+def _vec_field(d: dict, key: str, cmd: str) -> list[float]:
+    raw = _field(d, key, list, cmd)
+    if len(raw) not in (2, 3) or not all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in raw):
+        raise DocumentFormatError(f"command {cmd!r}: {key!r} must be 2 or 3 numbers")
+    return [float(x) for x in raw]
+
+
+def check_params(params: dict) -> dict:
+    """Validate inflation parameters; return a plain dict of floats merged over the defaults."""
+    out = dict(DEFAULT_INFLATE_PARAMS)
+    for k, v in dict(params).items():
+        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(float(v)):
+            raise ParameterError(f"inflation parameter {k!r} must be a finite number, got {v!r}")
+        out[k] = float(v)
+    if out["resolution"] <= 0:
+        raise ParameterError(f"resolution must be > 0 (a target edge length), got {out['resolution']}")
+    if out["inflation"] < 0:
+        raise ParameterError(f"inflation must be >= 0, got {out['inflation']}")
+    if not 0 <= out["smoothing"] < 1:
+        raise ParameterError(f"smoothing must be in [0, 1), got {out['smoothing']}")
+    return out
+
+
+def inflate_layer(doc, layer: Layer) -> Layer:
+    """``layer`` with a mesh freshly inflated from its points and parameters, and its sculpt
+    edits re-applied in order. Raises before anything changes."""
+    if layer.points is None:
+        return layer.evolve(mesh=None, edits=())
+    mesh = doc.host.inflate(layer.points, layer.closed, dict(layer.params))
+    if mesh is None:
+        raise SketchforgeError("no inflate plugin is installed, so a contour cannot become a mesh")
+    if not np.all(np.isfinite(mesh.V)):
+        raise SolverError(f"inflating layer {layer.id!r} produced non-finite heights; nothing was changed")
+    out = layer.evolve(mesh=mesh, edits=())
+    for entry in layer.edits:
+        cls = doc.host.command_class(entry.get("command", ""))
+        out = cls.reapply(doc, out, entry)
+    return out
+
+
+# --- layer commands ---------------------------------------------------------------------------
+
+
+@dataclass
+class AddLayer(Command):
+    name: ClassVar[str] = "add_layer"
+    id: str | None = None
+    layer_name: str | None = None
+    index: int | None = None  # None: on top (in front)
+    _layer: Layer | None = field(default=None, repr=False)
+
+    def text(self) -> str:
+        return "Add layer"
+
+    def do(self, doc) -> None:
+        if self.id is None:
+            self.id = doc.new_layer_id()
+        if self.id in doc.layer_ids():
+            raise ParameterError(f"a layer with id {self.id!r} already exists")
+        if self.layer_name is None:
+            self.layer_name = self.id.replace("_", " ").capitalize()
+        n = len(doc.layers)
+        idx = n if self.index is None else self.index
+        if not 0 <= idx <= n:
+            raise ParameterError(f"layer index {idx} is outside 0..{n}")
+        if self._layer is None:  # the same value on redo, so later commands' caches stay valid
+            self._layer = Layer(id=self.id, name=self.layer_name)
+        doc._insert_layer(idx, self._layer)
+
+    def undo(self, doc) -> None:
+        doc._remove_layer(doc.index_of(self.id))
+
+    def to_dict(self) -> dict:
+        d = {"command": self.name, "id": self.id, "name": self.layer_name}
+        if self.index is not None:
+            d["index"] = self.index
+        return d
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "AddLayer":
+        return cls(
+            id=_field(d, "id", str, cls.name, None),
+            layer_name=_field(d, "name", str, cls.name, None),
+            index=_field(d, "index", int, cls.name, None),
+        )
+
+
+@dataclass
+class RemoveLayer(Command):
+    name: ClassVar[str] = "remove_layer"
+    layer: str
+    _removed: Layer | None = field(default=None, repr=False)
+    _index: int = field(default=-1, repr=False)
+
+    def text(self) -> str:
+        return "Remove layer"
+
+    def do(self, doc) -> None:
+        self._index = doc.index_of(self.layer)
+        self._removed = doc._remove_layer(self._index)
+
+    def undo(self, doc) -> None:
+        doc._insert_layer(self._index, self._removed)
+
+    def to_dict(self) -> dict:
+        return {"command": self.name, "layer": self.layer}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "RemoveLayer":
+        return cls(layer=_field(d, "layer", str, cls.name))
+
+
+@dataclass
+class _ReplaceLayerCommand(Command):
+    """Shared machinery: compute a new Layer value once, swap it in, swap the old one back."""
+
+    layer: str
+    _old: Layer | None = field(default=None, repr=False)
+    _new: Layer | None = field(default=None, repr=False)
+
+    def compute(self, doc, old: Layer) -> Layer:
+        raise NotImplementedError
+
+    def prepare(self, doc) -> None:
+        old = doc.layer(self.layer)
+        if self._new is None or old is not self._old:
+            self._new = self.compute(doc, old)
+            self._old = old
+
+    def do(self, doc) -> None:
+        old = doc.layer(self.layer)
+        if self._new is None or old is not self._old:  # first do, or the layer changed since
+            new = self.compute(doc, old)  # may raise: nothing has changed yet
+            self._old, self._new = old, new
+        doc._replace_layer(self._new)
+
+    def undo(self, doc) -> None:
+        doc._replace_layer(self._old)
+
+
+@dataclass
+class RenameLayer(_ReplaceLayerCommand):
+    name: ClassVar[str] = "rename_layer"
+    new_name: str = ""
+
+    def text(self) -> str:
+        return "Rename layer"
+
+    def compute(self, doc, old: Layer) -> Layer:
+        if not self.new_name.strip():
+            raise ParameterError("a layer name must not be empty")
+        return old.evolve(name=self.new_name)
+
+    def to_dict(self) -> dict:
+        return {"command": self.name, "layer": self.layer, "name": self.new_name}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "RenameLayer":
+        return cls(layer=_field(d, "layer", str, cls.name), new_name=_field(d, "name", str, cls.name))
+
+
+@dataclass
+class SetLayerVisible(_ReplaceLayerCommand):
+    name: ClassVar[str] = "set_layer_visible"
+    visible: bool = True
+
+    def text(self) -> str:
+        return "Show layer" if self.visible else "Hide layer"
+
+    def compute(self, doc, old: Layer) -> Layer:
+        return old.evolve(visible=bool(self.visible))
+
+    def to_dict(self) -> dict:
+        return {"command": self.name, "layer": self.layer, "visible": bool(self.visible)}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "SetLayerVisible":
+        return cls(layer=_field(d, "layer", str, cls.name), visible=_field(d, "visible", bool, cls.name))
+
+
+@dataclass
+class SetContour(_ReplaceLayerCommand):
+    """Set (or redraw) a layer's stroke. Redrawing drops the layer's sculpt edits: they were
+    drawn on the old shape and have no meaning on a new outline (the app warns first)."""
+
+    name: ClassVar[str] = "set_contour"
+    points: Any = None  # (n,2) float64
+    closed: bool = False
+
+    def __post_init__(self) -> None:
+        self.points = np.array(self.points, dtype=np.float64)
+        self.points.setflags(write=False)
+
+    def text(self) -> str:
+        return "Draw contour"
+
+    def compute(self, doc, old: Layer) -> Layer:
+        return inflate_layer(doc, old.evolve(points=self.points, closed=bool(self.closed), edits=()))
+
+    def to_dict(self) -> dict:
+        d = {"command": self.name, "layer": self.layer, "points": self.points.tolist()}
+        if self.closed:
+            d["closed"] = True
+        return d
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "SetContour":
+        return cls(
+            layer=_field(d, "layer", str, cls.name),
+            points=_points_field(d, cls.name),
+            closed=_field(d, "closed", bool, cls.name, False),
+        )
+
+
+@dataclass
+class SetInflateParams(_ReplaceLayerCommand):
+    """Change inflation parameters; the mesh is rebuilt and the layer's sculpt edits are
+    re-applied in order (if one no longer applies, the whole change is refused with its
+    message and nothing changes)."""
+
+    name: ClassVar[str] = "set_inflate_params"
+    params: dict = field(default_factory=dict)
+
+    def text(self) -> str:
+        return "Set inflation parameters"
+
+    def compute(self, doc, old: Layer) -> Layer:
+        merged = check_params({**dict(old.params), **self.params})
+        return inflate_layer(doc, old.evolve(params=merged))
+
+    def to_dict(self) -> dict:
+        return {"command": self.name, "layer": self.layer, "params": dict(self.params)}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "SetInflateParams":
+        params = _field(d, "params", dict, cls.name)
+        check_params(params)
+        return cls(layer=_field(d, "layer", str, cls.name), params=dict(params))
+
+
+@dataclass
+class MirrorLayer(_ReplaceLayerCommand):
+    """Mirror a layer's stroke left-right about its own bounding-box centre (the mesh is
+    re-inflated; sculpt edits are dropped as for a redraw)."""
+
+    name: ClassVar[str] = "mirror_layer"
+
+    def text(self) -> str:
+        return "Mirror layer"
+
+    def compute(self, doc, old: Layer) -> Layer:
+        if old.points is None:
+            raise ParameterError(f"layer {old.id!r} has no contour to mirror")
+        pts = np.array(old.points)
+        cx = 0.5 * (pts[:, 0].min() + pts[:, 0].max())
+        pts[:, 0] = 2.0 * cx - pts[:, 0]
+        return inflate_layer(doc, old.evolve(points=pts, edits=()))
+
+    def to_dict(self) -> dict:
+        return {"command": self.name, "layer": self.layer}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "MirrorLayer":
+        return cls(layer=_field(d, "layer", str, cls.name))
+
+
+@dataclass
+class MoveLayer(Command):
+    """Move a layer to ``index`` in the back-to-front list (0 = furthest back)."""
+
+    name: ClassVar[str] = "move_layer"
+    layer: str = ""
+    index: int = 0
+    _from: int = field(default=-1, repr=False)
+
+    def text(self) -> str:
+        return "Reorder layers"
+
+    def do(self, doc) -> None:
+        n = len(doc.layers)
+        if not 0 <= self.index < n:
+            raise ParameterError(f"layer index {self.index} is outside 0..{n - 1}")
+        self._from = doc.index_of(self.layer)
+        doc._move_layer(self._from, self.index)
+
+    def undo(self, doc) -> None:
+        doc._move_layer(self.index, self._from)
+
+    def to_dict(self) -> dict:
+        return {"command": self.name, "layer": self.layer, "index": self.index}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "MoveLayer":
+        return cls(layer=_field(d, "layer", str, cls.name), index=_field(d, "index", int, cls.name))
+
+
+@dataclass
+class DuplicateLayer(Command):
+    """Copy a layer (mesh and edits included) just in front of it."""
+
+    name: ClassVar[str] = "duplicate_layer"
+    layer: str = ""
+    new_id: str | None = None
+    new_name: str | None = None
+    _copy: Layer | None = field(default=None, repr=False)
+    _src: Layer | None = field(default=None, repr=False)
+
+    def text(self) -> str:
+        return "Duplicate layer"
+
+    def do(self, doc) -> None:
+        src_index = doc.index_of(self.layer)
+        src = doc.layers[src_index]
+        if self.new_id is None:
+            self.new_id = doc.new_layer_id(src.id + "_copy")
+        if self.new_id in doc.layer_ids():
+            raise ParameterError(f"a layer with id {self.new_id!r} already exists")
+        if self.new_name is None:
+            self.new_name = src.name + " copy"
+        if self._copy is None or self._src is not src:
+            self._copy, self._src = src.evolve(id=self.new_id, name=self.new_name), src
+        doc._insert_layer(src_index + 1, self._copy)
+
+    def undo(self, doc) -> None:
+        doc._remove_layer(doc.index_of(self.new_id))
+
+    def to_dict(self) -> dict:
+        return {"command": self.name, "layer": self.layer, "id": self.new_id, "name": self.new_name}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "DuplicateLayer":
+        return cls(
+            layer=_field(d, "layer", str, cls.name),
+            new_id=_field(d, "id", str, cls.name, None),
+            new_name=_field(d, "name", str, cls.name, None),
+        )
+
+
+@dataclass
+class SetLight(Command):
+    """Set the light direction. Commands of one drag (same ``gesture``) merge into one undo
+    step; the gesture id is not saved (the journal keeps the final direction)."""
+
+    name: ClassVar[str] = "set_light"
+    merge_id: ClassVar[str | None] = "set_light"
+    direction: Any = (1.0, 0.0, 0.0)
+    gesture: int | None = None
+    _old: Light | None = field(default=None, repr=False)
+    _new: Light | None = field(default=None, repr=False)
+
+    def text(self) -> str:
+        return "Set light"
+
+    def do(self, doc) -> None:
+        if self._new is None:
+            self._new = Light.from_vector(self.direction)
+            self.direction = [float(v) for v in self._new.direction]
+        self._old = doc.light
+        doc._set_light(self._new)
+
+    def undo(self, doc) -> None:
+        doc._set_light(self._old)
+
+    def merge(self, other: "Command") -> bool:
+        if self.gesture is None or other.gesture != self.gesture:
+            return False
+        self._new = other._new
+        self.direction = other.direction
+        return True
+
+    def to_dict(self) -> dict:
+        return {"command": self.name, "direction": [float(v) for v in self.direction]}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "SetLight":
+        return cls(direction=_vec_field(d, "direction", cls.name))
+
+
+class MacroCommand(Command):
+    """A group of commands that is done and undone as one step."""
+
+    name: ClassVar[str] = "macro"
+
+    def __init__(self, text: str = "", children: list | None = None, _done: bool = False) -> None:
+        self.text_ = text
+        self.children = list(children or [])
+        self._done = _done
+
+    def text(self) -> str:
+        return self.text_ or "Group"
+
+    def do(self, doc) -> None:
+        done: list[Command] = []
+        try:
+            for c in self.children:
+                c.do(doc)
+                done.append(c)
+        except Exception:
+            for c in reversed(done):  # all or nothing
+                c.undo(doc)
+            raise
+
+    def undo(self, doc) -> None:
+        for c in reversed(self.children):
+            c.undo(doc)
+
+    def to_dict(self) -> dict:
+        return {"command": self.name, "text": self.text_, "children": [c.to_dict() for c in self.children]}
+
+    @classmethod
+    def from_dict(cls, d: dict, registry=None) -> "MacroCommand":
+        children = _field(d, "children", list, cls.name)
+        if registry is None:
+            raise DocumentFormatError("a macro needs a command registry to read its children")
+        return cls(text=_field(d, "text", str, cls.name, ""), children=[registry.from_dict(c) for c in children])
+
+
+#: The document's own commands, registered by the built-in plugin.
+CORE_COMMANDS: tuple[type[Command], ...] = (
+    AddLayer,
+    RemoveLayer,
+    RenameLayer,
+    SetLayerVisible,
+    MoveLayer,
+    DuplicateLayer,
+    MirrorLayer,
+    SetContour,
+    SetInflateParams,
+    SetLight,
+    MacroCommand,
+)
+
+
+class CommandRegistry:
+    """Maps journal names to command classes (core + plugins)."""
+
+    def __init__(self, classes) -> None:
+        self._classes: dict[str, type[Command]] = {}
+        for cls in classes:
+            if not cls.name:
+                raise ValueError(f"command class {cls.__name__} has no name")
+            if cls.name in self._classes and self._classes[cls.name] is not cls:
+                raise ValueError(f"two plugins provide the command {cls.name!r}")
+            self._classes[cls.name] = cls
+
+    def names(self) -> list[str]:
+        return sorted(self._classes)
+
+    def get(self, name: str) -> type[Command]:
+        from sketchforge.errors import UnknownCommandError
+
+        try:
+            return self._classes[name]
+        except KeyError:
+            known = ", ".join(self.names())
+            raise UnknownCommandError(
+                f"unknown command {name!r} (is the plugin that provides it installed? known: {known})"
+            ) from None
+
+    def from_dict(self, d) -> Command:
+        if not isinstance(d, dict):
+            raise DocumentFormatError(f"a journal entry must be an object, got {type(d).__name__}")
+        name = d.get("command")
+        if not isinstance(name, str):
+            raise DocumentFormatError("a journal entry needs a string field 'command'")
+        cls = self.get(name)
+        if cls is MacroCommand:
+            return MacroCommand.from_dict(d, registry=self)
+        try:
+            return cls.from_dict(d)
+        except SketchforgeError:
+            raise
+        except (TypeError, ValueError, KeyError) as exc:
+            raise DocumentFormatError(f"command {name!r}: {exc}") from None

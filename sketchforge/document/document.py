@@ -1,0 +1,157 @@
+"""The Document: ordered layers, the light, the undo stack, and events. No Qt.
+
+Only commands change a document (through the underscore methods below); everything else
+reads it. Signals, emitted after the change:
+
+- ``layer_inserted(int index, Layer layer)``
+- ``layer_removed(int index, Layer layer)``
+- ``layer_changed(int index, Layer new, Layer old)`` (any field; ``mesh_changed`` follows if
+  the mesh object changed)
+- ``layer_moved(int from_index, int to_index)``
+- ``mesh_changed(str layer_id)``
+- ``light_changed(Light light)``
+- ``history_changed()`` (undo stack index, texts or clean state)
+- ``assembly_invalidated()`` (the assembled model must be recomputed)
+"""
+
+from __future__ import annotations
+
+from sketchforge.document.commands import Command
+from sketchforge.document.events import Signal
+from sketchforge.document.layer import Layer, Light
+from sketchforge.document.undo import UndoStack
+from sketchforge.errors import LayerNotFoundError
+
+
+class Document:
+    def __init__(self, host=None, light: Light | None = None) -> None:
+        if host is None:
+            from sketchforge.plugins.manager import default_host
+
+            host = default_host()
+        self.host = host
+        self._layers: list[Layer] = []
+        self._light = light or Light()
+        #: The light at the start of the journal and the entries that came before this
+        #: session's undo history (from an opened file).
+        self.initial_light: Light = self._light
+        self.base_journal: list[dict] = []
+        self.revision = 0  # bumped on every change; keys derived caches
+        self.geometry_revision = 0  # bumped when layers change (not the light)
+        self._assembled = None
+        self._assembled_revision = -1
+
+        self.layer_inserted = Signal(int, Layer, name="layer_inserted")
+        self.layer_removed = Signal(int, Layer, name="layer_removed")
+        self.layer_changed = Signal(int, Layer, Layer, name="layer_changed")
+        self.layer_moved = Signal(int, int, name="layer_moved")
+        self.mesh_changed = Signal(str, name="mesh_changed")
+        self.light_changed = Signal(Light, name="light_changed")
+        self.history_changed = Signal(name="history_changed")
+        self.assembly_invalidated = Signal(name="assembly_invalidated")
+        self.undo_stack = UndoStack(self)
+
+    # --- queries --------------------------------------------------------------------------------
+    @property
+    def layers(self) -> tuple[Layer, ...]:
+        """Back to front: later layers are in front."""
+        return tuple(self._layers)
+
+    @property
+    def light(self) -> Light:
+        return self._light
+
+    def layer_ids(self) -> list[str]:
+        return [layer.id for layer in self._layers]
+
+    def index_of(self, layer_id: str) -> int:
+        for i, layer in enumerate(self._layers):
+            if layer.id == layer_id:
+                return i
+        known = ", ".join(self.layer_ids()) or "none"
+        raise LayerNotFoundError(f"there is no layer with id {layer_id!r} (layers: {known})")
+
+    def layer(self, layer_id: str) -> Layer:
+        return self._layers[self.index_of(layer_id)]
+
+    def new_layer_id(self, prefix: str = "layer") -> str:
+        taken = set(self.layer_ids())
+        i = 1
+        while f"{prefix}{i}" in taken:
+            i += 1
+        return f"{prefix}{i}"
+
+    def journal(self) -> list[dict]:
+        """Every command that led from an empty document with ``initial_light`` to now."""
+        return list(self.base_journal) + [c.to_dict() for c in self.undo_stack.done_commands()]
+
+    # --- the one way to change a document -----------------------------------------------------
+    def push(self, command: Command) -> Command:
+        return self.undo_stack.push(command)
+
+    def execute(self, entry: dict) -> Command:
+        """Build a command from a journal dict and push it."""
+        return self.push(self.host.commands.from_dict(entry))
+
+    # --- assembled model (derived, cached) --------------------------------------------------------
+    def assembled(self, params: dict | None = None):
+        """The assembled model of the visible layers (None without an assembler or meshes).
+        Cached until the next change."""
+        if self._assembled_revision != self.geometry_revision:
+            parts = [layer for layer in self._layers if layer.visible and layer.mesh is not None]
+            self._assembled = self.host.assemble(parts, params or {}) if parts else None
+            self._assembled_revision = self.geometry_revision
+        return self._assembled
+
+    # --- mutators: commands only ------------------------------------------------------------------
+    def _touch(self) -> None:
+        self.revision += 1
+        self.geometry_revision += 1
+        self.assembly_invalidated.emit()
+
+    def _insert_layer(self, index: int, layer: Layer) -> None:
+        self._layers.insert(index, layer)
+        self._touch()
+        self.layer_inserted.emit(index, layer)
+
+    def _remove_layer(self, index: int) -> Layer:
+        layer = self._layers.pop(index)
+        self._touch()
+        self.layer_removed.emit(index, layer)
+        return layer
+
+    def _replace_layer(self, layer: Layer) -> None:
+        index = self.index_of(layer.id)
+        old = self._layers[index]
+        self._layers[index] = layer
+        self._touch()
+        self.layer_changed.emit(index, layer, old)
+        if layer.mesh is not old.mesh:
+            self.mesh_changed.emit(layer.id)
+
+    def _move_layer(self, src: int, dst: int) -> None:
+        layer = self._layers.pop(src)
+        self._layers.insert(dst, layer)
+        self._touch()
+        self.layer_moved.emit(src, dst)
+
+    def _set_light(self, light: Light) -> None:
+        self._light = light
+        self.revision += 1  # shading only: the assembled geometry does not depend on the light
+        self.light_changed.emit(light)
+
+    # --- comparison (tests, replay checks) --------------------------------------------------------
+    def same_state(self, other: "Document") -> bool:
+        """Equal layers (meshes bit-identical) and light."""
+        return (
+            len(self._layers) == len(other._layers)
+            and all(a.same_state(b) for a, b in zip(self._layers, other._layers))
+            and self._light == other._light
+        )
+
+    def restore_state(self, layers: list[Layer], light: Light) -> None:
+        """Set the whole state at once (opening a file). Not undoable: clears history."""
+        self._layers = list(layers)
+        self._light = light
+        self._touch()
+        self.undo_stack.clear()

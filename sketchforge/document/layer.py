@@ -1,0 +1,148 @@
+"""Layer and Light: immutable values held by the Document.
+
+Layers are frozen: a command changes a layer by putting a new Layer value in its place, and
+keeps the old value for undo. Meshes and point arrays are read-only, so values can be shared
+freely between the document, the undo history and views.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, replace
+from types import MappingProxyType
+from typing import Any, Mapping
+
+import numpy as np
+
+from sketchforge.errors import ParameterError
+from sketchforge.geometry.mesh import Mesh
+
+#: Inflation parameters of a new layer. ``resolution``: target edge length in drawing units;
+#: ``inflation``: height scale; ``smoothing``: fairing weight α (0 = no fairing), see
+#: plugins/inflate for its units.
+DEFAULT_INFLATE_PARAMS: Mapping[str, float] = MappingProxyType(
+    {"resolution": 0.03, "inflation": 1.0, "smoothing": 0.5}
+)
+
+
+def _points(a) -> np.ndarray | None:
+    if a is None:
+        return None
+    arr = np.array(a, dtype=np.float64, copy=True)
+    if arr.ndim != 2 or arr.shape[1] != 2:
+        raise ParameterError(f"contour points must be a list of [x, y] pairs, got shape {arr.shape}")
+    arr.setflags(write=False)
+    return arr
+
+
+@dataclass(frozen=True, eq=False)
+class Layer:
+    """One drawn part.
+
+    Attributes
+    ----------
+    id : str
+        Stable identifier used by commands and files.
+    name : str
+        Display name.
+    visible : bool
+    points : (n, 2) float64 or None
+        The stroke as drawn (before cleaning); None until a contour is set.
+    closed : bool
+        True when the whole outline is free; False lets an open stroke's closing segment be
+        the junction Γ_conn.
+    params : Mapping[str, float]
+        Inflation parameters (``resolution``, ``inflation``, ``smoothing``).
+    mesh : Mesh or None
+        The current front surface (inflated, then sculpted).
+    edits : tuple of dict
+        Sculpt commands (as journal dicts) applied since the mesh was last inflated, oldest
+        first; re-applied when the inflation parameters change.
+    """
+
+    id: str
+    name: str
+    visible: bool = True
+    points: np.ndarray | None = None
+    closed: bool = False
+    params: Mapping[str, float] = field(default_factory=lambda: dict(DEFAULT_INFLATE_PARAMS))
+    mesh: Mesh | None = None
+    edits: tuple = ()
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "points", _points(self.points))
+        object.__setattr__(self, "params", MappingProxyType(dict(self.params)))
+        object.__setattr__(self, "edits", tuple(self.edits))
+
+    def evolve(self, **changes: Any) -> "Layer":
+        """A copy with some fields changed."""
+        return replace(self, **changes)
+
+    def same_state(self, other: "Layer") -> bool:
+        """Exact equality of every field, meshes compared bit for bit."""
+        if not isinstance(other, Layer):
+            return False
+        pts_equal = (self.points is None and other.points is None) or (
+            self.points is not None
+            and other.points is not None
+            and self.points.shape == other.points.shape
+            and self.points.tobytes() == other.points.tobytes()
+        )
+        mesh_equal = (self.mesh is None and other.mesh is None) or (
+            self.mesh is not None and self.mesh.identical(other.mesh)
+        )
+        return (
+            self.id == other.id
+            and self.name == other.name
+            and self.visible == other.visible
+            and self.closed == other.closed
+            and dict(self.params) == dict(other.params)
+            and list(self.edits) == list(other.edits)
+            and pts_equal
+            and mesh_equal
+        )
+
+
+@dataclass(frozen=True)
+class Light:
+    """A directional light in the drawing plane: unit vector (x, y, 0) pointing towards the light."""
+
+    x: float = 1.0 / math.sqrt(2.0)
+    y: float = 1.0 / math.sqrt(2.0)
+
+    def __post_init__(self) -> None:
+        x, y = float(self.x), float(self.y)
+        if not (math.isfinite(x) and math.isfinite(y)):
+            raise ParameterError("the light direction must be finite numbers")
+        norm = math.hypot(x, y)
+        if norm < 1e-12:
+            raise ParameterError("the light direction must not be the zero vector")
+        object.__setattr__(self, "x", x / norm)
+        object.__setattr__(self, "y", y / norm)
+
+    @classmethod
+    def from_vector(cls, v) -> "Light":
+        """From a (2,) or (3,) vector; any z component is dropped (the light lies in the plane)."""
+        v = list(v)
+        if len(v) not in (2, 3):
+            raise ParameterError(f"a light direction has 2 or 3 components, got {len(v)}")
+        try:
+            return cls(float(v[0]), float(v[1]))
+        except (TypeError, ValueError) as exc:
+            raise ParameterError(f"the light direction must be numbers: {exc}") from None
+
+    @classmethod
+    def from_angle(cls, degrees: float) -> "Light":
+        """Counter-clockwise angle from +x in the drawing plane."""
+        a = math.radians(float(degrees))
+        return cls(math.cos(a), math.sin(a))
+
+    @property
+    def direction(self) -> np.ndarray:
+        """(3,) float64 unit vector with z = 0."""
+        return np.array([self.x, self.y, 0.0])
+
+    @property
+    def angle(self) -> float:
+        """Degrees, counter-clockwise from +x."""
+        return math.degrees(math.atan2(self.y, self.x))

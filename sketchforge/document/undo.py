@@ -1,0 +1,196 @@
+"""UndoStack with QUndoStack semantics, without Qt.
+
+- ``push`` runs the command, then drops the redo tail, then tries to merge it into the
+  command on top (same ``merge_id``, never across the clean point, never into a command that
+  is already below the clean index).
+- Macros (``begin_macro``/``end_macro``) run their children as they are pushed and undo them
+  in reverse order (pyface's Qt-free port walks forward; we do not).
+- The clean index marks the saved state; it becomes unreachable (-1) when the commands that
+  led to it are dropped.
+
+Signals (all emitted only when the value really changes):
+``index_changed(int)``, ``can_undo_changed(bool)``, ``can_redo_changed(bool)``,
+``undo_text_changed(str)``, ``redo_text_changed(str)``, ``clean_changed(bool)``.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+from sketchforge.document.events import Signal
+
+if TYPE_CHECKING:  # pragma: no cover
+    from sketchforge.document.commands import Command
+
+
+class UndoStack:
+    def __init__(self, document) -> None:
+        self._doc = document
+        self._commands: list[Command] = []
+        self._index = 0
+        self._clean_index = 0
+        self._macros: list = []  # open MacroCommands, innermost last
+        self.index_changed = Signal(int, name="index_changed")
+        self.can_undo_changed = Signal(bool, name="can_undo_changed")
+        self.can_redo_changed = Signal(bool, name="can_redo_changed")
+        self.undo_text_changed = Signal(str, name="undo_text_changed")
+        self.redo_text_changed = Signal(str, name="redo_text_changed")
+        self.clean_changed = Signal(bool, name="clean_changed")
+
+    # --- queries ------------------------------------------------------------------------------
+    @property
+    def index(self) -> int:
+        return self._index
+
+    @property
+    def clean_index(self) -> int:
+        return self._clean_index
+
+    def count(self) -> int:
+        return len(self._commands)
+
+    def command(self, i: int) -> "Command":
+        return self._commands[i]
+
+    def commands(self) -> list["Command"]:
+        """All commands, done ones first (``commands()[:index]``)."""
+        return list(self._commands)
+
+    def done_commands(self) -> list["Command"]:
+        return self._commands[: self._index]
+
+    def can_undo(self) -> bool:
+        return not self._macros and self._index > 0
+
+    def can_redo(self) -> bool:
+        return not self._macros and self._index < len(self._commands)
+
+    def undo_text(self) -> str:
+        return self._commands[self._index - 1].text() if self.can_undo() else ""
+
+    def redo_text(self) -> str:
+        return self._commands[self._index].text() if self.can_redo() else ""
+
+    def is_clean(self) -> bool:
+        return not self._macros and self._index == self._clean_index
+
+    def in_macro(self) -> bool:
+        return bool(self._macros)
+
+    # --- state snapshot for change signals -----------------------------------------------------
+    def _state(self):
+        return (self._index, self.can_undo(), self.can_redo(), self.undo_text(), self.redo_text(), self.is_clean())
+
+    def _emit_changes(self, before) -> None:
+        after = self._state()
+        signals = (
+            self.index_changed,
+            self.can_undo_changed,
+            self.can_redo_changed,
+            self.undo_text_changed,
+            self.redo_text_changed,
+            self.clean_changed,
+        )
+        for sig, a, b in zip(signals, before, after):
+            if a != b:
+                sig.emit(b)
+        if before != after:
+            self._doc.history_changed.emit()
+
+    # --- mutation -----------------------------------------------------------------------------
+    def push(self, command: "Command") -> "Command":
+        """Run ``command`` and record it. If it raises, nothing is recorded (the command
+        guarantees the document is unchanged) and the error propagates."""
+        before = self._state()
+        command.do(self._doc)
+        if self._macros:
+            macro = self._macros[-1]
+            if not (macro.children and macro.children[-1].try_merge(command)):
+                macro.children.append(command)
+            return command
+        if self._index < len(self._commands):
+            del self._commands[self._index :]
+            if self._clean_index > self._index:
+                self._clean_index = -1
+        top = self._commands[-1] if self._commands else None
+        mergeable = top is not None and self._index != self._clean_index
+        if mergeable and top.try_merge(command):
+            pass
+        else:
+            self._commands.append(command)
+            self._index += 1
+        self._emit_changes(before)
+        return command
+
+    def undo(self) -> None:
+        if not self.can_undo():
+            return
+        before = self._state()
+        self._commands[self._index - 1].undo(self._doc)
+        self._index -= 1
+        self._emit_changes(before)
+
+    def redo(self) -> None:
+        if not self.can_redo():
+            return
+        before = self._state()
+        self._commands[self._index].do(self._doc)
+        self._index += 1
+        self._emit_changes(before)
+
+    def set_index(self, index: int) -> None:
+        """Undo or redo until ``index`` (the history panel's click)."""
+        index = max(0, min(int(index), len(self._commands)))
+        while self._index > index:
+            self.undo()
+        while self._index < index:
+            self.redo()
+
+    def set_clean(self) -> None:
+        before = self._state()
+        self._clean_index = self._index
+        self._emit_changes(before)
+
+    def clear(self) -> None:
+        """Forget the history (the document keeps its current state), e.g. after opening a file."""
+        if self._macros:
+            raise RuntimeError("cannot clear the undo stack inside a macro")
+        before = self._state()
+        self._commands.clear()
+        self._index = 0
+        self._clean_index = 0
+        self._emit_changes(before)
+
+    def begin_macro(self, text: str) -> None:
+        from sketchforge.document.commands import MacroCommand
+
+        self._macros.append(MacroCommand(text=text, children=[], _done=True))
+
+    def end_macro(self) -> "Command | None":
+        """Close the innermost macro; an empty macro is dropped."""
+        if not self._macros:
+            raise RuntimeError("end_macro without begin_macro")
+        macro = self._macros.pop()
+        if not macro.children:
+            return None
+        if self._macros:
+            self._macros[-1].children.append(macro)
+            return macro
+        # The children already ran; record the macro without running it again.
+        before = self._state()
+        if self._index < len(self._commands):
+            del self._commands[self._index :]
+            if self._clean_index > self._index:
+                self._clean_index = -1
+        self._commands.append(macro)
+        self._index += 1
+        self._emit_changes(before)
+        return macro
+
+    def abort_macro(self) -> None:
+        """Undo the children of the innermost open macro and drop it (an error mid-gesture)."""
+        if not self._macros:
+            return
+        macro = self._macros.pop()
+        for child in reversed(macro.children):
+            child.undo(self._doc)

@@ -1,0 +1,52 @@
+"""Typed errors with messages meant for the person using the app or the CLI.
+
+Every error a user can cause derives from :class:`SketchforgeError`; the CLI prints its
+message on one line and the app shows it in a dialog. Anything else escaping is a bug.
+"""
+
+
+class SketchforgeError(Exception):
+    """Base of every error a user can cause; ``str(err)`` is a complete, readable sentence."""
+
+
+class ContourError(SketchforgeError, ValueError):
+    """A drawn contour cannot become a layer (too short, degenerate, self-intersecting, NaN...)."""
+
+
+class ParameterError(SketchforgeError, ValueError):
+    """A parameter is out of range or of the wrong type."""
+
+
+class LayerNotFoundError(SketchforgeError, KeyError):
+    """A command names a layer id the document does not have."""
+
+    def __str__(self) -> str:  # KeyError would quote the message
+        return str(self.args[0]) if self.args else "layer not found"
+
+
+class UnknownCommandError(SketchforgeError, ValueError):
+    """A journal entry names a command that no installed plugin provides."""
+
+
+class DocumentFormatError(SketchforgeError, ValueError):
+    """A document file is not a valid sketchforge document (names the file and the field)."""
+
+
+class SculptError(SketchforgeError, ValueError):
+    """An isophote edit cannot be applied (stroke outside the band, pick outside the layer...)."""
+
+
+class SolverError(SketchforgeError, RuntimeError):
+    """A numerical solver failed or produced non-finite values; the command was rolled back."""
+
+
+class ExportError(SketchforgeError, OSError):
+    """A mesh could not be written (unknown format, missing folder...)."""
+
+
+class LimitError(SketchforgeError, ValueError):
+    """An input exceeds a documented size limit (too many points, triangles or commands)."""
+
+
+class NothingToDoError(SketchforgeError):
+    """An edit would change nothing; the message says why (e.g. an empty impacted region)."""

@@ -1,0 +1,117 @@
+"""Mesh file writers (OBJ, PLY, STL, glTF) as plain functions of a Mesh.
+
+All writers go through :func:`sketchforge.atomic.write_bytes_atomic`.
+"""
+
+from __future__ import annotations
+
+import base64
+import io
+import json
+import struct
+
+import numpy as np
+
+from sketchforge.atomic import write_bytes_atomic
+from sketchforge.geometry.mesh import Mesh
+
+
+def obj_bytes(mesh: Mesh) -> bytes:
+    out = io.StringIO()
+    out.write("# sketchforge\n")
+    np.savetxt(out, mesh.V, fmt="v %.9g %.9g %.9g")
+    if mesh.n_faces:
+        np.savetxt(out, mesh.F + 1, fmt="f %d %d %d")
+    return out.getvalue().encode("ascii")
+
+
+def ply_bytes(mesh: Mesh) -> bytes:
+    header = (
+        "ply\nformat binary_little_endian 1.0\ncomment sketchforge\n"
+        f"element vertex {mesh.n_vertices}\nproperty float x\nproperty float y\nproperty float z\n"
+        f"element face {mesh.n_faces}\nproperty list uchar int vertex_indices\nend_header\n"
+    ).encode("ascii")
+    faces = np.zeros(mesh.n_faces, dtype=[("n", "u1"), ("i", "<i4", (3,))])
+    faces["n"] = 3
+    faces["i"] = mesh.F
+    return header + mesh.V.astype("<f4").tobytes() + faces.tobytes()
+
+
+def face_normals(V: np.ndarray, F: np.ndarray) -> np.ndarray:
+    """Unit normals (m,3) float64 of triangles F (m,3) int64 over V (n,3) float64 (0 for degenerate)."""
+    n = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+    length = np.linalg.norm(n, axis=1, keepdims=True)
+    return np.divide(n, length, out=np.zeros_like(n), where=length > 0)
+
+
+def stl_bytes(mesh: Mesh) -> bytes:
+    rec = np.zeros(mesh.n_faces, dtype=[("n", "<f4", (3,)), ("v", "<f4", (3, 3)), ("attr", "<u2")])
+    rec["n"] = face_normals(mesh.V, mesh.F)
+    rec["v"] = mesh.V[mesh.F]
+    header = b"sketchforge binary STL".ljust(80, b" ")
+    return header + struct.pack("<I", mesh.n_faces) + rec.tobytes()
+
+
+def _gltf_parts(mesh: Mesh) -> tuple[dict, bytes]:
+    pos = mesh.V.astype("<f4")
+    idx = mesh.F.astype("<u4").ravel()
+    pos_bytes, idx_bytes = pos.tobytes(), idx.tobytes()
+    lo = pos.min(axis=0).tolist() if len(pos) else [0.0, 0.0, 0.0]
+    hi = pos.max(axis=0).tolist() if len(pos) else [0.0, 0.0, 0.0]
+    gltf = {
+        "asset": {"version": "2.0", "generator": "sketchforge"},
+        "scene": 0,
+        "scenes": [{"nodes": [0]}],
+        "nodes": [{"mesh": 0}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+        "buffers": [{"byteLength": len(pos_bytes) + len(idx_bytes)}],
+        "bufferViews": [
+            {"buffer": 0, "byteOffset": 0, "byteLength": len(pos_bytes), "target": 34962},
+            {"buffer": 0, "byteOffset": len(pos_bytes), "byteLength": len(idx_bytes), "target": 34963},
+        ],
+        "accessors": [
+            {"bufferView": 0, "componentType": 5126, "count": len(pos), "type": "VEC3", "min": lo, "max": hi},
+            {"bufferView": 1, "componentType": 5125, "count": len(idx), "type": "SCALAR"},
+        ],
+    }
+    return gltf, pos_bytes + idx_bytes
+
+
+def glb_bytes(mesh: Mesh) -> bytes:
+    gltf, blob = _gltf_parts(mesh)
+    js = json.dumps(gltf, separators=(",", ":")).encode("utf-8")
+    js += b" " * (-len(js) % 4)
+    blob += b"\0" * (-len(blob) % 4)
+    total = 12 + 8 + len(js) + 8 + len(blob)
+    return (
+        struct.pack("<III", 0x46546C67, 2, total)
+        + struct.pack("<II", len(js), 0x4E4F534A)
+        + js
+        + struct.pack("<II", len(blob), 0x004E4942)
+        + blob
+    )
+
+
+def gltf_bytes(mesh: Mesh) -> bytes:
+    gltf, blob = _gltf_parts(mesh)
+    gltf["buffers"][0]["uri"] = "data:application/octet-stream;base64," + base64.b64encode(blob).decode("ascii")
+    return json.dumps(gltf, indent=1).encode("utf-8")
+
+
+def write_obj(path, mesh: Mesh) -> None:
+    write_bytes_atomic(path, obj_bytes(mesh))
+
+
+def write_ply(path, mesh: Mesh) -> None:
+    write_bytes_atomic(path, ply_bytes(mesh))
+
+
+def write_stl(path, mesh: Mesh) -> None:
+    write_bytes_atomic(path, stl_bytes(mesh))
+
+
+def write_gltf(path, mesh: Mesh) -> None:
+    from pathlib import Path
+
+    data = glb_bytes(mesh) if Path(path).suffix.lower() == ".glb" else gltf_bytes(mesh)
+    write_bytes_atomic(path, data)

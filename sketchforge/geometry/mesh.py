@@ -1,0 +1,83 @@
+"""The triangle mesh value type shared by every plugin and the document."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+
+def _frozen(a, dtype, ndim: int, name: str) -> np.ndarray:
+    arr = np.array(a, dtype=dtype, copy=True)
+    if ndim == 2 and arr.size == 0:
+        arr = arr.reshape(0, 3)
+    if arr.ndim != ndim:
+        raise ValueError(f"Mesh.{name} must have {ndim} dimensions, got shape {arr.shape}")
+    # Meshes are shared between the document, undo history and views; making the arrays
+    # read-only turns an accidental in-place edit (which would corrupt undo) into an error.
+    arr.setflags(write=False)
+    return arr
+
+
+@dataclass(frozen=True, eq=False)
+class Mesh:
+    """An immutable triangle mesh.
+
+    Attributes
+    ----------
+    V : (n, 3) float64
+        Vertex positions: x right, y up in the drawing plane, z towards the viewer.
+    F : (m, 3) int64
+        Triangles, counter-clockwise seen from +z for a layer's front surface.
+    boundary : (k,) int64
+        The outer boundary loop as vertex indices, in order (empty for a closed surface).
+    junction : (j,) int64
+        Vertices on the junction Γ_conn (the closing segment of an open stroke), in order
+        along the boundary; empty for a free (closed-outline) part.
+    """
+
+    V: np.ndarray
+    F: np.ndarray
+    boundary: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    junction: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "V", _frozen(self.V, np.float64, 2, "V"))
+        object.__setattr__(self, "F", _frozen(self.F, np.int64, 2, "F"))
+        object.__setattr__(self, "boundary", _frozen(self.boundary, np.int64, 1, "boundary"))
+        object.__setattr__(self, "junction", _frozen(self.junction, np.int64, 1, "junction"))
+        if self.V.shape[1] != 3 or self.F.shape[1] != 3:
+            raise ValueError(f"Mesh needs V (n,3) and F (m,3), got {self.V.shape} and {self.F.shape}")
+        n = len(self.V)
+        for name in ("F", "boundary", "junction"):
+            idx = getattr(self, name)
+            if idx.size and (idx.min() < 0 or idx.max() >= n):
+                raise ValueError(f"Mesh.{name} refers to a vertex outside 0..{n - 1}")
+
+    @property
+    def n_vertices(self) -> int:
+        return int(len(self.V))
+
+    @property
+    def n_faces(self) -> int:
+        return int(len(self.F))
+
+    def with_heights(self, z: np.ndarray) -> "Mesh":
+        """Same connectivity, new z (n,) float64."""
+        V = np.array(self.V)
+        V[:, 2] = np.asarray(z, dtype=np.float64)
+        return Mesh(V, self.F, self.boundary, self.junction)
+
+    def identical(self, other: "Mesh | None") -> bool:
+        """Bit-identical comparison (positions compared as raw bytes, so -0.0 != 0.0, NaN == NaN)."""
+        if other is None:
+            return False
+        return all(
+            a.shape == b.shape and a.dtype == b.dtype and a.tobytes() == b.tobytes()
+            for a, b in (
+                (self.V, other.V),
+                (self.F, other.F),
+                (self.boundary, other.boundary),
+                (self.junction, other.junction),
+            )
+        )

@@ -1,0 +1,44 @@
+"""Test support shipped with the package: hosts built from an explicit plugin list.
+
+Tests register plugins explicitly (entry points off) so they never depend on what happens to
+be installed; :class:`FanInflater` is a tiny deterministic stand-in for the inflate plugin
+for tests about the document machinery, not about geometry.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from sketchforge.errors import ContourError
+from sketchforge.geometry.mesh import Mesh
+from sketchforge.plugins.hookspecs import hookimpl
+from sketchforge.plugins.manager import PluginHost
+
+
+def make_test_host(*plugins, entry_points: bool = False, allowlist=None) -> PluginHost:
+    """A host with the core plugin plus ``plugins`` (objects or modules, in order)."""
+    return PluginHost.create(plugins, load_entry_points=entry_points, allowlist=allowlist)
+
+
+class FanInflater:
+    """Inflates a polygon into a fan around its vertex centroid: z = inflation * params-dependent
+    bump at the centre, 0 on the outline. Not a real inflation; fast and exact to compare."""
+
+    @hookimpl
+    def sketchforge_inflate(self, points, closed, params):
+        P = np.asarray(points, dtype=np.float64)
+        if len(P) < 3 or not np.all(np.isfinite(P)):
+            raise ContourError("a contour needs at least 3 finite points")
+        x, y = P[:, 0], P[:, 1]
+        area = 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+        if abs(area) < 1e-12:
+            raise ContourError("the contour has zero area")
+        if area < 0:
+            P = P[::-1]
+        n = len(P)
+        c = P.mean(axis=0)
+        h = float(params.get("inflation", 1.0)) * (1.0 + float(params.get("smoothing", 0.0))) * np.sqrt(abs(area))
+        V = np.vstack([np.c_[P, np.zeros(n)], [c[0], c[1], h]])
+        F = np.array([[i, (i + 1) % n, n] for i in range(n)], dtype=np.int64)
+        junction = np.zeros(0, np.int64) if closed else np.array([n - 1, 0], dtype=np.int64)
+        return Mesh(V, F, np.arange(n), junction)

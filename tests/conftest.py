@@ -1,0 +1,32 @@
+import os
+import sys
+from pathlib import Path
+
+import pytest
+
+# Qt (when a test imports it) must never need a display unless the test is a GL test.
+os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
+sys.path.insert(0, str(Path(__file__).parent))
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+@pytest.fixture
+def fan_host():
+    """Core commands + a fast fake inflater (document-machinery tests)."""
+    from sketchforge.plugins.testing import FanInflater, make_test_host
+
+    return make_test_host(FanInflater())
+
+
+@pytest.fixture(scope="session")
+def real_host():
+    """Every installed plugin (the real inflate, sculpt and assemble plugins)."""
+    from sketchforge.plugins.manager import default_host
+
+    return default_host()
+
+
+@pytest.fixture
+def examples_dir():
+    return ROOT / "examples"
