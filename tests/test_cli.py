@@ -1,0 +1,87 @@
+"""The command line: replay/export/info work headlessly; errors are one line, exit 2."""
+
+import json
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from tests_support import SPEC_DOC
+
+
+def run(*args, timeout=300):
+    return subprocess.run([sys.executable, "-m", "sketchforge", *map(str, args)], capture_output=True, text=True, timeout=timeout)
+
+
+@pytest.fixture
+def spec_doc(tmp_path):
+    p = tmp_path / "doc.json"
+    p.write_text(json.dumps(SPEC_DOC))
+    return p
+
+
+def read_obj(path):
+    V, F = [], []
+    for line in path.read_text().splitlines():
+        if line.startswith("v "):
+            V.append([float(x) for x in line.split()[1:]])
+        elif line.startswith("f "):
+            F.append([int(x) - 1 for x in line.split()[1:]])
+    return np.array(V), np.array(F)
+
+
+def test_replay_exports_one_layer(spec_doc, tmp_path):
+    out = tmp_path / "body.obj"
+    res = run("replay", spec_doc, "--export", out, "--layer", "body")
+    assert res.returncode == 0, res.stderr
+    V, F = read_obj(out)
+    assert len(V) > 500 and F.max() == len(V) - 1
+    assert V[:, 2].min() >= 0 and V[:, 2].max() > 0.2  # an inflated height field
+    assert np.abs(V[:, 0]).max() == pytest.approx(1.0, abs=0.02)
+
+
+@pytest.mark.parametrize("suffix", [".ply", ".stl", ".glb", ".gltf"])
+def test_replay_exports_every_format(spec_doc, tmp_path, suffix):
+    out = tmp_path / ("m" + suffix)
+    res = run("replay", spec_doc, "--export", out, "--layer", "body")
+    assert res.returncode == 0, res.stderr
+    head = out.read_bytes()[:4]
+    assert head == {".ply": b"ply\n", ".stl": b"sket", ".glb": b"glTF", ".gltf": b'{\n "'}[suffix]
+
+
+def test_info_lists_layers(spec_doc, tmp_path):
+    saved = tmp_path / "saved.json"
+    assert run("replay", spec_doc, "--save", saved).returncode == 0
+    res = run("info", saved)
+    assert res.returncode == 0, res.stderr
+    assert "body 'Body'" in res.stdout and "vertices" in res.stdout
+    check = run("replay", saved, "--check")
+    assert check.returncode == 0 and "matches the snapshot" in check.stderr
+
+
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["info", "missing.json"], "no such file"),
+        (["replay", "DOC", "--export", "nowhere/x.obj", "--layer", "body"], "does not exist"),
+        (["replay", "DOC", "--export", "x.fbx", "--layer", "body"], "cannot export to '.fbx'"),
+        (["replay", "DOC", "--export", "x.obj", "--layer", "ghost"], "no layer with id 'ghost'"),
+    ],
+)
+def test_errors_are_one_line_without_traceback(spec_doc, tmp_path, args, message):
+    args = [str(spec_doc) if a == "DOC" else (str(tmp_path / a) if a.endswith((".obj", ".fbx")) else a) for a in args]
+    res = run(*args)
+    assert res.returncode == 2
+    lines = res.stderr.strip().splitlines()
+    assert len(lines) == 1 and message in lines[0] and "Traceback" not in res.stderr
+
+
+def test_bad_contour_in_journal_names_entry(tmp_path):
+    doc = json.loads(json.dumps(SPEC_DOC))
+    doc["journal"][1]["points"] = [[0, 0], [1, 1], [1, 0], [0, 1]]  # a figure eight
+    p = tmp_path / "bad.json"
+    p.write_text(json.dumps(doc))
+    res = run("replay", p)
+    assert res.returncode == 2
+    assert "journal entry 1 (set_contour)" in res.stderr and "Traceback" not in res.stderr
