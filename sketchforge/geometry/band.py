@@ -1,0 +1,63 @@
+"""The band around a selected isophote: where the person may redraw it (thesis 4.3)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import shapely
+from shapely.geometry import LineString, Polygon
+
+from sketchforge.errors import SculptError
+
+
+def band(polyline: np.ndarray, radius: float, outline: np.ndarray):
+    """Minkowski sum of the isophote with a disk, clipped to the layer's outline.
+
+    Parameters
+    ----------
+    polyline : (k, 2+) float64
+        The selected isophote in the drawing plane (extra columns ignored); a closed one repeats
+        its first point at the end.
+    radius : float
+        Band radius in drawing units, > 0.
+    outline : (b, 2+) float64
+        The layer's outline polygon (e.g. ``mesh.V[mesh.boundary, :2]``), either orientation,
+        closing point optional.
+
+    Returns
+    -------
+    shapely Polygon or MultiPolygon
+        The band; non-empty.
+
+    Raises
+    ------
+    SculptError
+        For a radius that is not a positive number, an isophote with fewer than two distinct
+        points, or a band that misses the outline.
+    """
+    try:
+        r = float(radius)
+    except (TypeError, ValueError):
+        raise SculptError(f"the band radius must be a number, got {radius!r}") from None
+    if not math.isfinite(r) or r <= 0.0:
+        raise SculptError(f"the band radius must be positive, got {radius!r}")
+    line = np.asarray(polyline, dtype=np.float64)[:, :2]
+    if len(line) < 2 or not np.any(line != line[0]):
+        raise SculptError("the selected isophote is a single point; pick another isophote")
+    out = np.asarray(outline, dtype=np.float64)[:, :2]
+    if len(out) < 3:
+        raise SculptError("the layer has no outline to clip the band to")
+    region = shapely.make_valid(Polygon(out))
+    # Round joins and caps make the buffer the exact Minkowski sum with a disk (up to the
+    # polygonal approximation of the arcs, 16 segments per quarter circle).
+    swept = LineString(line).buffer(r, quad_segs=16)
+    result = swept.intersection(region)
+    result = shapely.make_valid(result)
+    parts = getattr(result, "geoms", [result])
+    polys = [g for g in parts if g.geom_type in ("Polygon", "MultiPolygon")]
+    if not polys or all(p.is_empty for p in polys):
+        raise SculptError("the band does not overlap the layer")
+    if len(polys) == 1:
+        return polys[0]
+    return shapely.union_all(polys)

@@ -1,0 +1,120 @@
+"""Face and vertex normals of a triangle mesh, and the slopes p, q of a height field.
+
+Conventions: x right, y up, z towards the viewer; a face's normal follows its winding
+(counter-clockwise seen from +z gives n_z > 0). Slopes follow thesis eq. 2.3.2:
+p = -n_x / n_z = dz/dx and q = -n_y / n_z = dz/dy.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: Smallest n_z used when turning normals into slopes. An inflated surface meets the drawing
+#: plane at a right angle, so the true normal at the rim lies in the plane (n_z = 0) and its
+#: slopes are infinite. Mesh rim normals come from the adjacent triangles and are never
+#: exactly in the plane, but a steep sliver can still give n_z ~ 1e-8; clamping to 1e-2 caps the
+#: slope magnitude at 100 (a surface angle of 89.4 degrees), keeping the strip equations
+#: finite while changing no normal that is less steep than that.
+NZ_MIN = 1e-2
+
+
+def face_normals(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Unit face normals and face areas.
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+        Vertex positions.
+    F : (m, 3) int64
+        Triangles; the normal follows the winding (right-hand rule).
+
+    Returns
+    -------
+    N : (m, 3) float64
+        Unit normals; (0, 0, 1) for a degenerate (zero-area) triangle.
+    area : (m,) float64
+        Triangle areas in 3D.
+    """
+    V = np.asarray(V, dtype=np.float64)
+    F = np.asarray(F, dtype=np.int64)
+    cross = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+    norm = np.linalg.norm(cross, axis=1)
+    N = np.zeros_like(cross)
+    N[:, 2] = 1.0
+    ok = norm > 0
+    N[ok] = cross[ok] / norm[ok, None]
+    return N, 0.5 * norm
+
+
+def vertex_normals(V: np.ndarray, F: np.ndarray) -> np.ndarray:
+    """Area-weighted unit vertex normals.
+
+    Each vertex gets the sum of its faces' normals weighted by face area (the sum of the
+    unnormalised cross products). A rim vertex thus takes its normal from the triangles next to
+    it (thesis 4.5), which are never vertical on a height field, so n_z > 0 there.
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+    F : (m, 3) int64
+
+    Returns
+    -------
+    (n, 3) float64
+        Unit normals; (0, 0, 1) for a vertex without faces or whose faces cancel out.
+    """
+    V = np.asarray(V, dtype=np.float64)
+    F = np.asarray(F, dtype=np.int64)
+    cross = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+    acc = np.zeros((len(V), 3))
+    for k in range(3):
+        np.add.at(acc, F[:, k], cross)
+    norm = np.linalg.norm(acc, axis=1)
+    N = np.zeros_like(acc)
+    N[:, 2] = 1.0
+    ok = norm > 1e-300
+    N[ok] = acc[ok] / norm[ok, None]
+    return N
+
+
+def slopes(N: np.ndarray, nz_min: float = NZ_MIN) -> tuple[np.ndarray, np.ndarray]:
+    """Slopes p = -n_x/n_z, q = -n_y/n_z of unit normals, finite everywhere.
+
+    n_z is replaced by ``max(n_z, nz_min)`` before dividing, so a normal at (or beyond, for a
+    fold-over) the rim gives a slope of magnitude at most ``1 / nz_min`` (|n_xy| <= 1), rising
+    against n_xy as a true slope would, instead of inf or NaN. Normals with n_z >= nz_min
+    are converted exactly.
+
+    Parameters
+    ----------
+    N : (..., 3) float64
+        Unit normals.
+    nz_min : float
+        Clamp for n_z, in (0, 1].
+
+    Returns
+    -------
+    p, q : (...) float64
+    """
+    if not 0.0 < nz_min <= 1.0:
+        raise ValueError(f"nz_min must be in (0, 1], got {nz_min}")
+    N = np.asarray(N, dtype=np.float64)
+    nz = np.maximum(N[..., 2], nz_min)
+    return -N[..., 0] / nz, -N[..., 1] / nz
+
+
+def normals_from_slopes(p: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """Unit normals (-p, -q, 1) / sqrt(1 + p² + q²) (thesis eq. 2.3.1).
+
+    Parameters
+    ----------
+    p, q : (...) float64
+
+    Returns
+    -------
+    (..., 3) float64
+    """
+    p = np.asarray(p, dtype=np.float64)
+    q = np.asarray(q, dtype=np.float64)
+    n = np.stack([-p, -q, np.ones_like(p)], axis=-1)
+    return n / np.sqrt(1.0 + p * p + q * q)[..., None]
