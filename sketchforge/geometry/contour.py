@@ -1,0 +1,440 @@
+"""Drawn stroke -> clean, evenly resampled, counter-clockwise contour (thesis 3.2).
+
+Two steps, so that a caller can check the mesh size between them before any array of the
+target resolution is built:
+
+1. :func:`prepare_outline` validates the stroke, thins it (near-duplicates, and 100k-point
+   strokes, in O(n)), trims a closing overshoot, decides whether the closing segment is a
+   junction Γ_conn, rejects self-intersections (O(n log n) with an R-tree of segments) and
+   orients it counter-clockwise.
+2. :func:`resample_outline` smooths hand jitter (Taubin λ|μ, which does not shrink the shape)
+   and resamples at the target edge length, keeping sharp corners and the junction's ends.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import shapely
+
+from sketchforge.errors import ContourError
+
+#: Coordinates beyond this (drawing units) are refused: squared distances of 1e200 overflow,
+#: and no drawing is that large.
+MAX_COORDINATE = 1e9
+#: A closed outline gets at least this many boundary edges whatever the resolution, so a
+#: coarse resolution on a small stroke still makes a blob rather than a flat triangle.
+MIN_BOUNDARY_EDGES = 12
+#: The ends of a stroke further apart than this many edge lengths make an open stroke.
+JUNCTION_GAP_EDGES = 2.0
+#: A self-crossing with both crossing segments within this fraction of the stroke's length
+#: from its two ends is a closing overshoot (trimmed); any other crossing is an error.
+OVERSHOOT_FRACTION = 0.2
+#: Turning angle (degrees, measured over one edge length each side) above which a point is
+#: a corner that smoothing and resampling keep.
+CORNER_ANGLE = 50.0
+
+
+@dataclass(frozen=True)
+class Outline:
+    """A validated stroke, before resampling.
+
+    points : (k, 2) float64
+        The thinned stroke, oriented so that the closed ring points[0], ..., points[-1],
+        points[0] is counter-clockwise. First point not repeated.
+    is_open : bool
+        True when the closing segment points[-1] -> points[0] is the junction Γ_conn.
+    area : float
+        Area enclosed by the ring (> 0).
+    perimeter : float
+        Length of the ring, closing segment included.
+    edge_length : float
+        The edge length to resample at: the requested resolution, capped so the ring has at
+        least MIN_BOUNDARY_EDGES edges.
+    """
+
+    points: np.ndarray
+    is_open: bool
+    area: float
+    perimeter: float
+    edge_length: float
+
+
+@dataclass(frozen=True)
+class Contour:
+    """A resampled contour, ready to triangulate.
+
+    points : (k, 2) float64
+        Counter-clockwise ring, first point not repeated, edges ≈ edge_length.
+    junction : (j,) int64
+        Indices into ``points`` of Γ_conn, in ring order, both endpoints included; empty for
+        a closed outline.
+    corners : (c,) int64
+        Indices of the points kept exactly: sharp corners and, for an open stroke, the
+        junction's two ends.
+    edge_length : float
+    """
+
+    points: np.ndarray
+    junction: np.ndarray
+    corners: np.ndarray
+    edge_length: float
+
+
+# --- small helpers ---------------------------------------------------------------------------
+
+
+def signed_area(P) -> float:
+    """Shoelace area of the closed ring P (k, 2); positive when counter-clockwise."""
+    P = np.asarray(P, dtype=np.float64)
+    x, y = P[:, 0], P[:, 1]
+    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+
+
+def _arclength(P) -> np.ndarray:
+    """Cumulative length along the polyline P (k, 2) -> (k,), starting at 0."""
+    return np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(P, axis=0), axis=1))])
+
+
+def _fmt(p) -> str:
+    return f"({p[0]:.4g}, {p[1]:.4g})"
+
+
+def validate_stroke(points) -> np.ndarray:
+    """The stroke as an (n, 2) float64 array, or ContourError saying what is wrong."""
+    try:
+        P = np.array(points, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise ContourError(f"the stroke must be a list of [x, y] number pairs ({exc})") from None
+    if P.ndim != 2 or P.shape[1] != 2:
+        raise ContourError(f"the stroke must be a list of [x, y] pairs, got an array of shape {P.shape}")
+    if not np.all(np.isfinite(P)):
+        bad = int(np.flatnonzero(~np.all(np.isfinite(P), axis=1))[0])
+        raise ContourError(f"the stroke has a point that is not a finite number (point {bad}: {P[bad].tolist()})")
+    if P.size and np.max(np.abs(P)) > MAX_COORDINATE:
+        raise ContourError(
+            f"the stroke's coordinates reach {np.max(np.abs(P)):.3g}; they must lie within "
+            f"±{MAX_COORDINATE:.0e} drawing units"
+        )
+    return P
+
+
+def decimate(P, spacing: float) -> np.ndarray:
+    """Thin a polyline to about one point per ``spacing`` of length, in O(n), keeping both ends.
+
+    Points are binned by arc length and each bin is replaced by its mean: near duplicates
+    vanish and dense tablet noise is averaged rather than sampled (rounding corners by at most
+    spacing/2). A noisy stroke's arc length overstates its real length, so thinning repeats
+    (each pass O(n)) until the count settles.
+
+    P (n, 2) float64 -> (m, 2) float64.
+    """
+    if len(P) < 3 or spacing <= 0:
+        return P
+    for _ in range(4):
+        # Arc length of a 5-point moving average: noise between samples inflates the raw
+        # length several times over, which would make the bins far too small.
+        c = np.cumsum(np.vstack([np.zeros((1, 2)), P]), axis=0)
+        w = min(5, len(P))
+        smooth = np.vstack([P[: w // 2], (c[w:] - c[:-w]) / w, P[len(P) - (w - 1 - w // 2) :]])
+        s = _arclength(smooth)
+        bucket = np.floor(s / spacing).astype(np.int64)
+        starts = np.flatnonzero(np.concatenate([[True], bucket[1:] > bucket[:-1]]))
+        if len(starts) > 0.9 * len(P):
+            break
+        counts = np.diff(np.concatenate([starts, [len(P)]]))
+        Q = np.add.reduceat(P, starts, axis=0) / counts[:, None]
+        # The stroke's ends stay where they were drawn (they define the junction).
+        Q = np.vstack([P[:1], Q[1:-1], P[-1:]]) if len(Q) > 2 else np.vstack([P[:1], P[-1:]])
+        if len(Q) < 3:
+            break
+        P = Q
+    # A bin edge can split a cluster of near-duplicates into two means a hair apart, which would
+    # make a zig-zag that touches itself: drop points too close to their predecessor.
+    d = np.linalg.norm(np.diff(P, axis=0), axis=1)
+    keep = np.concatenate([[True], d >= 0.25 * spacing])
+    keep[-1] = True
+    P = P[keep]
+    if len(P) > 2 and np.linalg.norm(P[-1] - P[-2]) < 0.25 * spacing:
+        P = np.delete(P, -2, axis=0)
+    return P
+
+
+def segment_crossings(P, closed: bool) -> np.ndarray:
+    """Pairs of non-adjacent segments of the polyline that touch or cross, O(n log n).
+
+    Parameters
+    ----------
+    P : (k, 2) float64
+    closed : bool
+        Include the closing segment P[-1] -> P[0] (index k-1).
+
+    Returns
+    -------
+    pairs : (c, 2) int64, segment i runs from P[i] to P[i+1]; i < j; sorted.
+    """
+    Q = np.vstack([P, P[:1]]) if closed else P
+    nseg = len(Q) - 1
+    if nseg < 3:
+        return np.zeros((0, 2), dtype=np.int64)
+    segs = shapely.linestrings(np.stack([Q[:-1], Q[1:]], axis=1))
+    tree = shapely.STRtree(segs)
+    i, j = tree.query(segs, predicate="intersects")
+    keep = (j > i + 1) & ~(closed & (i == 0) & (j == nseg - 1))
+    pairs = np.column_stack([i[keep], j[keep]]).astype(np.int64)
+    return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
+
+
+def _intersection_point(a, b, c, d) -> np.ndarray:
+    """Where segment ab meets segment cd (the midpoint of the overlap if they are parallel)."""
+    r, s = b - a, d - c
+    den = r[0] * s[1] - r[1] * s[0]
+    if abs(den) < 1e-300:
+        return 0.5 * (a + d)
+    t = ((c[0] - a[0]) * s[1] - (c[1] - a[1]) * s[0]) / den
+    return a + min(max(t, 0.0), 1.0) * r
+
+
+# --- step 1 ------------------------------------------------------------------------------------
+
+
+def prepare_outline(points, resolution: float, closed: bool = False) -> Outline:
+    """Validate and thin a drawn stroke, trim a closing overshoot, orient it counter-clockwise.
+
+    Parameters
+    ----------
+    points : (n, 2) array-like of float
+        The stroke as drawn, either orientation, any number of points.
+    resolution : float
+        Target edge length (drawing units), > 0.
+    closed : bool
+        True: the whole outline is free (no junction). False: if the ends are more than
+        JUNCTION_GAP_EDGES edge lengths apart, the closing segment is the junction.
+
+    Returns
+    -------
+    Outline
+
+    Raises
+    ------
+    ContourError
+        Fewer than 3 distinct points, zero area, non-finite or huge coordinates, or a
+        self-intersection other than a closing overshoot.
+    """
+    P = validate_stroke(points)
+    if len(P):
+        P = P[np.concatenate([[True], np.any(np.diff(P, axis=0) != 0, axis=1)])]
+    if len(np.unique(P, axis=0)) < 3:
+        raise ContourError(f"the stroke has {len(np.unique(P, axis=0))} distinct points; an outline needs at least 3")
+    # All points on one line: no area, whatever the order. Checked before crossings so that a
+    # stroke traced back and forth along a line is reported as what it is.
+    centred = P - P.mean(axis=0)
+    sv = np.linalg.svd(centred, compute_uv=False)
+    if sv[1] <= 1e-9 * sv[0]:
+        raise ContourError("the stroke's points all lie on one straight line: it encloses no area")
+
+    raw_length = float(_arclength(P)[-1]) + float(np.linalg.norm(P[-1] - P[0]))
+    h = min(float(resolution), raw_length / MIN_BOUNDARY_EDGES)
+    P = decimate(P, h / 4.0)
+    if len(P) < 3:
+        raise ContourError("the stroke is too short: fewer than 3 distinct points remain after thinning")
+
+    P, trimmed = _trim_overshoot(P)
+    crossings = segment_crossings(P, closed=True)
+    if len(crossings):
+        i, j = crossings[0]
+        Q = np.vstack([P, P[:1]])
+        x = _intersection_point(Q[i], Q[i + 1], Q[j], Q[j + 1])
+        if not trimmed and j == len(P) - 1 and not closed:
+            raise ContourError(
+                f"the straight line closing the stroke (from its end back to its start) crosses the "
+                f"stroke near {_fmt(x)}; draw the stroke so that its ends face each other"
+            )
+        raise ContourError(f"the outline crosses itself near {_fmt(x)} (a figure eight cannot be inflated)")
+
+    gap = float(np.linalg.norm(P[-1] - P[0]))
+    is_open = (not closed) and (not trimmed) and gap > JUNCTION_GAP_EDGES * h
+    area = signed_area(P)
+    perimeter = float(_arclength(P)[-1]) + gap
+    if abs(area) <= 1e-12 * perimeter * perimeter:
+        raise ContourError("the outline encloses no area")
+    if area < 0:
+        P = P[::-1].copy()
+    h = min(h, perimeter / MIN_BOUNDARY_EDGES)
+    return Outline(np.ascontiguousarray(P), is_open, abs(area), perimeter, h)
+
+
+def _trim_overshoot(P):
+    """Cut a stroke that crosses itself near both ends back to the closed loop between the
+    crossing; returns (points, trimmed). Other crossings are left for the caller to report."""
+    pairs = segment_crossings(P, closed=False)
+    if not len(pairs):
+        return P, False
+    s = _arclength(P)
+    total = s[-1]
+    head = s[pairs[:, 0] + 1] <= OVERSHOOT_FRACTION * total  # segment i starts in the head zone
+    tail = s[pairs[:, 1]] >= (1.0 - OVERSHOOT_FRACTION) * total
+    cand = pairs[head & tail]
+    if not len(cand):
+        return P, False
+    # Outermost crossing: the loop it closes keeps as much of the stroke as possible.
+    i = int(cand[:, 0].min())
+    j = int(cand[cand[:, 0] == i][:, 1].max())
+    x = _intersection_point(P[i], P[i + 1], P[j], P[j + 1])
+    loop = np.vstack([x[None], P[i + 1 : j + 1]])
+    # Drop points that coincide with the new corner x.
+    d = np.linalg.norm(loop - x, axis=1)
+    loop = np.vstack([loop[:1], loop[1:][d[1:] > 1e-12 * max(total, 1e-300)]])
+    return loop, True
+
+
+# --- step 2 ------------------------------------------------------------------------------------
+
+
+def _resample_polyline(P, n_edges: int) -> np.ndarray:
+    """n_edges + 1 points evenly spaced along the polyline P (k, 2), both ends kept."""
+    s = _arclength(P)
+    t = np.linspace(0.0, s[-1], n_edges + 1)
+    out = np.column_stack([np.interp(t, s, P[:, 0]), np.interp(t, s, P[:, 1])])
+    out[0], out[-1] = P[0], P[-1]
+    return out
+
+
+def _turning_angles(P, window: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Angle (degrees) between the chords to the points ``window`` back and ahead along the
+    closed ring P (k, 2); chords over a length, not single edges, so jitter does not count.
+
+    Returns the angles (k,) and, for each point, the index range [back, ahead] (into the ring
+    tiled three times, point i at i + k) covering ``window`` on each side.
+    """
+    k = len(P)
+    Q = np.vstack([P, P, P])
+    s = _arclength(Q)
+    idx = np.arange(k, 2 * k)
+    back = np.clip(np.searchsorted(s, s[idx] - window, side="right") - 1, 0, 3 * k - 1)
+    ahead = np.clip(np.searchsorted(s, s[idx] + window, side="left"), 0, 3 * k - 1)
+    u = Q[idx] - Q[back]
+    v = Q[ahead] - Q[idx]
+    cos = np.einsum("ij,ij->i", u, v) / np.maximum(np.linalg.norm(u, axis=1) * np.linalg.norm(v, axis=1), 1e-300)
+    return np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))), back, ahead
+
+
+def _find_corners(P, window: float) -> np.ndarray:
+    """Indices of sharp corners of the closed ring P (k, 2): turning angle above CORNER_ANGLE
+    and the largest within ``window`` along the ring (one corner per plateau: strictly larger
+    than the points after it, at least as large as those before)."""
+    ang, back, ahead = _turning_angles(P, window)
+    k = len(P)
+    tiled = np.concatenate([ang, ang, ang])
+    corners = []
+    # Only candidates are visited, each against the few points within one window: O(k).
+    for i in np.flatnonzero(ang > CORNER_ANGLE):
+        lo, hi = max(back[i], i + 1), min(ahead[i], i + 2 * k - 1)
+        before, after = tiled[lo : i + k], tiled[i + k + 1 : hi + 1]
+        if np.all(ang[i] >= before) and np.all(ang[i] > after):
+            corners.append(i)
+    return np.asarray(corners, dtype=np.int64)
+
+
+def _taubin(piece: np.ndarray, periodic: bool, iterations: int = 3) -> np.ndarray:
+    """Taubin λ|μ smoothing (λ = 0.5, μ = -0.53): removes jitter at the sample spacing without
+    the shrinking of plain Laplacian smoothing. Ends of an open piece stay fixed."""
+    X = piece.copy()
+    for _ in range(iterations):
+        for w in (0.5, -0.53):
+            if periodic:
+                X = X + w * (0.5 * (np.roll(X, 1, axis=0) + np.roll(X, -1, axis=0)) - X)
+            elif len(X) > 2:
+                X[1:-1] = X[1:-1] + w * (0.5 * (X[:-2] + X[2:]) - X[1:-1])
+    return X
+
+
+def resample_outline(outline: Outline, smooth: bool = True) -> Contour:
+    """Smooth jitter lightly and resample at ``outline.edge_length``.
+
+    The drawn part is cut at its sharp corners (and, for an open stroke, at its ends); each
+    piece is resampled at half the edge length, smoothed with its ends fixed, and resampled at
+    the edge length. The junction of an open stroke stays a straight segment.
+
+    Parameters
+    ----------
+    outline : Outline
+    smooth : bool
+        False skips the jitter smoothing (for synthetic, exact outlines).
+
+    Returns
+    -------
+    Contour
+
+    Raises
+    ------
+    ContourError
+        When smoothing made parts of the outline touch (features finer than the resolution).
+    """
+    P, h = outline.points, outline.edge_length
+    k = len(P)
+    corners = _find_corners(P, h)
+    if outline.is_open:
+        # The junction's ends are pins; corners on the junction itself cannot exist (straight).
+        # Corners within half an edge of the ends would make slivers of pieces: the ends win.
+        s_ring = _arclength(P)
+        far = (s_ring[corners] > 0.5 * h) & (s_ring[corners] < s_ring[-1] - 0.5 * h)
+        pins = np.unique(np.concatenate([[0, k - 1], corners[far]])).astype(np.int64)
+    else:
+        pins = corners
+    ring = np.vstack([P, P[:1]])
+    pieces = []
+    if len(pins) == 0:
+        fine = _resample_polyline(ring, max(2 * MIN_BOUNDARY_EDGES, int(round(outline.perimeter / (0.5 * h)))))[:-1]
+        if smooth:
+            fine = _taubin(fine, periodic=True)
+        fine = np.vstack([fine, fine[:1]])
+        pieces.append(_resample_polyline(fine, max(MIN_BOUNDARY_EDGES, int(round(_arclength(fine)[-1] / h)))))
+        junction_piece = None
+        starts = []
+    else:
+        starts = list(pins)
+        ends = starts[1:] + [starts[0] + k]
+        junction_piece = None
+        for a, b in zip(starts, ends):
+            seg = ring[a : b + 1] if b <= k else np.vstack([ring[a:], ring[1 : b - k + 1]])
+            if outline.is_open and a == k - 1:
+                junction_piece = len(pieces)  # the closing segment: straight, not smoothed
+                n = max(1, int(round(np.linalg.norm(seg[-1] - seg[0]) / h)))
+                pieces.append(_resample_polyline(seg, n))
+                continue
+            length = _arclength(seg)[-1]
+            fine = _resample_polyline(seg, max(2, int(round(length / (0.5 * h)))))
+            if smooth:
+                fine = _taubin(fine, periodic=False)
+            pieces.append(_resample_polyline(fine, max(1, int(round(_arclength(fine)[-1] / h)))))
+    # Concatenate pieces, dropping each piece's last point (the next piece's first).
+    out, corner_idx, junction = [], [], np.zeros(0, dtype=np.int64)
+    pos = 0
+    for p_i, piece in enumerate(pieces):
+        body = piece[:-1]
+        if len(starts):
+            corner_idx.append(pos)
+        if p_i == junction_piece:
+            junction = np.arange(pos, pos + len(piece), dtype=np.int64)
+        out.append(body)
+        pos += len(body)
+    Q = np.ascontiguousarray(np.vstack(out))
+    if len(junction):
+        junction[junction >= len(Q)] -= len(Q)  # the junction ends at the ring's first point
+    # h <= perimeter / MIN_BOUNDARY_EDGES and (open) drawn length >= gap > 2h guarantee it.
+    assert len(Q) >= 3, "resampling lost the outline"
+    crossings = segment_crossings(Q, closed=True)
+    if len(crossings):
+        i = crossings[0, 0]
+        raise ContourError(
+            f"parts of the outline come closer to each other than the resolution {h:.3g} near "
+            f"{_fmt(Q[i])}; use a finer resolution"
+        )
+    return Contour(Q, junction, np.asarray(corner_idx, dtype=np.int64), h)
+
+
+def clean_contour(points, resolution: float, closed: bool = False, smooth: bool = True) -> Contour:
+    """:func:`prepare_outline` then :func:`resample_outline` (no mesh-size check in between)."""
+    return resample_outline(prepare_outline(points, resolution, closed), smooth=smooth)

@@ -1,0 +1,254 @@
+"""The inflate plugin: disk -> ellipsoid, fairing, mesh contract, junctions, errors, limits."""
+
+import warnings
+
+import numpy as np
+import pluggy
+import pytest
+
+from inflate_shapes import circle, ellipse, figure_eight, letter_m, min_angles, signed_face_areas, star
+from sketchforge.document.layer import DEFAULT_INFLATE_PARAMS
+from sketchforge.errors import ContourError, LimitError, ParameterError
+from sketchforge.geometry.contour import clean_contour
+from sketchforge.geometry.mesh import Mesh
+from sketchforge.geometry.triangulate import MAX_VERTICES
+from sketchforge.plugins import hookspecs
+from sketchforge_inflate import DEFAULT_PARAMS, inflate_stroke
+from sketchforge_inflate import plugin as inflate_plugin
+
+FLAT = {"smoothing": 0.0}
+
+
+def _ellipsoid_error(mesh, height):
+    """RMS and max of z minus the exact ellipsoid over the mesh's own boundary radius."""
+    r = np.linalg.norm(mesh.V[:, :2], axis=1)
+    R = r[mesh.boundary].mean()
+    exact = height / R * np.sqrt(np.maximum(R * R - r * r, 0.0))
+    err = mesh.V[:, 2] - exact
+    return np.sqrt(np.mean(err**2)), np.abs(err).max()
+
+
+def _rim_slope(mesh):
+    """Mean |∇z| over the triangles that touch the boundary."""
+    V, F = mesh.V, mesh.F
+    on_rim = np.isin(F, mesh.boundary).any(axis=1)
+    P, z = V[F[on_rim]][:, :, :2], V[F[on_rim]][:, :, 2]
+    e1, e2 = P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]
+    det = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
+    dz1, dz2 = z[:, 1] - z[:, 0], z[:, 2] - z[:, 0]
+    gx = (dz1 * e2[:, 1] - dz2 * e1[:, 1]) / det
+    gy = (e1[:, 0] * dz2 - e2[:, 0] * dz1) / det
+    return np.hypot(gx, gy).mean()
+
+
+def _check_contract(mesh):
+    assert isinstance(mesh, Mesh)
+    assert mesh.V.dtype == np.float64 and mesh.V.shape[1] == 3
+    assert mesh.F.dtype == np.int64 and mesh.F.shape[1] == 3
+    assert np.all(np.isfinite(mesh.V))
+    assert np.all(mesh.V[:, 2] >= 0.0)
+    assert np.all(mesh.V[mesh.boundary, 2] == 0.0)
+    assert np.all(signed_face_areas(mesh.V, mesh.F) > 0)  # counter-clockwise seen from +z
+    # Consistent orientation: every directed edge at most once, boundary edges exactly the loop.
+    E = np.vstack([mesh.F[:, [0, 1]], mesh.F[:, [1, 2]], mesh.F[:, [2, 0]]])
+    assert len(np.unique(E, axis=0)) == len(E)
+    keys = set(map(tuple, E))
+    border = {e for e in keys if (e[1], e[0]) not in keys}
+    b = mesh.boundary
+    assert border == set(zip(b.tolist(), np.roll(b, -1).tolist()))
+    x, y = mesh.V[b, 0], mesh.V[b, 1]
+    assert np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y) > 0
+
+
+def test_default_params_match_the_document_defaults():
+    assert dict(DEFAULT_PARAMS) == dict(DEFAULT_INFLATE_PARAMS)
+
+
+def test_disk_inflates_to_an_ellipsoid_converging_under_refinement():
+    errors = []
+    for h in (0.08, 0.04, 0.02):
+        mesh = inflate_stroke(circle(), True, {"resolution": h, "inflation": 0.7, **FLAT})
+        _check_contract(mesh)
+        rms, _ = _ellipsoid_error(mesh, 0.7)
+        errors.append(rms / mesh.V[:, 2].max())
+    assert errors[-1] < 0.01
+    assert errors[0] > errors[1] > errors[2]
+
+
+def test_result_does_not_depend_on_drawing_scale():
+    a = inflate_stroke(ellipse(), True, {"resolution": 0.05})
+    b = inflate_stroke(3.0 * ellipse(), True, {"resolution": 0.15})
+    # Same outline scaled; Triangle's interior points differ by rounding, the shape does not.
+    assert np.allclose(3.0 * a.V[a.boundary], b.V[b.boundary], atol=1e-9)
+    assert abs(b.n_vertices / a.n_vertices - 1.0) < 0.05
+    assert b.V[:, 2].max() == pytest.approx(3.0 * a.V[:, 2].max(), rel=2e-3)
+
+
+def test_fairing_smooths_the_rim_without_flattening():
+    flat = inflate_stroke(circle(), True, {"resolution": 0.03, **FLAT})
+    faired = inflate_stroke(circle(), True, {"resolution": 0.03})
+    _check_contract(faired)
+    assert np.array_equal(flat.F, faired.F)
+    assert _rim_slope(faired) < 0.5 * _rim_slope(flat)
+    peak0, peak1 = flat.V[:, 2].max(), faired.V[:, 2].max()
+    assert abs(peak1 - peak0) < 0.05 * peak0
+    # No flattening: at r = 0.8 the faired blob keeps > 95% of the ellipsoid's height.
+    r = np.linalg.norm(faired.V[:, :2], axis=1)
+    ring = np.abs(r - 0.8) < 0.02
+    assert faired.V[ring, 2].mean() > 0.95 * flat.V[ring, 2].mean()
+
+
+def test_smoothing_zero_is_exactly_the_unfaired_mesh():
+    a = inflate_stroke(star()[0], True, {"resolution": 0.05, "smoothing": 0.0})
+    b = inflate_stroke(star()[0], True, {"resolution": 0.05, "smoothing": 0})
+    assert a.identical(b)
+    c = inflate_stroke(star()[0], True, {"resolution": 0.05, "smoothing": 1e-3})
+    assert not a.identical(c)
+
+
+def test_faired_peak_agrees_across_resolutions():
+    peaks = [inflate_stroke(ellipse(), True, {"resolution": h}).V[:, 2].max() for h in (0.04, 0.02)]
+    assert abs(peaks[0] - peaks[1]) < 0.01 * peaks[1]
+
+
+@pytest.mark.parametrize("name", ["disk", "ellipse", "star", "m"])
+def test_minimum_angle_respected_away_from_sharp_corners(name):
+    pts = {"disk": circle(), "ellipse": ellipse(), "star": star()[0], "m": letter_m()}[name]
+    contour = clean_contour(pts, 0.04, closed=True)
+    mesh = inflate_stroke(pts, True, {"resolution": 0.04})
+    # Triangle keeps our boundary, so the boundary vertices are the contour's, in order.
+    assert np.array_equal(mesh.V[mesh.boundary, :2], contour.points)
+    P = contour.points
+    d_in = P[contour.corners] - P[contour.corners - 1]
+    d_out = P[(contour.corners + 1) % len(P)] - P[contour.corners]
+    inner = np.degrees(np.pi - np.arccos(np.einsum("ij,ij->i", d_in, d_out) / (np.linalg.norm(d_in, axis=1) * np.linalg.norm(d_out, axis=1))))
+    sharp = contour.corners[inner < 25.0]
+    away = ~np.isin(mesh.F, sharp).any(axis=1)
+    assert min_angles(mesh.V, mesh.F[away]).min() >= 25.0 - 1e-9
+
+
+@pytest.mark.parametrize("name", ["star", "m", "overshoot", "jittery"])
+def test_shapes_inflate(name):
+    rng = np.random.default_rng(3)
+    # Head and tail both pass through (1, 0), the head outwards and the tail inwards: the
+    # stroke crosses itself there and overshoots by 0.4 rad at each end.
+    t = np.linspace(-0.4, 2 * np.pi + 0.4, 500)
+    r = 1.0 + 0.3 * t * (2 * np.pi - t) / (4 * np.pi**2)
+    pts = {
+        "star": star()[0],
+        "m": letter_m(),
+        "overshoot": np.column_stack([r * np.cos(t), r * np.sin(t)]),
+        "jittery": circle(n=3000) + 0.003 * rng.standard_normal((3000, 2)),
+    }[name]
+    mesh = inflate_stroke(pts, False, {"resolution": 0.04})
+    _check_contract(mesh)
+    assert len(mesh.junction) == 0
+    interior = np.setdiff1d(np.arange(mesh.n_vertices), mesh.boundary)
+    assert len(interior) > 50 and np.all(mesh.V[interior, 2] > 0)
+
+
+def test_open_stroke_keeps_its_junction():
+    P = circle(n=300, turns=(2 * np.pi - 1.0) / (2 * np.pi), start=0.5)
+    mesh = inflate_stroke(P, False, {"resolution": 0.04})
+    _check_contract(mesh)
+    J = mesh.junction
+    assert len(J) >= 3
+    pos = {v: i for i, v in enumerate(mesh.boundary.tolist())}
+    assert all((pos[b] - pos[a]) % len(mesh.boundary) == 1 for a, b in zip(J[:-1], J[1:]))
+    ends = {tuple(np.round(P[0], 12)), tuple(np.round(P[-1], 12))}
+    assert {tuple(np.round(mesh.V[J[0], :2], 12)), tuple(np.round(mesh.V[J[-1], :2], 12))} == ends
+    assert np.abs(mesh.V[J, 0] - np.cos(0.5)).max() < 1e-12
+    assert np.all(mesh.V[J, 2] == 0.0)
+    assert len(inflate_stroke(P, True, {"resolution": 0.04}).junction) == 0
+
+
+def test_ten_thousand_vertices_reachable():
+    mesh = inflate_stroke(circle(), True, {"resolution": 0.024})
+    assert 9_000 < mesh.n_vertices < 12_000
+
+
+def test_hook_implementation_through_pluggy():
+    pm = pluggy.PluginManager("sketchforge")
+    pm.add_hookspecs(hookspecs)
+    pm.register(inflate_plugin)
+    mesh = pm.hook.sketchforge_inflate(points=circle(n=100).tolist(), closed=True, params={"resolution": 0.1})
+    _check_contract(mesh)
+
+
+@pytest.mark.parametrize(
+    "params, message",
+    [
+        ({"resolution": 0.0}, "resolution"),
+        ({"resolution": -1.0}, "resolution"),
+        ({"resolution": float("nan")}, "finite"),
+        ({"inflation": float("inf")}, "finite"),
+        ({"inflation": -0.1}, "inflation"),
+        ({"smoothing": 1.0}, r"\[0, 1\)"),
+        ({"smoothing": -0.01}, r"\[0, 1\)"),
+        ({"smoothing": "0.5"}, "number"),
+        ({"resolution": True}, "number"),
+    ],
+)
+def test_bad_parameters(params, message):
+    with pytest.raises(ParameterError, match=message):
+        inflate_stroke(circle(), True, params)
+
+
+def test_missing_and_unknown_keys():
+    a = inflate_stroke(circle(n=100), True, {"resolution": 0.1, "colour": "red"})
+    b = inflate_stroke(circle(n=100), True, {**DEFAULT_PARAMS, "resolution": 0.1})
+    assert a.identical(b)
+
+
+@pytest.mark.parametrize(
+    "points, message",
+    [
+        ([[0, 0], [1, 0]], "at least 3"),
+        ([[0, 0], [1, 0], [2, 0]], "straight line"),
+        ([[0, 0], [1, np.nan], [0, 1]], "finite"),
+        ([[0, 0], [1e200, 0], [0, 1e200]], "must lie within"),
+        (figure_eight(), "crosses itself"),
+    ],
+)
+def test_bad_contours(points, message):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        with pytest.raises(ContourError, match=message):
+            inflate_stroke(points, True, {"resolution": 0.05})
+
+
+def test_too_fine_a_resolution_is_refused_before_triangulating(monkeypatch):
+    import sketchforge_inflate.inflate as mod
+
+    def no_triangulation(*a, **k):  # pragma: no cover - must not be reached
+        raise AssertionError("triangulated despite the limit")
+
+    monkeypatch.setattr(mod, "triangulate_polygon", no_triangulation)
+    monkeypatch.setattr(mod, "resample_outline", no_triangulation)
+    with pytest.raises(LimitError) as err:
+        inflate_stroke(circle(), True, {"resolution": 1e-4})
+    msg = str(err.value)
+    assert f"{MAX_VERTICES:,}" in msg and "about" in msg
+    est = int(msg.split("about ")[1].split(" vertices")[0].replace(",", ""))
+    assert 2e8 < est < 6e8  # π / (0.43·1e-8) · 0.8 ≈ 5.8e8
+
+
+def test_huge_drawing_with_fine_resolution_hits_the_limit_not_memory():
+    with pytest.raises(LimitError):
+        inflate_stroke(1e8 * circle(), True, {"resolution": 1.0})
+
+
+def test_loaded_through_the_entry_point():
+    from sketchforge.plugins.manager import PluginHost
+
+    host = PluginHost.create(allowlist=["inflate"])
+    assert "inflate" in host.plugin_names()
+    _check_contract(host.inflate(circle(n=100), True, {"resolution": 0.1}))
+
+
+def test_stroke_of_100k_points_inflates():
+    rng = np.random.default_rng(5)
+    pts = circle(n=100_000) + 1e-4 * rng.standard_normal((100_000, 2))
+    mesh = inflate_stroke(pts, False, {"resolution": 0.05})
+    _check_contract(mesh)
+    assert 1_000 < mesh.n_vertices < 3_000

@@ -1,0 +1,108 @@
+"""Cotangent Laplacian, mass matrix, Dirichlet solver and fairing on small analytic cases."""
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+import scipy.sparse.linalg as sla
+
+from meshes import disk
+from sketchforge.geometry.dirichlet import DirichletSolver
+from sketchforge.geometry.fairing import FairingSolver, fair_heights, fairing_weight, squared_laplacian_matrix
+from sketchforge.geometry.laplacian import as_faces, laplacian_and_mass
+
+
+def test_one_right_triangle_by_hand():
+    V = np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+    L, M = laplacian_and_mass(V, np.array([[0, 1, 2]], dtype=np.int32))
+    # Right angle at vertex 0: the edge opposite it (1-2) gets ½cot(90°) = 0; edges 0-1 and
+    # 0-2 are opposite 45° angles: ½cot(45°) = ½.
+    expected = np.array([[-1.0, 0.5, 0.5], [0.5, -0.5, 0.0], [0.5, 0.0, -0.5]])
+    assert np.allclose(L.toarray(), expected, atol=1e-14)
+    assert M.diagonal().sum() == pytest.approx(0.5, rel=1e-14)
+
+
+def test_faces_coerced_to_int64():
+    assert as_faces(np.array([[0, 1, 2]], dtype=np.int32)).dtype == np.int64
+
+
+def test_rows_sum_to_zero_and_linear_functions_are_harmonic():
+    V2, F, b = disk(1.0, 0.1)
+    L, M = laplacian_and_mass(V2, F)
+    assert abs(L - L.T).max() < 1e-12
+    assert np.abs(L @ np.ones(len(V2))).max() < 1e-12
+    interior = np.setdiff1d(np.arange(len(V2)), b)
+    f = 2.0 * V2[:, 0] - 3.0 * V2[:, 1] + 1.0
+    assert np.abs((L @ f)[interior]).max() < 1e-12
+    assert M.diagonal().sum() == pytest.approx(0.5 * abs(np.sum(V2[b, 0] * np.roll(V2[b, 1], -1) - np.roll(V2[b, 0], -1) * V2[b, 1])), rel=1e-12)
+
+
+def test_dirichlet_solver_matches_scipy_and_keeps_fixed_values_exactly():
+    V2, F, b = disk(1.0, 0.1)
+    L, M = laplacian_and_mass(V2, F)
+    rhs = M @ np.cos(V2[:, 0])
+    fixed_vals = np.sin(3 * np.arctan2(V2[b, 1], V2[b, 0]))
+    order = np.argsort(b)
+    x = DirichletSolver(-L, b).solve(rhs, fixed_vals[order])
+    free = np.setdiff1d(np.arange(len(V2)), b)
+    A = (-L).tocsr()
+    y = np.zeros(len(V2))
+    y[b] = fixed_vals
+    y[free] = sla.spsolve(A[free][:, free].tocsc(), rhs[free] - A[free][:, b] @ fixed_vals)
+    assert np.abs(x - y).max() < 1e-11
+    assert np.array_equal(x[b], fixed_vals)
+
+
+def test_fairing_alpha_zero_is_identity():
+    V2, F, b = disk(1.0, 0.1)
+    L, M = laplacian_and_mass(V2, F)
+    z0 = np.sqrt(np.maximum(1 - (V2**2).sum(1), 0))
+    z = fair_heights(L, M, b, z0, 0.0)
+    assert z.tobytes() == z0.tobytes()
+
+
+def test_fairing_solves_the_stationarity_condition_with_the_factor_two():
+    V2, F, b = disk(1.0, 0.08)
+    L, M = laplacian_and_mass(V2, F)
+    z0 = np.sqrt(np.maximum(1 - (V2**2).sum(1), 0))
+    alpha, unit = 0.3, 0.05
+    z = FairingSolver(L, M, b, alpha, unit).solve(z0)
+    K = squared_laplacian_matrix(L, M)
+
+    def objective(y):  # α E + (1-α)‖y - z0‖²_M with lengths in `unit`
+        return alpha * (y @ (K @ y)) + (1 - alpha) * ((y - z0) @ (M @ (y - z0))) / unit**4
+
+    free = np.setdiff1d(np.arange(len(V2)), b)
+    rng = np.random.default_rng(0)
+    for _ in range(3):
+        d = np.zeros(len(V2))
+        d[free] = rng.standard_normal(len(free)) * 1e-3
+        assert objective(z) < objective(z + d) and objective(z) < objective(z - d)
+    # 4.2.2 as printed (no factor 2 on the linear term) would give half this height.
+    zi = np.argmax(z0)
+    assert z[zi] > 0.9 * z0[zi]
+
+
+def test_fairing_is_scale_invariant_when_the_unit_scales():
+    V2, F, b = disk(1.0, 0.1)
+    z0 = np.sqrt(np.maximum(1 - (V2**2).sum(1), 0))
+    L1, M1 = laplacian_and_mass(V2, F)
+    L3, M3 = laplacian_and_mass(3.0 * V2, F)
+    z1 = fair_heights(L1, M1, b, z0, 0.5, 0.04)
+    z3 = fair_heights(L3, M3, b, 3.0 * z0, 0.5, 0.12)
+    assert np.abs(z3 - 3.0 * z1).max() < 1e-10
+
+
+def test_fairing_weight_rejects_alpha_one():
+    assert fairing_weight(0.5, 2.0) == pytest.approx(16.0)
+    with pytest.raises(ValueError):
+        fairing_weight(1.0)
+
+
+def test_squared_laplacian_is_psd_and_kills_constants_only_through_rows():
+    V2, F, b = disk(1.0, 0.15)
+    L, M = laplacian_and_mass(V2, F)
+    K = squared_laplacian_matrix(L, M)
+    assert isinstance(K, sp.csc_matrix)
+    assert np.abs(K @ np.ones(len(V2))).max() < 1e-10
+    w = np.linalg.eigvalsh(K.toarray())
+    assert w.min() > -1e-8 * w.max()
