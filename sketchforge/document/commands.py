@@ -85,7 +85,7 @@ class Command:
 # --- parsing helpers (journal entries are user-writable, so every field is checked) ---------
 
 
-def _field(d: dict, key: str, kind: type | tuple, cmd: str, default: Any = ...):
+def parse_field(d: dict, key: str, kind: type | tuple, cmd: str, default: Any = ...):
     if key not in d:
         if default is ...:
             raise DocumentFormatError(f"command {cmd!r} needs the field {key!r}")
@@ -98,8 +98,8 @@ def _field(d: dict, key: str, kind: type | tuple, cmd: str, default: Any = ...):
     return v
 
 
-def _points_field(d: dict, cmd: str, key: str = "points") -> np.ndarray:
-    raw = _field(d, key, list, cmd)
+def parse_points(d: dict, cmd: str, key: str = "points") -> np.ndarray:
+    raw = parse_field(d, key, list, cmd)
     try:
         arr = np.array(raw, dtype=np.float64)
     except (TypeError, ValueError):
@@ -109,8 +109,8 @@ def _points_field(d: dict, cmd: str, key: str = "points") -> np.ndarray:
     return arr
 
 
-def _vec_field(d: dict, key: str, cmd: str) -> list[float]:
-    raw = _field(d, key, list, cmd)
+def parse_vector(d: dict, key: str, cmd: str) -> list[float]:
+    raw = parse_field(d, key, list, cmd)
     if len(raw) not in (2, 3) or not all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in raw):
         raise DocumentFormatError(f"command {cmd!r}: {key!r} must be 2 or 3 numbers")
     return [float(x) for x in raw]
@@ -190,9 +190,9 @@ class AddLayer(Command):
     @classmethod
     def from_dict(cls, d: dict) -> "AddLayer":
         return cls(
-            id=_field(d, "id", str, cls.name, None),
-            layer_name=_field(d, "name", str, cls.name, None),
-            index=_field(d, "index", int, cls.name, None),
+            id=parse_field(d, "id", str, cls.name, None),
+            layer_name=parse_field(d, "name", str, cls.name, None),
+            index=parse_field(d, "index", int, cls.name, None),
         )
 
 
@@ -218,11 +218,11 @@ class RemoveLayer(Command):
 
     @classmethod
     def from_dict(cls, d: dict) -> "RemoveLayer":
-        return cls(layer=_field(d, "layer", str, cls.name))
+        return cls(layer=parse_field(d, "layer", str, cls.name))
 
 
 @dataclass
-class _ReplaceLayerCommand(Command):
+class ReplaceLayerCommand(Command):
     """Shared machinery: compute a new Layer value once, swap it in, swap the old one back."""
 
     layer: str
@@ -250,7 +250,7 @@ class _ReplaceLayerCommand(Command):
 
 
 @dataclass
-class RenameLayer(_ReplaceLayerCommand):
+class RenameLayer(ReplaceLayerCommand):
     name: ClassVar[str] = "rename_layer"
     new_name: str = ""
 
@@ -267,11 +267,11 @@ class RenameLayer(_ReplaceLayerCommand):
 
     @classmethod
     def from_dict(cls, d: dict) -> "RenameLayer":
-        return cls(layer=_field(d, "layer", str, cls.name), new_name=_field(d, "name", str, cls.name))
+        return cls(layer=parse_field(d, "layer", str, cls.name), new_name=parse_field(d, "name", str, cls.name))
 
 
 @dataclass
-class SetLayerVisible(_ReplaceLayerCommand):
+class SetLayerVisible(ReplaceLayerCommand):
     name: ClassVar[str] = "set_layer_visible"
     visible: bool = True
 
@@ -286,11 +286,11 @@ class SetLayerVisible(_ReplaceLayerCommand):
 
     @classmethod
     def from_dict(cls, d: dict) -> "SetLayerVisible":
-        return cls(layer=_field(d, "layer", str, cls.name), visible=_field(d, "visible", bool, cls.name))
+        return cls(layer=parse_field(d, "layer", str, cls.name), visible=parse_field(d, "visible", bool, cls.name))
 
 
 @dataclass
-class SetContour(_ReplaceLayerCommand):
+class SetContour(ReplaceLayerCommand):
     """Set (or redraw) a layer's stroke. Redrawing drops the layer's sculpt edits: they were
     drawn on the old shape and have no meaning on a new outline (the app warns first)."""
 
@@ -317,14 +317,14 @@ class SetContour(_ReplaceLayerCommand):
     @classmethod
     def from_dict(cls, d: dict) -> "SetContour":
         return cls(
-            layer=_field(d, "layer", str, cls.name),
-            points=_points_field(d, cls.name),
-            closed=_field(d, "closed", bool, cls.name, False),
+            layer=parse_field(d, "layer", str, cls.name),
+            points=parse_points(d, cls.name),
+            closed=parse_field(d, "closed", bool, cls.name, False),
         )
 
 
 @dataclass
-class SetInflateParams(_ReplaceLayerCommand):
+class SetInflateParams(ReplaceLayerCommand):
     """Change inflation parameters; the mesh is rebuilt and the layer's sculpt edits are
     re-applied in order (if one no longer applies, the whole change is refused with its
     message and nothing changes)."""
@@ -344,13 +344,13 @@ class SetInflateParams(_ReplaceLayerCommand):
 
     @classmethod
     def from_dict(cls, d: dict) -> "SetInflateParams":
-        params = _field(d, "params", dict, cls.name)
+        params = parse_field(d, "params", dict, cls.name)
         check_params(params)
-        return cls(layer=_field(d, "layer", str, cls.name), params=dict(params))
+        return cls(layer=parse_field(d, "layer", str, cls.name), params=dict(params))
 
 
 @dataclass
-class MirrorLayer(_ReplaceLayerCommand):
+class MirrorLayer(ReplaceLayerCommand):
     """Mirror a layer's stroke left-right about its own bounding-box centre (the mesh is
     re-inflated; sculpt edits are dropped as for a redraw)."""
 
@@ -372,7 +372,7 @@ class MirrorLayer(_ReplaceLayerCommand):
 
     @classmethod
     def from_dict(cls, d: dict) -> "MirrorLayer":
-        return cls(layer=_field(d, "layer", str, cls.name))
+        return cls(layer=parse_field(d, "layer", str, cls.name))
 
 
 @dataclass
@@ -402,7 +402,7 @@ class MoveLayer(Command):
 
     @classmethod
     def from_dict(cls, d: dict) -> "MoveLayer":
-        return cls(layer=_field(d, "layer", str, cls.name), index=_field(d, "index", int, cls.name))
+        return cls(layer=parse_field(d, "layer", str, cls.name), index=parse_field(d, "index", int, cls.name))
 
 
 @dataclass
@@ -441,9 +441,9 @@ class DuplicateLayer(Command):
     @classmethod
     def from_dict(cls, d: dict) -> "DuplicateLayer":
         return cls(
-            layer=_field(d, "layer", str, cls.name),
-            new_id=_field(d, "id", str, cls.name, None),
-            new_name=_field(d, "name", str, cls.name, None),
+            layer=parse_field(d, "layer", str, cls.name),
+            new_id=parse_field(d, "id", str, cls.name, None),
+            new_name=parse_field(d, "name", str, cls.name, None),
         )
 
 
@@ -484,7 +484,7 @@ class SetLight(Command):
 
     @classmethod
     def from_dict(cls, d: dict) -> "SetLight":
-        return cls(direction=_vec_field(d, "direction", cls.name))
+        return cls(direction=parse_vector(d, "direction", cls.name))
 
 
 class MacroCommand(Command):
@@ -520,10 +520,10 @@ class MacroCommand(Command):
 
     @classmethod
     def from_dict(cls, d: dict, registry=None) -> "MacroCommand":
-        children = _field(d, "children", list, cls.name)
+        children = parse_field(d, "children", list, cls.name)
         if registry is None:
             raise DocumentFormatError("a macro needs a command registry to read its children")
-        return cls(text=_field(d, "text", str, cls.name, ""), children=[registry.from_dict(c) for c in children])
+        return cls(text=parse_field(d, "text", str, cls.name, ""), children=[registry.from_dict(c) for c in children])
 
 
 #: The document's own commands, registered by the built-in plugin.

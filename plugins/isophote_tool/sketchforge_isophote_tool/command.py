@@ -1,0 +1,105 @@
+"""The ``sculpt_isophote`` command: one isophote edit as a journal entry.
+
+``{"command": "sculpt_isophote", "layer": "body", "pick": [0.2, 0.1], "band": 0.3,
+"stroke": [[0.1, -0.3], ...]}`` (optional ``"model"``: a registered reflectance model name,
+default "lambertian"). It acts with the document's current light; it keeps the replaced layer
+so undo is instant and exact, and the new one so redo is too.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import ClassVar
+
+import numpy as np
+
+from sketchforge.document.commands import ReplaceLayerCommand, parse_field, parse_points, parse_vector
+from sketchforge.document.layer import Layer
+from sketchforge.errors import DocumentFormatError, NothingToDoError, SculptError
+
+from .reflect import LAMBERTIAN
+
+
+def _model(doc, name: str):
+    models = getattr(getattr(doc, "host", None), "reflectance_models", None) or {}
+    if name in models:
+        return models[name]
+    if name == LAMBERTIAN.name:
+        return LAMBERTIAN
+    raise SculptError(f"no reflectance model named {name!r} is installed")
+
+
+def _apply(doc, layer: Layer, pick, band, stroke, model_name: str, light=None):
+    from .pipeline import sculpt  # imports jax: only when an edit actually runs
+
+    if layer.mesh is None:
+        raise SculptError(f"layer {layer.id!r} has no surface to sculpt yet (draw its contour first)")
+    direction = doc.light.direction if light is None else np.asarray(light, dtype=np.float64)
+    return sculpt(layer.mesh, direction, pick, band, stroke, _model(doc, model_name))
+
+
+@dataclass
+class SculptIsophote(ReplaceLayerCommand):
+    """Redraw the isophote through ``pick`` as ``stroke`` (thesis 4.3-4.6)."""
+
+    name: ClassVar[str] = "sculpt_isophote"
+    pick: list = field(default_factory=list)
+    band: float = 0.3
+    stroke: list = field(default_factory=list)
+    model: str = "lambertian"
+    #: The last SculptResult (regions, strips, timings) for display; not saved.
+    result: object = field(default=None, repr=False, compare=False)
+
+    def text(self) -> str:
+        return "Sculpt isophote"
+
+    def entry(self) -> dict:
+        return self.to_dict()
+
+    def compute(self, doc, old: Layer) -> Layer:
+        self.result = _apply(doc, old, self.pick, self.band, self.stroke, self.model)
+        # The layer remembers the light this edit used, so re-applying it after a parameter
+        # change gives the same edit even if the light has moved since.
+        entry = {**self.to_dict(), "light": [float(v) for v in doc.light.direction]}
+        return old.evolve(mesh=self.result.mesh, edits=tuple(old.edits) + (entry,))
+
+    def to_dict(self) -> dict:
+        d = {
+            "command": self.name,
+            "layer": self.layer,
+            "pick": [float(v) for v in np.asarray(self.pick, float).reshape(-1)],
+            "band": float(self.band),
+            "stroke": np.asarray(self.stroke, float).reshape(-1, 2).tolist(),
+        }
+        if self.model != "lambertian":
+            d["model"] = self.model
+        return d
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "SculptIsophote":
+        pick = parse_vector(d, "pick", cls.name)
+        if len(pick) != 2:
+            raise DocumentFormatError(f"command {cls.name!r}: 'pick' must be 2 numbers [x, y]")
+        return cls(
+            layer=parse_field(d, "layer", str, cls.name),
+            pick=pick,
+            band=parse_field(d, "band", float, cls.name),
+            stroke=parse_points(d, cls.name, "stroke").tolist(),
+            model=parse_field(d, "model", str, cls.name, "lambertian"),
+        )
+
+    @classmethod
+    def reapply(cls, doc, layer: Layer, entry: dict) -> Layer:
+        """Re-apply a saved edit to a re-inflated layer, with the light it was made with. An
+        edit that no longer applies refuses the whole parameter change, saying which edit and
+        why (silently dropping an edit would lose the user's work)."""
+        cmd = cls.from_dict(entry)
+        try:
+            res = _apply(doc, layer, cmd.pick, cmd.band, cmd.stroke, cmd.model, entry.get("light"))
+        except (NothingToDoError, SculptError) as exc:
+            n = len(layer.edits) + 1
+            raise SculptError(
+                f"sculpt edit {n} of layer {layer.id!r} no longer applies to the rebuilt surface ({exc}); "
+                "the change was not made — undo that edit first to change these parameters"
+            ) from None
+        return layer.evolve(mesh=res.mesh, edits=tuple(layer.edits) + (dict(entry),))

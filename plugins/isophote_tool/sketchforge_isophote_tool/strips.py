@@ -1,0 +1,158 @@
+"""Region strips (thesis 4.3.3): dx/ds = -R_p(p, q), dy/ds = -R_q(p, q), p, q from the mesh.
+
+Strips start on the contour where they enter the layer (-∇R·n_in > 0) and stop where they
+leave the rim-margin region Ω*. Only their paths matter here (they delimit the cells that give
+S•), so they are integrated in arc length (unit speed: the direction -∇R/|∇R|) with fixed-step
+RK4 on the smooth (B-spline) p, q field: uniform spacing of samples, no stiffness near the rim
+where |∇R| is small.
+"""
+
+from __future__ import annotations
+
+import functools
+
+import jax
+import jax.numpy as jnp
+import numpy as np
+
+from sketchforge.geometry.field_jax import bilinear_eval, bspline_eval
+from sketchforge.plugins.registry import ReflectanceModel
+
+from .jaxcache import BATCH_BUCKETS, TRACES, bucket, pad_rows
+from .layerdata import LayerData
+from .reflect import eval_reflectance, r_of_pq
+
+#: Fixed number of RK4 steps per region strip (static: one compiled function per batch size).
+REGION_STEPS = 320
+
+
+@functools.lru_cache(maxsize=8)
+def _region_integrator(model: ReflectanceModel):
+    grad_r = jax.grad(r_of_pq(model), argnums=(0, 1))
+
+    def direction(x, coeffs, origin, spacing, l):
+        v, _ = bspline_eval(coeffs, origin, spacing, x)
+        rp, rq = grad_r(v[0], v[1], l)
+        d = -jnp.stack([rp, rq])
+        return d / (jnp.linalg.norm(d) + 1e-300)
+
+    def one(seed, coeffs, origin, spacing, dist, l, ds, margin):
+        TRACES["region_strips"] += 1
+
+        def step(carry, _):
+            x, alive, entered = carry
+            k1 = direction(x, coeffs, origin, spacing, l)
+            k2 = direction(x + 0.5 * ds * k1, coeffs, origin, spacing, l)
+            k3 = direction(x + 0.5 * ds * k2, coeffs, origin, spacing, l)
+            k4 = direction(x + ds * k3, coeffs, origin, spacing, l)
+            xn = x + ds / 6.0 * (k1 + 2 * k2 + 2 * k3 + k4)
+            d = bilinear_eval(dist, origin, spacing, xn)
+            inside = d > margin
+            # Stop on leaving Ω* after having entered it, or on leaving the layer.
+            stop = (entered & ~inside) | (d <= 0.0)
+            alive_n = alive & ~stop
+            x_out = jnp.where(alive_n, xn, x)
+            return (x_out, alive_n, entered | inside), (x_out, alive_n)
+
+        (_, _, _), (xs, alive) = jax.lax.scan(step, (seed, jnp.array(True), jnp.array(False)), None, REGION_STEPS)
+        return jnp.concatenate([seed[None], xs]), jnp.concatenate([jnp.array([True]), alive])
+
+    return jax.jit(jax.vmap(one, in_axes=(0,) + (None,) * 7))
+
+
+def integrate_region_strips(ld: LayerData, light: np.ndarray, model: ReflectanceModel, seeds: np.ndarray, margin: float):
+    """Integrate region strips from seed points.
+
+    Parameters
+    ----------
+    ld : LayerData
+    light : (3,) float64
+    model : ReflectanceModel
+    seeds : (k, 2) float64
+        Start points (just inside the contour).
+    margin : float
+        Rim margin: strips stop when they leave Ω* (distance to the contour < margin).
+
+    Returns
+    -------
+    list of (j, 2) float64 polylines, one per seed.
+    """
+    if len(seeds) == 0:
+        return []
+    fn = _region_integrator(model)
+    f = ld.pq_field
+    dist = jnp.asarray(ld.dist_nodes)
+    # Step: half an edge length, lengthened if needed so REGION_STEPS steps cross the layer
+    # about 2.5 times (strips curve; they rarely run longer than that).
+    lo, hi = ld.V2.min(axis=0), ld.V2.max(axis=0)
+    ds = max(0.5 * ld.h, 2.5 * float(np.linalg.norm(hi - lo)) / REGION_STEPS)
+    out = []
+    big = BATCH_BUCKETS[-1]
+    for s in range(0, len(seeds), big):
+        chunk = seeds[s : s + big]
+        b = bucket(len(chunk))
+        xs, alive = fn(
+            jnp.asarray(pad_rows(chunk, b)), f.coeffs, f.origin, f.spacing, dist,
+            jnp.asarray(light, jnp.float64), jnp.asarray(ds), jnp.asarray(margin),
+        )
+        xs, alive = np.asarray(xs), np.asarray(alive)
+        for i in range(len(chunk)):
+            out.append(xs[i][alive[i]])
+    return out
+
+
+def contour_runs(ld: LayerData, light: np.ndarray, model: ReflectanceModel, spacing: float):
+    """Arcs of the contour where strips enter the layer (-∇R·n_in > 0).
+
+    Returns
+    -------
+    list of (t0, t1) float
+        Arc-length intervals along the outline's exterior ring (counter-clockwise from its first
+        point); t1 may exceed the ring length (wrap around).
+    """
+    coords = np.asarray(ld.outline.exterior.coords)
+    L = ld.outline.exterior.length
+    n = max(int(np.ceil(L / spacing)), 16)
+    t = np.arange(n) * (L / n)
+    pts, n_in = ring_points(coords, t)
+    pq = ld.locator.interpolate(ld.pq, pts)
+    _, dR = eval_reflectance(model, pq, light)
+    inflow = np.einsum("ij,ij->i", -dR, n_in) > 0
+    if inflow.all():
+        return [(0.0, L)]
+    if not inflow.any():
+        return []
+    start = int(np.argmin(inflow))  # a sample that is not inflow: no run wraps past it
+    runs, cur = [], None
+    for k in range(n + 1):
+        i = (start + k) % n
+        if inflow[i] and cur is None:
+            cur = k
+        if not inflow[i] and cur is not None:
+            # Run ends half-way between the last inflow sample and the first outflow one.
+            runs.append((t[start] + (cur - 0.5) * L / n, t[start] + (k - 0.5) * L / n))
+            cur = None
+    return runs
+
+
+def ring_points(coords: np.ndarray, t: np.ndarray):
+    """Points (k, 2) and inward unit normals (k, 2) at arc lengths t along a closed CCW ring.
+
+    ``coords`` (r+1, 2) repeats its first point at the end (shapely ring coordinates)."""
+    d = np.linalg.norm(np.diff(coords, axis=0), axis=1)
+    s = np.concatenate([[0.0], np.cumsum(d)])
+    L = s[-1]
+    t = np.mod(t, L)
+    seg = np.clip(np.searchsorted(s, t, side="right") - 1, 0, len(d) - 1)
+    u = (t - s[seg]) / np.where(d[seg] > 0, d[seg], 1.0)
+    P = coords[seg] + u[:, None] * (coords[seg + 1] - coords[seg])
+    # Normal from a centred difference over about one sample, so corners get an averaged normal.
+    delta = min(1e-3 * L, 0.5 * float(np.median(d)))
+    def at(tt):
+        tt = np.mod(tt, L)
+        sg = np.clip(np.searchsorted(s, tt, side="right") - 1, 0, len(d) - 1)
+        uu = (tt - s[sg]) / np.where(d[sg] > 0, d[sg], 1.0)
+        return coords[sg] + uu[:, None] * (coords[sg + 1] - coords[sg])
+    tang = at(t + delta) - at(t - delta)
+    tang /= np.linalg.norm(tang, axis=1, keepdims=True)
+    return P, np.column_stack([-tang[:, 1], tang[:, 0]])
