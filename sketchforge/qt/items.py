@@ -1,0 +1,168 @@
+"""Graphics items of the drawing region (pyqtgraph view coordinates = document coordinates)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pyqtgraph as pg
+from PySide6.QtCore import QPointF, QRectF, Qt
+from PySide6.QtGui import QColor, QPainterPath, QPen
+
+from sketchforge.qt.render2d import NO_MESH_FILL, face_colours, mesh_polygons, paint_mesh, points_polygon
+
+# Overlay colours (figure 4.3 of the thesis).
+STROKE_DRAW = QColor(30, 60, 160)
+STROKE_SCULPT = QColor(0, 200, 230)  # cyan: the redrawn isophote
+ISOPHOTE = QColor(255, 255, 255)  # white: the selected isophote
+BAND = QColor(255, 140, 0)  # orange dashed: the band
+STRIPS = QColor(110, 110, 110, 170)
+REGION = QColor(20, 20, 20)
+ISOLINES = QColor(35, 30, 30, 200)
+CONTOUR = QColor(60, 50, 45)
+SELECTED = QColor(40, 110, 220)
+LIGHT = QColor(235, 170, 0)
+
+
+def cosmetic_pen(colour: QColor, width: float = 1.0, style=Qt.PenStyle.SolidLine) -> QPen:
+    pen = QPen(colour)
+    pen.setWidthF(width)
+    pen.setCosmetic(True)
+    pen.setStyle(style)
+    pen.setCapStyle(Qt.PenCapStyle.RoundCap)
+    pen.setJoinStyle(Qt.PenJoinStyle.RoundJoin)
+    return pen
+
+
+class ShadedLayerItem(pg.GraphicsObject):
+    """One layer: the flat-shaded triangles of its mesh, or its bare stroke without a mesh."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self._mesh = None
+        self._points = None
+        self._closed = True
+        self._colours: list = []
+        self._rect = QRectF()
+
+    def set_layer(self, layer, light, shader) -> None:
+        self.prepareGeometryChange()
+        self._mesh = layer.mesh if (layer.mesh is not None and layer.mesh.n_faces) else None
+        self._points = layer.points
+        self._colours = face_colours(self._mesh, light, shader) if self._mesh is not None else []
+        pts = self._mesh.V[:, :2] if self._mesh is not None else self._points
+        if pts is not None and len(pts):
+            lo, hi = pts.min(axis=0), pts.max(axis=0)
+            self._rect = QRectF(float(lo[0]), float(lo[1]), float(hi[0] - lo[0]), float(hi[1] - lo[1]))
+        else:
+            self._rect = QRectF()
+        self.update()
+
+    def set_shading(self, light, shader) -> None:
+        if self._mesh is not None:
+            self._colours = face_colours(self._mesh, light, shader)
+            self.update()
+
+    def has_mesh(self) -> bool:
+        return self._mesh is not None
+
+    def boundingRect(self) -> QRectF:
+        return self._rect
+
+    def paint(self, painter, option, widget=None) -> None:
+        if self._mesh is not None:
+            paint_mesh(painter, mesh_polygons(self._mesh), self._colours)
+        elif self._points is not None and len(self._points) >= 2:
+            painter.setPen(cosmetic_pen(CONTOUR, 1.5))
+            painter.setBrush(NO_MESH_FILL)
+            painter.drawPolygon(points_polygon(self._points))
+
+
+class PolylinesItem(pg.GraphicsObject):
+    """Several polylines with one pen (isophotes, band outline, strips, overlays)."""
+
+    def __init__(self, pen: QPen, closed: bool = False) -> None:
+        super().__init__()
+        self._pen = pen
+        self._closed = closed
+        self._path = QPainterPath()
+
+    def set_lines(self, lines) -> None:
+        self.prepareGeometryChange()
+        path = QPainterPath()
+        for line in lines or []:
+            arr = np.asarray(line, dtype=np.float64)
+            if arr.ndim != 2 or len(arr) < 1:
+                continue
+            path.moveTo(QPointF(float(arr[0, 0]), float(arr[0, 1])))
+            for x, y in arr[1:, :2].tolist():
+                path.lineTo(QPointF(x, y))
+            if self._closed:
+                path.closeSubpath()
+        self._path = path
+        self.update()
+
+    def is_empty(self) -> bool:
+        return self._path.isEmpty()
+
+    def boundingRect(self) -> QRectF:
+        return self._path.boundingRect()
+
+    def shape(self):
+        return self._path
+
+    def paint(self, painter, option, widget=None) -> None:
+        painter.setRenderHint(painter.RenderHint.Antialiasing, True)
+        painter.setPen(self._pen)
+        painter.setBrush(Qt.BrushStyle.NoBrush)
+        painter.drawPath(self._path)
+
+
+class LightIndicator(pg.GraphicsObject):
+    """A sun and an arrow from the centre of the drawing region towards the light."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self._center = np.zeros(2)
+        self._direction = np.array([1.0, 0.0])
+        self._length = 1.0
+        self._active = False
+
+    def set_state(self, center, direction, length: float, active: bool = False) -> None:
+        self.prepareGeometryChange()
+        self._center = np.asarray(center, dtype=np.float64)[:2]
+        self._direction = np.asarray(direction, dtype=np.float64)[:2]
+        self._length = float(length)
+        self._active = active
+        self.update()
+
+    def _tip(self) -> np.ndarray:
+        return self._center + self._length * self._direction
+
+    def boundingRect(self) -> QRectF:
+        r = 0.2 * self._length
+        c, t = self._center, self._tip()
+        lo = np.minimum(c, t) - r
+        hi = np.maximum(c, t) + r
+        return QRectF(float(lo[0]), float(lo[1]), float(hi[0] - lo[0]), float(hi[1] - lo[1]))
+
+    def paint(self, painter, option, widget=None) -> None:
+        painter.setRenderHint(painter.RenderHint.Antialiasing, True)
+        c, t = self._center, self._tip()
+        width = 2.5 if self._active else 1.5
+        painter.setPen(cosmetic_pen(LIGHT, width, Qt.PenStyle.DashLine))
+        painter.drawLine(QPointF(*c), QPointF(*t))
+        # arrow head (document units, so it scales with the arrow)
+        d = self._direction
+        n = np.array([-d[1], d[0]])
+        h = 0.08 * self._length
+        a = t - h * d + 0.5 * h * n
+        b = t - h * d - 0.5 * h * n
+        painter.setPen(cosmetic_pen(LIGHT, width))
+        painter.drawLine(QPointF(*t), QPointF(*a))
+        painter.drawLine(QPointF(*t), QPointF(*b))
+        # the sun at the tip
+        r = 0.05 * self._length
+        painter.setBrush(QColor(255, 215, 60))
+        painter.drawEllipse(QPointF(*(t + 1.3 * r * d)), r, r)
+        # the centre
+        painter.setBrush(LIGHT)
+        painter.drawEllipse(QPointF(*c), 0.25 * r, 0.25 * r)

@@ -1,0 +1,612 @@
+"""The main window (thesis figure 4.1): left menu, central drawing region, controls top right,
+layers and history bottom right; menus, shortcuts, files, the status bar's progress indicator.
+
+The window owns one Document for its whole life: opening a file loads it into a new Document
+first (so a bad file loses nothing) and then adopts its state (``Document.restore_state``).
+Every edit is a command pushed on ``doc.undo_stack``; slow ones go through the CommandRunner.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from PySide6.QtCore import QSettings, Qt, QTimer, Signal
+from PySide6.QtGui import QAction, QActionGroup, QKeySequence
+from PySide6.QtWidgets import (
+    QFileDialog,
+    QLabel,
+    QMainWindow,
+    QMessageBox,
+    QProgressBar,
+    QPushButton,
+    QSplitter,
+    QStackedWidget,
+    QTabWidget,
+    QVBoxLayout,
+    QWidget,
+)
+
+from sketchforge.document import commands as C
+from sketchforge.document import fileformat as ff
+from sketchforge.document.layer import Light
+from sketchforge.errors import SketchforgeError
+from sketchforge.qt.canvas import Canvas
+from sketchforge.qt.command_runner import CommandRunner
+from sketchforge.qt.errors_ui import ask_yes_no, error_text, show_error
+from sketchforge.qt.panels.creation_panel import CreationPanel
+from sketchforge.qt.panels.history_panel import HistoryPanel
+from sketchforge.qt.panels.layers_panel import LayersPanel
+from sketchforge.qt.panels.light_panel import LightPanel
+from sketchforge.qt.panels.mode_panel import ModePanel
+from sketchforge.qt.panels.sculpt_panel import SculptPanel
+from sketchforge.qt.sculpt import SculptController
+from sketchforge.qt.view3d import View3D
+from sketchforge.qt.workers import JobRunner
+
+FILE_FILTER = "sketchforge documents (*.json *.sketchforge);;All files (*)"
+MAX_RECENT = 8
+
+
+class MainWindow(QMainWindow):
+    #: the whole document was replaced (new / open)
+    document_reset = Signal()
+
+    def __init__(self, doc, host=None, settings: QSettings | None = None, parent=None) -> None:
+        super().__init__(parent)
+        self.doc = doc
+        self.host = host or doc.host
+        self.settings = settings or QSettings()
+        self.path: Path | None = None
+        self.mode = "editing"
+        self.state = "creation"
+        self.current_layer: str | None = None
+        self.jobs = JobRunner(self)
+        self.runner = CommandRunner(doc, self.jobs, self)
+
+        self._build_widgets()
+        self._build_menus()
+        self._build_status_bar()
+        self._connect()
+        self._sync_all()
+        self.set_state("creation")
+
+    # --- construction ---------------------------------------------------------------------------
+    def _build_widgets(self) -> None:
+        doc = self.doc
+        self.canvas = Canvas(doc, self.host)
+        self.view3d = View3D(doc, self.jobs)
+        self.center = QStackedWidget()
+        self.center.addWidget(self.canvas)
+        self.center.addWidget(self.view3d)
+
+        self.modes = ModePanel()
+        self.creation_panel = CreationPanel()
+        self.creation_panel.set_shaders(self.host.shaders.keys(), self.canvas.shader_name)
+        self.sculpt_panel = SculptPanel()
+        self.sculpt_panel.set_models(self.host.reflectance_models.keys())
+        self.light_panel = LightPanel()
+        self.controls = QStackedWidget()
+        self.controls.addWidget(self.creation_panel)
+        self.controls.addWidget(self.sculpt_panel)
+        self.observe_note = QLabel("OBSERVATION: drag to orbit, wheel to zoom.\nThe left menu switches between the assembled model and each layer's mesh.")
+        self.observe_note.setWordWrap(True)
+        self.observe_note.setAlignment(Qt.AlignmentFlag.AlignTop)
+        self.controls.addWidget(self.observe_note)
+        top = QWidget()
+        top_lay = QVBoxLayout(top)
+        top_lay.setContentsMargins(0, 0, 0, 0)
+        top_lay.addWidget(self.controls)
+        top_lay.addWidget(self.light_panel)
+        top_lay.addStretch(1)
+
+        self.layers_panel = LayersPanel(doc, lambda: (self.doc.light, self.canvas._shader()))
+        self.history_panel = HistoryPanel(doc)
+        self.history_panel.enabled_edits = lambda: not self.runner.busy
+        tabs = QTabWidget()
+        tabs.addTab(self.layers_panel, "Layers")
+        tabs.addTab(self.history_panel, "History")
+        self.bottom_tabs = tabs
+
+        right = QSplitter(Qt.Orientation.Vertical)
+        right.addWidget(top)
+        right.addWidget(tabs)
+        right.setStretchFactor(0, 0)
+        right.setStretchFactor(1, 1)
+        right.setMinimumWidth(290)
+        right.setMaximumWidth(380)
+
+        main = QSplitter(Qt.Orientation.Horizontal)
+        main.addWidget(self.modes)
+        main.addWidget(self.center)
+        main.addWidget(right)
+        main.setStretchFactor(1, 1)
+        main.setChildrenCollapsible(False)
+        self.setCentralWidget(main)
+
+        self.sculpt = SculptController(doc, self.host, self.canvas, self.runner)
+        self.canvas.sculpt = self.sculpt
+
+    def _action(self, menu, text, slot, shortcut=None, checkable=False) -> QAction:
+        act = QAction(text, self)
+        if shortcut is not None:
+            if isinstance(shortcut, (list, tuple)):
+                act.setShortcuts([QKeySequence(s) for s in shortcut])
+            else:
+                act.setShortcut(QKeySequence(shortcut))
+        act.setCheckable(checkable)
+        act.triggered.connect(slot)
+        menu.addAction(act)
+        return act
+
+    def _build_menus(self) -> None:
+        mb = self.menuBar()
+        f = mb.addMenu("&File")
+        self.act_new = self._action(f, "&New", self.new_document, QKeySequence.StandardKey.New)
+        self.act_open = self._action(f, "&Open…", self.open_dialog, QKeySequence.StandardKey.Open)
+        self.recent_menu = f.addMenu("Open &Recent")
+        f.addSeparator()
+        self.act_save = self._action(f, "&Save", self.save, QKeySequence.StandardKey.Save)
+        self.act_save_as = self._action(f, "Save &As…", self.save_as, QKeySequence.StandardKey.SaveAs)
+        self.act_export = self._action(f, "&Export…", self.export_dialog, "Ctrl+E")
+        f.addSeparator()
+        self._action(f, "&Quit", self.close, QKeySequence.StandardKey.Quit)
+
+        e = mb.addMenu("&Edit")
+        self.act_undo = self._action(e, "Undo", self.undo, QKeySequence.StandardKey.Undo)
+        self.act_redo = self._action(e, "Redo", self.redo, ["Ctrl+Shift+Z", "Ctrl+Y"])
+        e.addSeparator()
+        self.act_cancel = self._action(e, "Cancel running solve", self.runner.cancel, "Esc")
+
+        lm = mb.addMenu("&Layer")
+        self._action(lm, "&Add layer", self.add_layer, "Ctrl+Shift+N")
+        self._action(lm, "&Remove layer", lambda: self._on_current(self.remove_layer), "Del")
+        self._action(lm, "&Duplicate layer", lambda: self._on_current(self.duplicate_layer), "Ctrl+D")
+        self._action(lm, "&Mirror layer", lambda: self._on_current(self.mirror_layer), "Ctrl+M")
+
+        v = mb.addMenu("&View")
+        self._action(v, "&Fit drawing", self.canvas.fit, "Ctrl+0")
+        self._action(v, "Reference &image…", self.reference_dialog)
+        self._action(v, "&Clear reference image", lambda: self.canvas.set_reference_image(None))
+        v.addSeparator()
+        self.act_light = self._action(v, "&Light tool", lambda on: self.modes.light.setChecked(on), "L", checkable=True)
+        v.addSeparator()
+        group = QActionGroup(self)
+        for name, key in (("editing", "F2"), ("sculpture", "F3"), ("observation", "F4")):
+            act = self._action(v, f"{name.upper()}", lambda _=False, n=name: self.set_mode(n), key)
+            group.addAction(act)
+        self.update_recent_menu()
+
+    def _build_status_bar(self) -> None:
+        sb = self.statusBar()
+        self.progress = QProgressBar()
+        self.progress.setRange(0, 0)  # busy indicator
+        self.progress.setMaximumWidth(160)
+        self.progress_label = QLabel()
+        self.cancel_button = QPushButton("Cancel")
+        self.cancel_button.clicked.connect(self.runner.cancel)
+        for w in (self.progress_label, self.progress, self.cancel_button):
+            sb.addPermanentWidget(w)
+            w.setVisible(False)
+
+    def _connect(self) -> None:
+        doc = self.doc
+        stack = doc.undo_stack
+        for sig in (stack.can_undo_changed, stack.can_redo_changed, stack.undo_text_changed, stack.redo_text_changed):
+            sig.connect(lambda *_: self._sync_undo())
+        stack.clean_changed.connect(lambda *_: self._sync_title())
+        doc.history_changed.connect(self._sync_undo)
+        doc.history_changed.connect(self._sync_title)
+        doc.light_changed.connect(self._on_light)
+        doc.layer_changed.connect(lambda *a: self._sync_current_layer())
+        doc.layer_removed.connect(lambda *a: self._sync_current_layer())
+
+        self.canvas.stroke_finished.connect(self.draw_stroke)
+        self.canvas.message.connect(self.show_message)
+        self.view3d.message.connect(self.show_message)
+        self.sculpt.message.connect(self.show_message)
+        self.sculpt.changed.connect(lambda: self.sculpt_panel.show_state(self.sculpt))
+        self.sculpt.layer_picked.connect(self.layers_panel.select)
+
+        self.modes.mode_changed.connect(lambda m: self.set_mode(m if m == "observation" else self.state))
+        self.modes.state_changed.connect(self.set_state)
+        self.modes.light_toggled.connect(self._light_toggled)
+        self.modes.observe_changed.connect(self.view3d.set_source)
+        self.modes.fit_requested.connect(self.canvas.fit)
+
+        self.creation_panel.params_edited.connect(self.set_params)
+        self.creation_panel.shader_changed.connect(self._shader_changed)
+        self.creation_panel.isolines_changed.connect(self.canvas.set_isoline_count)
+        self.sculpt_panel.radius_changed.connect(self.sculpt.set_radius)
+        self.sculpt_panel.show_changed.connect(lambda s, r: self.sculpt.set_show(s, r))
+        self.sculpt_panel.model_changed.connect(self._model_changed)
+        self.light_panel.angle_edited.connect(self.set_light_angle)
+
+        lp = self.layers_panel
+        lp.add_requested.connect(self.add_layer)
+        lp.remove_requested.connect(self.remove_layer)
+        lp.duplicate_requested.connect(self.duplicate_layer)
+        lp.mirror_requested.connect(self.mirror_layer)
+        lp.visibility_requested.connect(lambda lid, v: self.push(C.SetLayerVisible(layer=lid, visible=v)))
+        lp.rename_requested.connect(lambda lid, name: self.push(C.RenameLayer(layer=lid, new_name=name)))
+        lp.move_requested.connect(lambda lid, i: self.push(C.MoveLayer(layer=lid, index=i)))
+        lp.current_changed.connect(self._current_layer_changed)
+
+        self.runner.busy_changed.connect(self._busy)
+        self.runner.failed.connect(lambda exc, tb, cmd: show_error(self, f"{cmd.text()} failed", exc, tb))
+        self.jobs.busy_changed.connect(self._progress)
+
+    # --- synchronising widgets with the document ------------------------------------------------
+    def _sync_all(self) -> None:
+        self._sync_undo()
+        self._sync_title()
+        self._on_light(self.doc.light)
+        self.layers_panel.rebuild()
+        self._sync_current_layer()
+        self.sculpt.reset()
+
+    def _sync_undo(self) -> None:
+        stack = self.doc.undo_stack
+        self.act_undo.setEnabled(stack.can_undo())
+        self.act_redo.setEnabled(stack.can_redo())
+        self.act_undo.setText(f"Undo {stack.undo_text()}" if stack.can_undo() else "Undo")
+        self.act_redo.setText(f"Redo {stack.redo_text()}" if stack.can_redo() else "Redo")
+
+    def is_modified(self) -> bool:
+        return not self.doc.undo_stack.is_clean()
+
+    def _sync_title(self) -> None:
+        name = self.path.name if self.path is not None else "Untitled"
+        self.setWindowTitle(f"{name}[*] — sketchforge")
+        self.setWindowModified(self.is_modified())
+
+    def _on_light(self, light) -> None:
+        self.light_panel.show_light(light)
+        self.layers_panel.refresh_thumbnails()
+
+    def _current_layer_changed(self, layer_id) -> None:
+        self.current_layer = layer_id
+        self.canvas.set_current_layer(layer_id)
+        self._sync_current_layer()
+
+    def _sync_current_layer(self) -> None:
+        ids = self.doc.layer_ids()
+        if self.current_layer not in ids:
+            self.current_layer = self.layers_panel.current_id()
+        layer = self.doc.layer(self.current_layer) if self.current_layer in ids else None
+        self.creation_panel.show_layer(layer)
+
+    def _shader_changed(self, name: str) -> None:
+        if name:
+            self.canvas.set_shader(name)
+            self.layers_panel.refresh_thumbnails()
+
+    def show_message(self, text: str) -> None:
+        self.statusBar().showMessage(text, 8000)
+
+    def _busy(self, busy: bool) -> None:
+        self.canvas.busy = busy
+        for act in (self.act_undo, self.act_redo, self.act_new, self.act_open, self.act_save, self.act_save_as):
+            act.setEnabled(not busy)
+        if not busy:
+            self._sync_undo()
+
+    def _progress(self, label: str) -> None:
+        for w in (self.progress_label, self.progress, self.cancel_button):
+            w.setVisible(bool(label))
+        self.progress_label.setText(label + "…" if label else "")
+
+    # --- modes ----------------------------------------------------------------------------------
+    def set_mode(self, mode: str) -> None:
+        """"editing" (keeps the state), "creation", "sculpture" or "observation"."""
+        if mode in ("creation", "sculpture"):
+            self.set_state(mode)
+            mode = "editing"
+        self.mode = mode
+        for b, on in ((self.modes.editing, mode == "editing"), (self.modes.observation, mode == "observation")):
+            b.blockSignals(True)
+            b.setChecked(on)
+            b.blockSignals(False)
+        self.modes._enable(mode)
+        self.light_panel.setVisible(mode == "editing")
+        if mode == "observation":
+            self.center.setCurrentWidget(self.view3d)
+            self.controls.setCurrentWidget(self.observe_note)
+            self.view3d.activate()
+        else:
+            self.view3d.deactivate()
+            self.center.setCurrentWidget(self.canvas)
+            self.set_state(self.state)
+
+    def set_state(self, state: str) -> None:
+        self.state = state
+        for b, on in ((self.modes.creation, state == "creation"), (self.modes.sculpture, state == "sculpture")):
+            b.blockSignals(True)
+            b.setChecked(on)
+            b.blockSignals(False)
+        if self.mode != "editing":
+            return
+        self.controls.setCurrentWidget(self.creation_panel if state == "creation" else self.sculpt_panel)
+        self._apply_interaction()
+        if state == "sculpture":
+            self.sculpt.reset()
+            self.sculpt_panel.show_state(self.sculpt)
+
+    def _model_changed(self, name: str) -> None:
+        self.sculpt.options = {} if name == "lambertian" else {"model": name}
+
+    def _light_toggled(self, on: bool) -> None:
+        self.act_light.setChecked(on)
+        self._apply_interaction()
+
+    def _apply_interaction(self) -> None:
+        if self.modes.light.isChecked():
+            self.canvas.set_interaction("light")
+        else:
+            self.canvas.set_interaction("draw" if self.state == "creation" else "sculpt")
+
+    # --- edits ----------------------------------------------------------------------------------
+    def _refuse_if_busy(self) -> bool:
+        if self.runner.busy:
+            self.show_message("a solve is running: wait for it or cancel it (Esc)")
+            return True
+        return False
+
+    def push(self, cmd) -> bool:
+        """Push a quick command; an error shows a dialog and leaves the document unchanged."""
+        if self._refuse_if_busy():
+            self.layers_panel.rebuild()
+            return False
+        try:
+            self.doc.push(cmd)
+            return True
+        except SketchforgeError as exc:
+            show_error(self, f"{cmd.text()} failed", exc)
+            self.layers_panel.rebuild()
+            return False
+
+    def _on_current(self, fn) -> None:
+        if self.current_layer is not None:
+            fn(self.current_layer)
+
+    def add_layer(self) -> None:
+        cmd = C.AddLayer()
+        if self.push(cmd):
+            self.layers_panel.select(cmd.id)
+
+    def remove_layer(self, layer_id: str) -> None:
+        self.push(C.RemoveLayer(layer=layer_id))
+
+    def duplicate_layer(self, layer_id: str) -> None:
+        cmd = C.DuplicateLayer(layer=layer_id)
+        if self.push(cmd):
+            self.layers_panel.select(cmd.new_id)
+
+    def mirror_layer(self, layer_id: str) -> None:
+        if not self._refuse_if_busy():
+            self.runner.run(C.MirrorLayer(layer=layer_id), label="Inflating")
+
+    def set_params(self, params: dict) -> None:
+        if self.current_layer is None or self._refuse_if_busy():
+            return
+        self.runner.run(
+            C.SetInflateParams(layer=self.current_layer, params=params),
+            label="Inflating",
+            on_error=lambda exc: self._sync_current_layer() or False,
+        )
+
+    def set_light_angle(self, degrees: float) -> None:
+        light = Light.from_angle(degrees)
+        if light != self.doc.light:
+            self.push(C.SetLight(direction=[light.x, light.y, 0.0]))
+
+    def draw_stroke(self, points) -> None:
+        """A finished stroke: the current layer's contour (redraw), or a new layer's."""
+        if self._refuse_if_busy():
+            return
+        if len(points) < 2:
+            self.show_message("the stroke is too short: press, drag and release to draw a contour")
+            return
+        closed = self.creation_panel.closed.isChecked()
+        target = self.current_layer if self.current_layer in self.doc.layer_ids() else None
+        if target is not None:
+            layer = self.doc.layer(target)
+            if layer.edits and not ask_yes_no(
+                self,
+                "Redraw the contour?",
+                f"Layer “{layer.name}” has {len(layer.edits)} sculpt edit(s). Redrawing its contour "
+                "re-inflates it and drops them (Undo brings them back).",
+            ):
+                return
+            self.runner.run(C.SetContour(layer=target, points=points, closed=closed), label="Inflating")
+            return
+        add = C.AddLayer()
+        add.id = self.doc.new_layer_id()
+        self.runner.run(
+            C.SetContour(layer=add.id, points=points, closed=closed),
+            label="Inflating",
+            macro="Draw layer",
+            before=[add],
+            on_done=lambda cmd: self.layers_panel.select(add.id),
+        )
+
+    def undo(self) -> None:
+        if not self._refuse_if_busy():
+            self.doc.undo_stack.undo()
+
+    def redo(self) -> None:
+        if not self._refuse_if_busy():
+            self.doc.undo_stack.redo()
+
+    # --- files ----------------------------------------------------------------------------------
+    def maybe_save(self) -> bool:
+        """True when it is fine to drop the document (saved, or the person chose to)."""
+        if not self.is_modified():
+            return True
+        answer = QMessageBox.question(
+            self,
+            "Unsaved changes",
+            "The document has unsaved changes. Save them first?",
+            QMessageBox.StandardButton.Save | QMessageBox.StandardButton.Discard | QMessageBox.StandardButton.Cancel,
+            QMessageBox.StandardButton.Save,
+        )
+        if answer == QMessageBox.StandardButton.Save:
+            return self.save()
+        return answer == QMessageBox.StandardButton.Discard
+
+    def adopt(self, loaded, path: Path | None) -> None:
+        """Take over the state of a freshly loaded document (history starts here)."""
+        self.runner.cancel()
+        doc = self.doc
+        doc.restore_state(list(loaded.layers), loaded.light)
+        doc.initial_light = loaded.initial_light
+        doc.base_journal = list(loaded.base_journal)
+        doc.undo_stack.set_clean()
+        self.path = path
+        self.current_layer = None
+        self.canvas.rebuild()
+        self._sync_all()
+        self.history_panel.rebuild()
+        self.canvas.fit()
+        self.document_reset.emit()
+
+    def new_document(self) -> None:
+        if self._refuse_if_busy() or not self.maybe_save():
+            return
+        from sketchforge.document.document import Document
+
+        self.adopt(Document(host=self.host), None)
+
+    def open_dialog(self) -> None:
+        if self._refuse_if_busy() or not self.maybe_save():
+            return
+        path, _ = QFileDialog.getOpenFileName(self, "Open document", str(self._dir()), FILE_FILTER)
+        if path:
+            self.open_path(Path(path), ask=False)
+
+    def open_path(self, path: Path, ask: bool = True) -> bool:
+        """Open a file; on error show it and keep the open document untouched."""
+        if ask and (self._refuse_if_busy() or not self.maybe_save()):
+            return False
+        try:
+            loaded = ff.load(path, host=self.host)
+        except SketchforgeError as exc:
+            show_error(self, "Cannot open the document", exc)
+            return False
+        except Exception as exc:  # noqa: BLE001 - a bug, but the open document must survive
+            show_error(self, "Cannot open the document", exc)
+            return False
+        self.adopt(loaded, Path(path))
+        self._add_recent(path)
+        self.show_message(f"opened {path}")
+        return True
+
+    def save(self) -> bool:
+        if self.path is None:
+            return self.save_as()
+        return self.save_to(self.path)
+
+    def save_as(self) -> bool:
+        path, _ = QFileDialog.getSaveFileName(self, "Save document", str(self._dir() / "untitled.json"), FILE_FILTER)
+        if not path:
+            return False
+        return self.save_to(Path(path))
+
+    def save_to(self, path: Path) -> bool:
+        if self._refuse_if_busy():
+            return False
+        try:
+            ff.save(self.doc, path)
+        except SketchforgeError as exc:
+            show_error(self, "Cannot save the document", exc)
+            return False
+        self.path = Path(path)
+        self._add_recent(path)
+        self._sync_title()
+        self.history_panel.rebuild()
+        self.show_message(f"saved {path}")
+        return True
+
+    def export_dialog(self) -> None:
+        filters = ";;".join(
+            f"{e.description} ({' '.join('*' + s for s in e.suffixes)})" for e in self.host.exporters.values()
+        )
+        path, _ = QFileDialog.getSaveFileName(self, "Export mesh", str(self._dir() / "model.obj"), filters)
+        if path:
+            self.export_to(Path(path))
+
+    def export_to(self, path: Path) -> bool:
+        """Export the assembled model (the visible layers merged without an assembler)."""
+        try:
+            exporter = self.host.exporter_for(path)
+            parts = [l for l in self.doc.layers if l.visible and l.mesh is not None]
+            if not parts:
+                raise SketchforgeError("there is nothing to export: no visible layer has a mesh")
+            if self.host.has_assembler():
+                mesh = self.doc.assembled()
+            else:
+                from sketchforge.geometry.merge import merge_meshes
+
+                mesh = merge_meshes([l.mesh for l in parts])
+            exporter.write(path, mesh)
+        except SketchforgeError as exc:
+            show_error(self, "Cannot export", exc)
+            return False
+        self.show_message(f"exported {path} ({mesh.n_vertices} vertices, {mesh.n_faces} triangles)")
+        return True
+
+    def reference_dialog(self) -> None:
+        path, _ = QFileDialog.getOpenFileName(self, "Reference image", str(self._dir()), "Images (*.png *.jpg *.jpeg *.bmp)")
+        if path:
+            try:
+                self.canvas.set_reference_image(path)
+            except SketchforgeError as exc:
+                show_error(self, "Cannot show the image", exc)
+
+    def _dir(self) -> Path:
+        return self.path.parent if self.path is not None else Path.cwd()
+
+    # --- recent files ---------------------------------------------------------------------------
+    def recent_files(self) -> list[str]:
+        value = self.settings.value("recent_files", [])
+        if isinstance(value, str):
+            value = [value]
+        return [str(v) for v in (value or [])]
+
+    def _add_recent(self, path) -> None:
+        p = str(Path(path).resolve())
+        files = [p] + [f for f in self.recent_files() if f != p]
+        self.settings.setValue("recent_files", files[:MAX_RECENT])
+        self.update_recent_menu()
+
+    def update_recent_menu(self) -> None:
+        self.recent_menu.clear()
+        files = self.recent_files()
+        for f in files:
+            act = self.recent_menu.addAction(f)
+            act.triggered.connect(lambda _=False, f=f: self.open_path(Path(f)))
+        self.recent_menu.setEnabled(bool(files))
+
+    # --- background warm-up and closing ---------------------------------------------------------
+    def start_warm_up(self) -> None:
+        """Compile the sculpt solver in the background, if the plugin offers ``warm_up``."""
+        try:
+            import sketchforge_isophote_tool as tool
+        except ImportError:
+            return
+        warm = getattr(tool, "warm_up", None)
+        if warm is None:
+            return
+        self.jobs.start(warm, lambda _r: self.show_message("sculpt solver ready"), lambda e, tb: None, label="Warming up", background=True)
+
+    def closeEvent(self, event) -> None:
+        if getattr(self, "_closing_now", False) or self.maybe_save():
+            self.runner.cancel()
+            event.accept()
+        else:
+            event.ignore()
+
+    def close_now(self) -> None:
+        """Close without asking (screenshots, tests)."""
+        self._closing_now = True
+        self.runner.cancel()
+        self.close()

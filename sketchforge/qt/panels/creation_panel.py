@@ -1,0 +1,79 @@
+"""CREATION controls: the current layer's inflation parameters, the stroke kind, and how the
+drawing region shades (Lambertian or cel, isophote lines)."""
+
+from __future__ import annotations
+
+from PySide6.QtCore import Signal
+from PySide6.QtWidgets import QCheckBox, QComboBox, QDoubleSpinBox, QFormLayout, QGroupBox, QLabel, QSpinBox
+
+#: (key, label, minimum, maximum, step, decimals, tooltip)
+PARAMS = (
+    ("resolution", "Resolution", 0.002, 1.0, 0.005, 3, "Target triangle edge length, drawing units"),
+    ("inflation", "Inflation", 0.0, 10.0, 0.1, 2, "Height scale of the inflated shape"),
+    ("smoothing", "Smoothing", 0.0, 0.99, 0.05, 2, "Fairing weight α (0 = none)"),
+)
+
+
+class CreationPanel(QGroupBox):
+    #: {key: value} for the current layer
+    params_edited = Signal(dict)
+    closed_changed = Signal(bool)
+    shader_changed = Signal(str)
+    isolines_changed = Signal(int)
+
+    def __init__(self, parent=None) -> None:
+        super().__init__("Creation", parent)
+        form = QFormLayout(self)
+        self.layer_label = QLabel("no layer: draw to create one")
+        form.addRow(self.layer_label)
+        self.spins: dict[str, QDoubleSpinBox] = {}
+        for key, label, lo, hi, step, dec, tip in PARAMS:
+            s = QDoubleSpinBox()
+            s.setRange(lo, hi)
+            s.setSingleStep(step)
+            s.setDecimals(dec)
+            s.setKeyboardTracking(False)
+            s.setToolTip(tip)
+            s.valueChanged.connect(lambda v, k=key: self._edited(k, v))
+            self.spins[key] = s
+            form.addRow(label, s)
+        self.closed = QCheckBox("closed outline (free part)")
+        self.closed.setToolTip("Unchecked: an open stroke's closing segment attaches to the layer below")
+        self.closed.toggled.connect(self.closed_changed.emit)
+        form.addRow(self.closed)
+        self.shader = QComboBox()
+        self.shader.currentTextChanged.connect(self.shader_changed.emit)
+        form.addRow("Shading", self.shader)
+        self.isolines = QSpinBox()
+        self.isolines.setRange(0, 20)
+        self.isolines.setToolTip("Number of isophote lines drawn over the shading")
+        self.isolines.valueChanged.connect(self.isolines_changed.emit)
+        form.addRow("Isophote lines", self.isolines)
+        self._updating = False
+
+    def set_shaders(self, names, current: str) -> None:
+        self.shader.blockSignals(True)
+        self.shader.clear()
+        self.shader.addItems(list(names))
+        self.shader.setCurrentText(current)
+        self.shader.blockSignals(False)
+
+    def show_layer(self, layer) -> None:
+        """Mirror the current layer's parameters (None: no layer selected)."""
+        self._updating = True
+        try:
+            for s in self.spins.values():
+                s.setEnabled(layer is not None)
+            if layer is None:
+                self.layer_label.setText("no layer: draw to create one")
+                return
+            kind = "no contour yet: draw it" if layer.points is None else f"{len(layer.edits)} sculpt edits"
+            self.layer_label.setText(f"<b>{layer.name}</b> ({kind})")
+            for key, s in self.spins.items():
+                s.setValue(float(layer.params.get(key, s.value())))
+        finally:
+            self._updating = False
+
+    def _edited(self, key: str, value: float) -> None:
+        if not self._updating:
+            self.params_edited.emit({key: float(value)})
