@@ -1,4 +1,5 @@
 import os
+import tempfile
 import sys
 from pathlib import Path
 
@@ -6,6 +7,8 @@ import pytest
 
 # Qt (when a test imports it) must never need a display unless the test is a GL test.
 os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
+# Autosaves and app settings written by tests never touch the user's own folders.
+os.environ["SKETCHFORGE_DATA_DIR"] = tempfile.mkdtemp(prefix="sketchforge-test-data-")
 sys.path.insert(0, str(Path(__file__).parent))
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -23,6 +23,19 @@ from sketchforge.document import fileformat as ff
 DEFAULT_INTERVAL_S = 60.0
 
 
+def autosave_interval(setting=None) -> float:
+    """Seconds between autosaves: ``$SKETCHFORGE_AUTOSAVE_INTERVAL``, else ``setting`` (the
+    app's stored preference), else :data:`DEFAULT_INTERVAL_S`. Invalid values fall back."""
+    for raw in (os.environ.get("SKETCHFORGE_AUTOSAVE_INTERVAL"), setting):
+        try:
+            value = float(raw)
+        except (TypeError, ValueError):
+            continue
+        if value > 0:
+            return value
+    return DEFAULT_INTERVAL_S
+
+
 def data_dir() -> Path:
     env = os.environ.get("SKETCHFORGE_DATA_DIR")
     if env:
@@ -102,6 +115,5 @@ def recover(item: Recoverable, host=None):
     """Open an autosave as a document with unsaved changes (the autosave file is kept until
     the user saves or discards)."""
     doc = ff.load(item.path, host=host)
-    doc.undo_stack.clear()  # the recovered state is not the saved file: mark it dirty
-    doc.undo_stack._clean_index = -1
+    doc.undo_stack.reset_clean()  # the recovered state is not the saved file
     return doc

@@ -151,6 +151,12 @@ class UndoStack:
         self._clean_index = self._index
         self._emit_changes(before)
 
+    def reset_clean(self) -> None:
+        """No state is the saved one (QUndoStack::resetClean): e.g. recovered work."""
+        before = self._state()
+        self._clean_index = -1
+        self._emit_changes(before)
+
     def clear(self) -> None:
         """Forget the history (the document keeps its current state), e.g. after opening a file."""
         if self._macros:

@@ -25,12 +25,16 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import jax
-import jax.numpy as jnp
 import numpy as np
 import scipy.ndimage as ndi
 
-jax.config.update("jax_enable_x64", True)
+from sketchforge.geometry.locate import TriangleLocator
+from sketchforge.numerics import enable_x64
+
+enable_x64()
+
+import jax  # noqa: E402  (x64 must be switched on before JAX makes any array)
+import jax.numpy as jnp  # noqa: E402
 
 #: Nodes per side of every resampling grid. One size for all layers keeps one compiled
 #: function per batch size; 256 gives a spacing below the edge length up to ~20k-vertex layers
@@ -287,9 +291,9 @@ class BucketField:
 
     Attributes
     ----------
-    table : (B, B, c) int32
+    table : (Bx, By, c) int32
         Candidate triangles per bucket ``[bx, by]``, padded with 0 (``count`` says how many).
-    count : (B, B) int32
+    count : (Bx, By) int32
     corners : (m, 3, 2) float64
         Triangle corner positions.
     values : (m, 3, k) float64
@@ -319,8 +323,8 @@ class BucketField:
     def __call__(self, xy):
         """Value (k,) and per-face gradient (k, 2) at one point; points outside every
         triangle use the candidate triangle they are closest to being inside."""
-        B = self.table.shape[0]
-        b = jnp.clip(jnp.floor((xy - self.origin) / self.cell).astype(jnp.int32), 0, B - 1)
+        last = jnp.array(self.table.shape[:2]) - 1
+        b = jnp.clip(jnp.floor((xy - self.origin) / self.cell).astype(jnp.int32), 0, last)
         cand = self.table[b[0], b[1]]  # (c,)
         n = self.count[b[0], b[1]]
         P = self.corners[cand]  # (c, 3, 2)
@@ -354,42 +358,37 @@ def face_gradients(V2: np.ndarray, F: np.ndarray, values: np.ndarray) -> np.ndar
     return np.stack([gx, gy], axis=2)
 
 
-def make_bucket_field(V2: np.ndarray, F: np.ndarray, values: np.ndarray, buckets: int = 64) -> BucketField:
+def make_bucket_field(
+    V2: np.ndarray, F: np.ndarray, values: np.ndarray, locator: TriangleLocator | None = None
+) -> BucketField:
     """Build a :class:`BucketField` of a per-vertex field (n,) or (n, k).
 
-    ``buckets`` per side of the layer's bounding square; candidate lists are padded to the
-    largest bucket, so the shapes (and compiled functions) depend on the mesh.
+    The buckets are those of :class:`~sketchforge.geometry.locate.TriangleLocator` (pass one
+    already built for this mesh to reuse it); candidate lists are padded to the largest bucket,
+    so the shapes (and compiled functions) depend on the mesh.
     """
+    V2 = np.asarray(V2, np.float64)[:, :2]
+    F = np.asarray(F, np.int64)
     vals = np.asarray(values, np.float64)
     if vals.ndim == 1:
         vals = vals[:, None]
-    lo, hi = V2.min(axis=0), V2.max(axis=0)
-    cell = float((hi - lo).max()) / buckets * (1 + 1e-9)
-    P = V2[F]
-    blo = np.clip(np.floor((P.min(axis=1) - lo) / cell).astype(np.int64), 0, buckets - 1)
-    bhi = np.clip(np.floor((P.max(axis=1) - lo) / cell).astype(np.int64), 0, buckets - 1)
-    pairs = []
-    for dx in range(int((bhi - blo)[:, 0].max()) + 1):
-        for dy in range(int((bhi - blo)[:, 1].max()) + 1):
-            ok = (blo[:, 0] + dx <= bhi[:, 0]) & (blo[:, 1] + dy <= bhi[:, 1])
-            f = np.nonzero(ok)[0]
-            pairs.append(np.stack([(blo[f, 0] + dx) * buckets + blo[f, 1] + dy, f], axis=1))
-    pairs = np.concatenate(pairs)
-    pairs = pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
-    counts = np.bincount(pairs[:, 0], minlength=buckets * buckets)
-    c = int(counts.max())
-    start = np.concatenate([[0], np.cumsum(counts)[:-1]])
-    slot = np.arange(len(pairs)) - start[pairs[:, 0]]
-    table = np.zeros((buckets * buckets, c), np.int32)
-    table[pairs[:, 0], slot] = pairs[:, 1]
+    bk = (locator if locator is not None else TriangleLocator(V2, F)).buckets
+    counts = np.diff(bk.start)  # (nx*ny,), cell = cy * nx + cx
+    c = int(max(counts.max(), 1))
+    cell = np.repeat(np.arange(len(counts)), counts)
+    slot = np.arange(len(bk.tris)) - bk.start[cell]
+    table = np.zeros((len(counts), c), np.int32)
+    table[cell, slot] = bk.tris
+    # Cells are numbered row by row (y major); the table is indexed [bx, by].
+    table = table.reshape(bk.ny, bk.nx, c).transpose(1, 0, 2)
     return BucketField(
-        jnp.asarray(table.reshape(buckets, buckets, c)),
-        jnp.asarray(counts.reshape(buckets, buckets).astype(np.int32)),
-        jnp.asarray(P),
+        jnp.asarray(np.ascontiguousarray(table)),
+        jnp.asarray(counts.reshape(bk.ny, bk.nx).T.astype(np.int32)),
+        jnp.asarray(V2[F]),
         jnp.asarray(vals[F]),
         jnp.asarray(face_gradients(V2, F, vals)),
-        jnp.asarray(lo),
-        jnp.asarray(cell),
+        jnp.asarray(bk.origin),
+        jnp.asarray(bk.h),
     )
 
 

@@ -8,11 +8,41 @@ makes. All loops run over bucket slots (a few tens at most), never over points.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 #: Barycentric slack: a point whose smallest barycentric coordinate is above -BARY_TOL counts as
 #: inside, so points on shared edges and at vertices are always found despite rounding.
 BARY_TOL = 1e-10
+
+
+@dataclass(frozen=True)
+class Buckets:
+    """The locator's grid of triangle buckets, for consumers that need the raw arrays
+    (e.g. :func:`sketchforge.geometry.field_jax.make_bucket_field` turns them into a padded
+    JAX table).
+
+    Attributes
+    ----------
+    origin : (2,) float64
+        Lower-left corner of cell (0, 0).
+    h : float
+        Cell size (square cells).
+    nx, ny : int
+        Cells along x and y.
+    start : (nx*ny + 1,) int64
+        Cell ``cy * nx + cx`` lists ``tris[start[cell]:start[cell + 1]]``.
+    tris : (t,) int64
+        Triangle indices sorted by cell.
+    """
+
+    origin: np.ndarray
+    h: float
+    nx: int
+    ny: int
+    start: np.ndarray
+    tris: np.ndarray
 
 
 class TriangleLocator:
@@ -33,6 +63,8 @@ class TriangleLocator:
         F = np.asarray(F, dtype=np.int64).reshape(-1, 3)
         m = len(F)
         self._m = m
+        self._V2, self._F = V2, F
+        self._vertex_face = None  # built on demand by locate(..., nearest=True)
         if m == 0:
             return
         tri = V2[F]  # (m, 3, 2)
@@ -82,12 +114,25 @@ class TriangleLocator:
         ij[:, 1] = np.clip(ij[:, 1], 0, self._ny - 1)
         return ij
 
-    def locate(self, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    @property
+    def buckets(self) -> Buckets:
+        """The grid of triangle buckets (see :class:`Buckets`); read-only views."""
+        if self._m == 0:
+            raise ValueError("an empty triangulation has no buckets")
+        return Buckets(self._origin, float(self._h), self._nx, self._ny, self._cell_start, self._cell_tris)
+
+    def locate(self, P: np.ndarray, nearest: bool = False) -> tuple[np.ndarray, np.ndarray]:
         """Containing triangle and barycentric coordinates of each point.
 
         Parameters
         ----------
         P : (k, 2) float64
+        nearest : bool
+            If True, a finite point outside the mesh is snapped to it instead of reported as
+            -1: it gets the candidate triangle of its grid cell that it is closest to being
+            inside, with its barycentrics clipped to [0, 1] (a point of that triangle), or, in a
+            cell without triangles, its nearest vertex. Callers that sample curves lying on the
+            outline (where rounding puts half the samples just outside) use this.
 
         Returns
         -------
@@ -137,12 +182,61 @@ class TriangleLocator:
             best_l[idx, 0] = l1[idx]
             best_l[idx, 1] = l2[idx]
         hit = best >= -BARY_TOL
+        if nearest:
+            hit = best > -np.inf
         sel = order[hit]
         face[sel] = best_face[hit]
         bary[sel, 0] = 1.0 - best_l[hit, 0] - best_l[hit, 1]
         bary[sel, 1] = best_l[hit, 0]
         bary[sel, 2] = best_l[hit, 1]
+        if nearest:
+            self._snap(P, finite, face, bary)
         return face, bary
+
+    def _snap(self, P: np.ndarray, finite: np.ndarray, face: np.ndarray, bary: np.ndarray) -> None:
+        """In place: clip outside barycentrics to the triangle; unlocated finite points take
+        their nearest vertex (one-hot barycentrics in one of its triangles)."""
+        out = (face >= 0) & (bary.min(axis=1, initial=0.0) < -BARY_TOL)
+        if out.any():
+            b = np.clip(bary[out], 0.0, None)
+            bary[out] = b / b.sum(axis=1, keepdims=True)
+        miss = np.nonzero((face < 0) & finite)[0]
+        if len(miss) == 0:
+            return
+        from scipy.spatial import cKDTree
+
+        if self._vertex_face is None:
+            used = np.unique(self._F)
+            vf = np.full((len(self._V2), 2), -1, dtype=np.int64)  # (face, corner) per vertex
+            vf[self._F.ravel(), 0] = np.repeat(np.arange(self._m), 3)
+            vf[self._F.ravel(), 1] = np.tile(np.arange(3), self._m)
+            self._vertex_face = (cKDTree(self._V2[used]), used, vf)
+        tree, used, vf = self._vertex_face
+        _, i = tree.query(P[miss])
+        v = used[i]
+        face[miss] = vf[v, 0]
+        bary[miss] = 0.0
+        bary[miss, vf[v, 1]] = 1.0
+
+    def interpolate(self, field: np.ndarray, P: np.ndarray, nearest: bool = True) -> np.ndarray:
+        """Barycentric interpolation of a vertex field at points (locate + :func:`interpolate`).
+
+        Parameters
+        ----------
+        field : (n,) or (n, d) float64
+            Values at the vertices of this triangulation.
+        P : (k, 2) float64
+        nearest : bool
+            As in :meth:`locate`; by default points outside take the value at the nearest
+            point found there, so curves on the outline never produce NaN.
+
+        Returns
+        -------
+        (k,) or (k, d) float64
+            NaN only for non-finite points (or points outside with ``nearest=False``).
+        """
+        face, bary = self.locate(P, nearest=nearest)
+        return interpolate(field, self._F, face, bary)
 
 
 def locate(V2: np.ndarray, F: np.ndarray, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -97,6 +97,10 @@ def reflectance_pq_grad(model: ReflectanceModel) -> Callable:
     return jax.jit(f)
 
 
+#: Points per compiled batch of :func:`evaluate_pq` (larger inputs are split).
+EVAL_CHUNK = 4096
+
+
 @lru_cache(maxsize=None)
 def _batched_pq_grad(model: ReflectanceModel) -> Callable:
     return jax.jit(jax.vmap(reflectance_pq_grad(model), in_axes=(0, 0, None)))
@@ -125,8 +129,18 @@ def evaluate_pq(
     """
     p = np.ascontiguousarray(p, dtype=np.float64).reshape(-1)
     q = np.ascontiguousarray(q, dtype=np.float64).reshape(-1)
-    r, rp, rq = _batched_pq_grad(model)(p, q, np.asarray(l, dtype=np.float64))
-    return np.asarray(r), np.asarray(rp), np.asarray(rq)
+    l = np.asarray(l, dtype=np.float64)
+    fn = _batched_pq_grad(model)
+    k = len(p)
+    if k <= EVAL_CHUNK:
+        # Pad to one fixed size: an editor calls this with a different k on every edit, and
+        # each new shape would otherwise cost a fresh trace and compile (~0.1 s).
+        pad = np.zeros((2, EVAL_CHUNK))
+        pad[0, :k], pad[1, :k] = p, q
+        r, rp, rq = fn(pad[0], pad[1], l)
+        return np.asarray(r)[:k], np.asarray(rp)[:k], np.asarray(rq)[:k]
+    parts = [evaluate_pq(model, p[s : s + EVAL_CHUNK], q[s : s + EVAL_CHUNK], l) for s in range(0, k, EVAL_CHUNK)]
+    return tuple(np.concatenate(a) for a in zip(*parts))
 
 
 def evaluate(model: ReflectanceModel | None, N: np.ndarray, l: np.ndarray) -> np.ndarray:

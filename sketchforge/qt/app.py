@@ -115,4 +115,5 @@ def run_app(doc_path=None, screenshot: str | None = None, mode: str = "editing")
         window.close_now()
         return 0
     window.start_warm_up()
+    window.offer_recovery()
     return app.exec()

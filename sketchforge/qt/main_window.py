@@ -28,6 +28,7 @@ from PySide6.QtWidgets import (
 
 from sketchforge.document import commands as C
 from sketchforge.document import fileformat as ff
+from sketchforge.document.autosave import Autosaver, autosave_interval
 from sketchforge.document.layer import Light
 from sketchforge.errors import SketchforgeError
 from sketchforge.qt.canvas import Canvas
@@ -69,6 +70,43 @@ class MainWindow(QMainWindow):
         self._connect()
         self._sync_all()
         self.set_state("creation")
+
+        # Autosave of unsaved work (the Autosaver decides when; the timer only polls).
+        self.autosaver = Autosaver(doc, interval_s=autosave_interval(self.settings.value("autosave/interval_s")))
+        self._autosave_timer = QTimer(self)
+        self._autosave_timer.setInterval(5000)
+        self._autosave_timer.timeout.connect(self._autosave)
+        self._autosave_timer.start()
+
+    def _autosave(self) -> None:
+        try:
+            self.autosaver.tick()
+        except SketchforgeError as exc:
+            self.show_message(f"autosave failed: {error_text(exc)}")
+
+    def offer_recovery(self) -> bool:
+        """At start: offer the newest autosave left by a session that did not end normally.
+        Returns True when one was recovered (it opens as unsaved changes)."""
+        from sketchforge.document.autosave import find_recoverable, recover
+
+        items = find_recoverable()
+        if not items:
+            return False
+        item = items[0]
+        where = item.original or "an untitled document"
+        if not ask_yes_no(self, "Recover unsaved work?", f"sketchforge found unsaved work on {where} from a session that did not close normally. Recover it?"):
+            return False
+        try:
+            loaded = recover(item, host=self.host)
+        except SketchforgeError as exc:
+            show_error(self, "Cannot recover the autosave", exc)
+            return False
+        self.adopt(loaded, Path(item.original) if item.original else None)
+        self.doc.undo_stack.reset_clean()  # recovered work is not saved anywhere yet
+        self._sync_title()
+        item.path.unlink(missing_ok=True)  # the new autosaver takes over from here
+        self.autosaver.save_now()
+        return True
 
     # --- construction ---------------------------------------------------------------------------
     def _build_widgets(self) -> None:
@@ -462,6 +500,8 @@ class MainWindow(QMainWindow):
         doc.base_journal = list(loaded.base_journal)
         doc.undo_stack.set_clean()
         self.path = path
+        self.autosaver.discard()
+        self.autosaver = Autosaver(self.doc, original_path=path, interval_s=self.autosaver.interval_s)
         self.current_layer = None
         self.canvas.rebuild()
         self._sync_all()
@@ -520,6 +560,8 @@ class MainWindow(QMainWindow):
             show_error(self, "Cannot save the document", exc)
             return False
         self.path = Path(path)
+        self.autosaver.discard()
+        self.autosaver = Autosaver(self.doc, original_path=self.path, interval_s=self.autosaver.interval_s)
         self._add_recent(path)
         self._sync_title()
         self.history_panel.rebuild()
@@ -601,6 +643,8 @@ class MainWindow(QMainWindow):
     def closeEvent(self, event) -> None:
         if getattr(self, "_closing_now", False) or self.maybe_save():
             self.runner.cancel()
+            self._autosave_timer.stop()
+            self.autosaver.discard()  # a normal close: nothing to recover next time
             event.accept()
         else:
             event.ignore()

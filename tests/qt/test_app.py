@@ -86,3 +86,33 @@ def test_observation_view_renders_with_opengl(tmp_path):
     assert proc.returncode == 0, proc.stderr[-2000:]
     img = QImage(str(out))
     assert clay_fraction(img, 0.15, 0.75, 0.1, 0.9) > 0.10  # the 3D model was rendered
+
+
+def test_autosave_is_offered_back_after_a_crash(tmp_path, monkeypatch, qtbot):
+    """Unsaved work written by the autosave timer is offered at the next start, opens as
+    unsaved changes, and a normal close removes the autosave."""
+    from sketchforge.document import Document
+    from sketchforge.document import fileformat as ff
+    from sketchforge.document.autosave import find_recoverable
+    from sketchforge.plugins.testing import FanInflater, make_test_host
+    from sketchforge.qt import errors_ui, main_window
+    from sketchforge.qt.main_window import MainWindow
+
+    monkeypatch.setenv("SKETCHFORGE_DATA_DIR", str(tmp_path / "data"))
+    monkeypatch.setenv("SKETCHFORGE_AUTOSAVE_INTERVAL", "0.001")
+    host = make_test_host(FanInflater())
+    first = MainWindow(Document(host=host), host=host)
+    qtbot.addWidget(first)
+    first.doc.execute({"command": "add_layer", "id": "a"})
+    first.doc.execute({"command": "set_contour", "layer": "a", "points": [[0, 0], [2, 0], [1, 1]]})
+    first._autosave()
+    assert len(find_recoverable()) == 1
+    # The "crash": the first window never closes normally.
+    monkeypatch.setattr(main_window, "ask_yes_no", lambda *a, **k: True)
+    second = MainWindow(Document(host=host), host=host)
+    qtbot.addWidget(second)
+    assert second.offer_recovery() is True
+    assert ff.compare(first.doc, second.doc) == [] and second.is_modified()
+    second.close_now()
+    first.close_now()
+    assert find_recoverable() == []
