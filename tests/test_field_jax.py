@@ -7,7 +7,7 @@ import pytest
 import triangle
 
 from sketchforge.geometry import field_jax as fj
-from sketchforge_isophote_tool.locate import Locator
+from sketchforge.geometry.locate import TriangleLocator
 
 
 @pytest.fixture(scope="module")
@@ -30,7 +30,7 @@ def test_bucket_field_matches_numpy_barycentric(disk):
     rng = np.random.default_rng(0)
     P = rng.uniform(-0.7, 0.7, (500, 2))
     got, grad = jax.vmap(bf)(jnp.asarray(P))
-    ref = Locator.build(V2, F).interpolate(vals, P)
+    ref = TriangleLocator(V2, F).interpolate(vals, P)
     assert np.abs(np.asarray(got)[:, 0] - ref).max() < 1e-12
     # per-face gradient reproduces a linear field exactly
     lin = 2 * V2[:, 0] - 3 * V2[:, 1]
@@ -45,7 +45,7 @@ def test_grid_field_close_to_barycentric_and_smooth(disk):
     rng = np.random.default_rng(1)
     P = rng.uniform(-0.65, 0.65, (500, 2))
     got, grad = jax.vmap(gf)(jnp.asarray(P))
-    ref = Locator.build(V2, F).interpolate(vals, P)
+    ref = TriangleLocator(V2, F).interpolate(vals, P)
     h = 0.06
     # both approximate the same smooth field: differences of the order of the linear
     # interpolation error (h² · |second derivatives|)

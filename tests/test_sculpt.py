@@ -10,11 +10,11 @@ from sculpt_helpers import isophote_stroke
 from sketchforge.errors import NothingToDoError, SculptError
 from sketchforge.geometry import field_jax
 from sketchforge_isophote_tool import sculpt
-from sketchforge_isophote_tool.isophote import make_band
+from sketchforge.geometry.reflectance import LAMBERTIAN
+from sketchforge_isophote_tool.isophote import band_around
 from sketchforge_isophote_tool.jaxcache import TRACES
 from sketchforge_isophote_tool.layerdata import layer_data
 from sketchforge_isophote_tool.pipeline import DEFAULT_OPTIONS, integrate_from_entry
-from sketchforge_isophote_tool.reflect import LAMBERTIAN
 from sketchforge_isophote_tool.regions import compute_regions
 from sketchforge_isophote_tool.stroke import clip_to_band, prepare_stroke
 from sketchforge_isophote_tool.testing import LIGHT, inflated
@@ -63,7 +63,7 @@ def test_strips_on_unchanged_shading_reproduce_heights(shape, pick):
     peak = mesh.V[:, 2].max()
     st, c, iso = isophote_stroke(mesh, pick)
     ld = layer_data(mesh, LIGHT, LAMBERTIAN)
-    band = make_band(iso, 0.3, ld.outline)
+    band = band_around(ld, iso, 0.3)
     stroke = shapely.LineString(clip_to_band(prepare_stroke(st, ld.h), band, ld.h)[0])
     margin = 3 * ld.h
     R = compute_regions(ld, LIGHT, LAMBERTIAN, band, stroke, margin, 2 * ld.h)

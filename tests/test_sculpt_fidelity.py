@@ -8,9 +8,10 @@ import pytest
 import shapely
 
 from sculpt_helpers import fidelity, isophote_stroke
+from sketchforge.geometry.isophotes import isophotes
+from sketchforge.geometry.reflectance import LAMBERTIAN
 from sketchforge_isophote_tool import sculpt
 from sketchforge_isophote_tool.layerdata import layer_data
-from sketchforge_isophote_tool.reflect import LAMBERTIAN
 from sketchforge_isophote_tool.testing import LIGHT, inflated
 
 CASES = [("ellipse", [0.2, 0.1]), ("pillow", [0.2, 0.1]), ("m", [-0.2, 0.35]), ("m", [0.3, 0.45])]
@@ -38,9 +39,7 @@ def test_new_isophote_follows_the_stroke(shape, pick, offset):
     # No new c-isophote piece away from the stroke: new isophote points far from every old
     # c-isophote lie near the stroke.
     ld0 = layer_data(mesh, LIGHT, LAMBERTIAN)
-    from sketchforge_isophote_tool.isophote import isophote_lines
-
-    old = shapely.MultiLineString([L for L in isophote_lines(ld0.V2, mesh.F, ld0.E, c) if len(L) > 1])
+    old = shapely.MultiLineString([L for L in isophotes(ld0.V2, mesh.F, ld0.E, c)[0] if len(L) > 1])
     P = np.concatenate(lines)
     pts = shapely.points(P)
     moved = shapely.distance(pts, old) > 3 * h

@@ -9,8 +9,8 @@ import pytest
 import triangle
 
 from sketchforge.geometry import field_jax as fj
+from sketchforge.geometry.reflectance import LAMBERTIAN, evaluate_pq
 from sketchforge_isophote_tool.characteristics import CHAR_STEPS, integrate_characteristics
-from sketchforge_isophote_tool.reflect import LAMBERTIAN, eval_reflectance
 
 L = np.array([1.0, 1.0, 0.0]) / np.sqrt(2.0)
 G = fj.GRID_SIZE
@@ -39,8 +39,8 @@ def seeds(surf, r=0.9, n=64):
     th = np.linspace(0, 2 * np.pi, n, endpoint=False)
     x, y = r * np.cos(th), r * np.sin(th)
     z, p, q = surf(x, y)
-    _, dR = eval_reflectance(LAMBERTIAN, np.column_stack([p, q]), L)
-    enter = np.einsum("ij,ij->i", -dR, -np.column_stack([x, y])) > 0
+    _, rp, rq = evaluate_pq(LAMBERTIAN, p, q, L)
+    enter = rp * x + rq * y > 0  # -∇R · (inward normal -(x, y)) > 0
     return np.column_stack([x, y, p, q, z])[enter]
 
 
@@ -99,6 +99,6 @@ def test_projection_onto_admissible_gradient():
     y0[:, 2:4] *= 1.02
     ys = run(y0, field)
     first = np.array([Y[0] for Y in ys])
-    R, _ = eval_reflectance(LAMBERTIAN, first[:, 2:4], L)
+    R = evaluate_pq(LAMBERTIAN, first[:, 2], first[:, 3], L)[0]
     assert np.abs(R - shading(bump, first[:, 0], first[:, 1])).max() < 1e-7
     assert z_error(bump, ys, 0.6) < 0.02

@@ -157,9 +157,12 @@ def isovalue_at(mesh, E: np.ndarray, point, locator: TriangleLocator | None = No
     Raises
     ------
     SculptError
-        If the point is outside the mesh.
+        If the point is not one finite (x, y) or is outside the mesh.
     """
-    P = np.asarray(point, dtype=np.float64).reshape(1, 2)
+    P = np.asarray(point, dtype=np.float64).reshape(-1)
+    if P.shape != (2,) or not np.isfinite(P).all():
+        raise SculptError(f"the pick must be one finite point [x, y], got {P.tolist()}")
+    P = P.reshape(1, 2)
     loc = locator if locator is not None else TriangleLocator(mesh.V, mesh.F)
     face, bary = loc.locate(P)
     if face[0] < 0:

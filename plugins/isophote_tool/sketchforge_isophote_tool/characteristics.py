@@ -21,15 +21,20 @@ from __future__ import annotations
 
 import functools
 
-import jax
-import jax.numpy as jnp
 import numpy as np
 
+from sketchforge.numerics import enable_x64
+
+enable_x64()
+
+import jax  # noqa: E402  (x64 before JAX makes any array)
+import jax.numpy as jnp  # noqa: E402
+
 from sketchforge.geometry.field_jax import bilinear_eval, bspline_eval
+from sketchforge.geometry.reflectance import reflectance_pq_grad
 from sketchforge.plugins.registry import ReflectanceModel
 
 from .jaxcache import BATCH_BUCKETS, TRACES, bucket, pad_rows
-from .reflect import r_of_pq
 
 #: Fixed steps of the "rk4" solver and saved samples of the diffrax solvers (static sizes).
 CHAR_STEPS = 256
@@ -38,12 +43,12 @@ PROJECT_ITERS = 8
 
 
 def _make_rhs(model):
-    vg = jax.value_and_grad(r_of_pq(model), argnums=(0, 1))
+    vg = reflectance_pq_grad(model)  # (p, q, l) -> (R, R_p, R_q)
 
     def rhs(y, coeffs, origin, spacing, l):
         p, q = y[2], y[3]
         _, Eg = bspline_eval(coeffs, origin, spacing, y[:2])
-        _, (rp, rq) = vg(p, q, l)
+        _, rp, rq = vg(p, q, l)
         g = jnp.sqrt(rp * rp + rq * rq) + 1e-300
         dx, dy = -rp / g, -rq / g
         return jnp.stack([dx, dy, -Eg[0, 0] / g, -Eg[0, 1] / g, p * dx + q * dy]), g
@@ -52,7 +57,7 @@ def _make_rhs(model):
         e, _ = bspline_eval(coeffs, origin, spacing, y[:2])
 
         def it(pq, _):
-            r, (rp, rq) = vg(pq[0], pq[1], l)
+            r, rp, rq = vg(pq[0], pq[1], l)
             g2 = rp * rp + rq * rq + 1e-300
             return pq + (e[0] - r) * jnp.stack([rp, rq]) / g2, None
 

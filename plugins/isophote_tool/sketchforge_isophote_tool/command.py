@@ -17,14 +17,14 @@ from sketchforge.document.commands import ReplaceLayerCommand, parse_field, pars
 from sketchforge.document.layer import Layer
 from sketchforge.errors import DocumentFormatError, NothingToDoError, SculptError
 
-from .reflect import LAMBERTIAN
-
 
 def _model(doc, name: str):
     models = getattr(getattr(doc, "host", None), "reflectance_models", None) or {}
     if name in models:
         return models[name]
-    if name == LAMBERTIAN.name:
+    if name == "lambertian":
+        from sketchforge.geometry.reflectance import LAMBERTIAN  # imports jax: only when used
+
         return LAMBERTIAN
     raise SculptError(f"no reflectance model named {name!r} is installed")
 

@@ -19,14 +19,14 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import igl
 import numpy as np
-import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 import shapely
 import triangle
 
 from sketchforge.errors import SolverError
+from sketchforge.geometry.fairing import squared_laplacian_matrix
+from sketchforge.geometry.laplacian import laplacian_and_mass
 
 from .layerdata import LayerData
 
@@ -112,11 +112,7 @@ def squared_laplacian_fill(V: np.ndarray, F: np.ndarray, fixed: np.ndarray, valu
     values : (k,) float64
         Used where ``fixed``.
     """
-    V3 = np.column_stack([V, np.zeros(len(V))])
-    L = igl.cotmatrix(V3, F)
-    M = igl.massmatrix(V3, F, igl.MASSMATRIX_TYPE_VORONOI)
-    Minv = sp.diags(1.0 / np.maximum(M.diagonal(), 1e-300))
-    Q = (L.T @ Minv @ L).tocsr()
+    Q = squared_laplacian_matrix(*laplacian_and_mass(V, F)).tocsr()
     free = ~fixed
     e = np.array(values, np.float64)
     if free.any():

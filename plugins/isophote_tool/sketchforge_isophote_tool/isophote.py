@@ -1,84 +1,56 @@
-"""Pick an isovalue, trace the isophote through the pick, build the band (thesis 4.3)."""
+"""The isophote an edit acts on (thesis 4.3), on a layer's cached data.
+
+The steps themselves are the core's: :func:`~sketchforge.geometry.isophotes.isovalue_at` (c, 0 for
+a pick in shadow), :func:`~sketchforge.geometry.isophotes.isophotes` (marching triangles),
+:func:`~sketchforge.geometry.isophotes.select_isophote` and
+:func:`~sketchforge.geometry.band.band`. What is sculpt-specific is only feeding them the cached
+:class:`~.layerdata.LayerData` (its locator, shading and outline) and handing the pipeline
+shapely geometry.
+"""
 
 from __future__ import annotations
 
 import numpy as np
 import shapely
 
-from sketchforge.errors import NothingToDoError, SculptError
+from sketchforge.geometry.band import band
+from sketchforge.geometry.isophotes import isophotes, isovalue_at, select_isophote
 
 from .layerdata import LayerData
 
 
-def pick_value(ld: LayerData, pick: np.ndarray) -> float:
-    """The isovalue c at a picked point: the signed shading there, 0 for a pick in shadow.
+def picked_isophote(ld: LayerData, pick) -> tuple[float, shapely.LineString]:
+    """The isovalue at a pick and the component of its isophote nearest to the pick.
+
+    Parameters
+    ----------
+    ld : LayerData
+    pick : (2,) float64
+
+    Returns
+    -------
+    c : float
+        E at the pick, 0 for a pick in shadow.
+    isophote : shapely LineString
+        Brighter side on its left (see :func:`~sketchforge.geometry.isophotes.isophotes`).
 
     Raises
     ------
     SculptError
-        If the pick is not a finite point inside the layer.
+        A pick that is not a finite point inside the layer, or no isophote at c.
     """
-    pick = np.asarray(pick, np.float64).reshape(-1)
-    if pick.shape != (2,) or not np.isfinite(pick).all():
-        raise SculptError(f"the pick must be one finite point [x, y], got {pick.tolist()}")
-    if not ld.outline.contains(shapely.Point(pick)):
-        raise SculptError(f"the pick point ({pick[0]:.4g}, {pick[1]:.4g}) is outside the layer")
-    e = float(ld.locator.interpolate(ld.E, pick[None])[0])
-    # In shadow every point has R <= 0; the only isophote there that a stroke can move is the
-    # terminator, so the edit acts on c = 0.
-    return max(e, 0.0)
+    c = isovalue_at(ld.mesh, ld.E, pick, ld.locator)
+    lines, _ = isophotes(ld.V2, ld.mesh.F, ld.E, c)
+    i = select_isophote(lines, np.asarray(pick, np.float64).reshape(2))
+    return c, shapely.LineString(lines[i])
 
 
-def isophote_lines(V2: np.ndarray, F: np.ndarray, E: np.ndarray, c: float) -> list[np.ndarray]:
-    """Polylines of the piecewise-linear field E at value c (marching triangles).
+def band_around(ld: LayerData, isophote: shapely.LineString, radius: float):
+    """The band isophote ⊕ disk(radius), clipped to the layer (shapely (Multi)Polygon).
 
-    Parameters
-    ----------
-    V2 : (n, 2) float64
-    F : (m, 3) int64
-    E : (n,) float64
-    c : float
-
-    Returns
-    -------
-    list of (k, 2) float64 arrays, merged into maximal polylines.
+    Raises
+    ------
+    SculptError
+        For a radius that is not a positive number.
     """
-    s = E - c
-    pos = s >= 0  # a vertex exactly at c counts as above: every crossing is well defined
-    npos = pos[F].sum(axis=1)
-    faces = F[(npos == 1) | (npos == 2)]
-    if len(faces) == 0:
-        return []
-    pts = []
-    for a, b in ((0, 1), (1, 2), (2, 0)):
-        i, j = faces[:, a], faces[:, b]
-        # Order each edge by vertex index so both triangles sharing it compute the same point.
-        lo, hi = np.minimum(i, j), np.maximum(i, j)
-        cross = pos[lo] != pos[hi]
-        t = np.where(cross, s[lo] / np.where(cross, s[lo] - s[hi], 1.0), 0.0)
-        p = V2[lo] + t[:, None] * (V2[hi] - V2[lo])
-        pts.append((cross, p))
-    segs = []
-    for k in range(len(faces)):
-        q = [p[k] for cross, p in pts if cross[k]]
-        if len(q) == 2:
-            segs.append(q)
-    merged = shapely.line_merge(shapely.MultiLineString(segs))
-    geoms = getattr(merged, "geoms", [merged])
-    return [np.asarray(g.coords) for g in geoms if not g.is_empty]
-
-
-def selected_isophote(lines: list[np.ndarray], pick: np.ndarray):
-    """The isophote component nearest to the pick (shapely LineString)."""
-    if not lines:
-        raise NothingToDoError("the layer has no isophote at the picked value")
-    geoms = [shapely.LineString(L) for L in lines if len(L) >= 2]
-    d = shapely.distance(np.array(geoms, dtype=object), shapely.Point(pick))
-    return geoms[int(np.argmin(d))]
-
-
-def make_band(isophote, radius: float, outline):
-    """Band = isophote ⊕ disk(radius), clipped to the layer (shapely Polygon/MultiPolygon)."""
-    if not (np.isfinite(radius) and radius > 0):
-        raise SculptError(f"the band radius must be a positive number, got {radius}")
-    return isophote.buffer(radius, quad_segs=16).intersection(outline)
+    return band(np.asarray(isophote.coords), radius, np.asarray(ld.outline.exterior.coords))

@@ -11,20 +11,21 @@ import hashlib
 from collections import OrderedDict
 from dataclasses import dataclass
 
-import igl
 import numpy as np
 import scipy.ndimage as ndi
 import shapely
 
 from sketchforge.geometry import field_jax
+from sketchforge.geometry.locate import TriangleLocator
 from sketchforge.geometry.mesh import Mesh
+from sketchforge.geometry.normals import slopes, vertex_normals
+from sketchforge.geometry.reflectance import evaluate_pq
 from sketchforge.plugins.registry import ReflectanceModel
 
-from .locate import Locator
-from .reflect import eval_reflectance
 
 #: Smallest |n_z| used for p = -n_x/n_z: contour vertices' averaged normals are steep but must
-#: stay finite (4.5: boundary normals come from the adjacent triangles).
+#: stay finite (4.5: boundary normals come from the adjacent triangles). Twice the core's
+#: default clamp: slopes at most 50, which the strip solvers' step sizes were tuned for.
 MIN_NZ = 0.02
 
 
@@ -47,7 +48,8 @@ class LayerData:
         Signed shading R(n, l) per vertex.
     outline : shapely.Polygon
         The layer's contour.
-    locator : Locator
+    locator : TriangleLocator
+        Point location on the layer (its ``interpolate`` snaps points just outside).
     raster : tuple
         ``(origin, spacing, face, bary)`` of the fixed-size grid (see field_jax).
     pq_field : field_jax.GridField
@@ -67,7 +69,7 @@ class LayerData:
     pq: np.ndarray
     E: np.ndarray
     outline: object
-    locator: Locator
+    locator: TriangleLocator
     raster: tuple
     pq_field: object
     E_nodes: np.ndarray
@@ -119,11 +121,10 @@ def _compute(mesh: Mesh, light: np.ndarray, model: ReflectanceModel) -> LayerDat
     V2 = np.ascontiguousarray(V[:, :2])
     e = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
     h = float(np.linalg.norm(V2[e[:, 0]] - V2[e[:, 1]], axis=1).mean())
-    N = igl.per_vertex_normals(V, F, igl.PER_VERTEX_NORMALS_WEIGHTING_TYPE_AREA)
-    N = np.asarray(N, np.float64)
-    nz = np.maximum(N[:, 2], MIN_NZ)
-    pq = np.stack([-N[:, 0] / nz, -N[:, 1] / nz], axis=1)
-    E, _ = eval_reflectance(model, pq, light)
+    N = vertex_normals(V, F)
+    pq = np.column_stack(slopes(N, MIN_NZ))
+    # E from the clamped slopes (not from N) so that E = R(p, q) holds exactly at every vertex.
+    E = evaluate_pq(model, pq[:, 0], pq[:, 1], light)[0]
     raster = field_jax.layer_raster(V2, F)
     origin, spacing, face, bary = raster
     # p, q and E from the vertex normals, i.e. the shading the person sees. (Measured: strips
@@ -144,7 +145,7 @@ def _compute(mesh: Mesh, light: np.ndarray, model: ReflectanceModel) -> LayerDat
         pq=pq,
         E=E,
         outline=outline_polygon(mesh),
-        locator=Locator.build(V2, F),
+        locator=TriangleLocator(V2, F),
         raster=raster,
         pq_field=pq_field,
         E_nodes=nodes[:, :, 2:3],

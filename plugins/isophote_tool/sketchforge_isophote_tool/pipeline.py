@@ -21,14 +21,15 @@ import shapely
 from sketchforge.errors import NothingToDoError, SculptError, SolverError
 from sketchforge.geometry import field_jax
 from sketchforge.geometry.mesh import Mesh
+from sketchforge.geometry.reflectance import LAMBERTIAN
 from sketchforge.plugins.registry import ReflectanceModel
 
 from .characteristics import CHAR_STEPS, SOLVERS, integrate_characteristics
 from .interp import LocalShading, interpolate_shading
-from .isophote import isophote_lines, make_band, pick_value, selected_isophote
+from .isophote import band_around, picked_isophote
 from .layerdata import LayerData, layer_data
-from .reflect import LAMBERTIAN
-from .regions import Regions, _gap, compute_regions
+from .gaps import StripGaps
+from .regions import Regions, compute_regions
 from .reconstruct import reconstruct_heights
 from .stroke import clip_to_band, prepare_stroke
 
@@ -141,7 +142,7 @@ def integrate_from_entry(ld, light, model, M, entry, E_field, opts, margin) -> l
     ds = length / CHAR_STEPS
     if opts["solver"] != "rk4":
         ds = 0.5 * h  # initial step of the adaptive solvers
-    shapely.prepare(M)
+    gaps_of = StripGaps(M)
 
     def run(P):
         pq = field_jax.eval_points(ld.pq_field, P)[0]
@@ -161,8 +162,8 @@ def integrate_from_entry(ld, light, model, M, entry, E_field, opts, margin) -> l
     for _ in range(MAX_COVER_ROUNDS):
         new_pts, where = [], []
         for c, (P, t) in enumerate(zip(entry, params)):
-            xy = [s[:, :2] for s in strips[c]]
-            gaps = np.array([_gap(xy[i], xy[i + 1], M) for i in range(len(xy) - 1)])
+            st = strips[c]
+            gaps = gaps_of([(st[i], st[i + 1]) for i in range(len(st) - 1)])
             bad = np.nonzero((gaps > opts["cover"] * h) & (np.diff(t) > 1e-3 * h))[0]
             if len(bad):
                 nt = 0.5 * (t[bad] + t[bad + 1])
@@ -253,10 +254,9 @@ def sculpt(
     T["layer"] = time.perf_counter() - t0
 
     t = time.perf_counter()
-    c = pick_value(ld, pick)
+    c, iso = picked_isophote(ld, pick)
     P = prepare_stroke(stroke, h)
-    iso = selected_isophote(isophote_lines(ld.V2, mesh.F, ld.E, c), np.asarray(pick, float))
-    band_geom = make_band(iso, band, ld.outline)
+    band_geom = band_around(ld, iso, band)
     pieces = clip_to_band(P, band_geom, h)
     stroke_geom = shapely.MultiLineString(pieces) if len(pieces) > 1 else shapely.LineString(pieces[0])
     T["isophote"] = time.perf_counter() - t

@@ -20,10 +20,11 @@ import numpy as np
 import shapely
 
 from sketchforge.errors import NothingToDoError
+from sketchforge.geometry.reflectance import evaluate_pq
 from sketchforge.plugins.registry import ReflectanceModel
 
+from .gaps import StripGaps
 from .layerdata import LayerData
-from .reflect import eval_reflectance
 from .strips import contour_runs, integrate_region_strips, ring_points
 
 #: Refinement rounds for the seeding of region strips.
@@ -83,18 +84,6 @@ def clean(geom, h: float):
     return parts[0] if len(parts) == 1 else shapely.MultiPolygon(parts)
 
 
-def _gap(a: np.ndarray, b: np.ndarray, zone) -> float:
-    """Largest distance from samples of one strip inside ``zone`` to the other strip."""
-    g = 0.0
-    for p, q in ((a, b), (b, a)):
-        if len(p) == 0 or len(q) < 2:
-            continue
-        inside = shapely.contains_xy(zone, p[:, 0], p[:, 1])
-        if inside.any():
-            g = max(g, float(shapely.distance(shapely.points(p[inside]), shapely.LineString(q)).max()))
-    return g
-
-
 def compute_regions(
     ld: LayerData,
     light: np.ndarray,
@@ -134,7 +123,8 @@ def compute_regions(
         raise NothingToDoError("no characteristic strip enters the layer under this light")
     coords = np.asarray(ld.outline.exterior.coords)
     zone = band.buffer(h).intersection(omega_star)
-    shapely.prepare(zone)
+    gaps_of = StripGaps(zone)
+    cell_memo: dict = {}  # (id, id) of two neighbouring strips -> (cell, hits stroke, refs)
 
     # Seeds per run: arc-length parameters, sorted. Strips start a quarter edge inside the
     # contour so their first sample lies in the layer.
@@ -158,10 +148,29 @@ def compute_regions(
         run_s.append(all_strips[k : k + len(t)])
         k += len(t)
 
+    shapely.prepare(stroke)
+
     def crossed_range(strips_):
-        cells = [_cell(strips_[i], strips_[i + 1]) for i in range(len(strips_) - 1)]
-        hit = np.nonzero([(not c.is_empty) and c.intersects(stroke) for c in cells])[0]
-        return cells, hit
+        # Cells between strips already paired in an earlier round are reused: only the
+        # cells next to inserted strips are new.
+        cells, hits, new = [], [], []
+        for i in range(len(strips_) - 1):
+            a, b = strips_[i], strips_[i + 1]
+            m = cell_memo.get((id(a), id(b)))
+            if m is None:
+                new.append(i)
+                cells.append(_cell(a, b))
+                hits.append(False)
+            else:
+                cells.append(m[0])
+                hits.append(m[1])
+        if new:
+            geoms = np.array([cells[i] for i in new], dtype=object)
+            inter = shapely.intersects(stroke, geoms) & ~shapely.is_empty(geoms)
+            for i, x in zip(new, inter):
+                hits[i] = bool(x)
+                cell_memo[(id(strips_[i]), id(strips_[i + 1]))] = (cells[i], hits[i], strips_[i], strips_[i + 1])
+        return cells, np.nonzero(hits)[0]
 
     worst = 0.0
     S_parts = []
@@ -172,7 +181,7 @@ def compute_regions(
             if len(hit) == 0:
                 break
             a, b = max(hit.min() - 1, 0), min(hit.max() + 1, len(cells) - 1)
-            gaps = np.array([_gap(st[i], st[i + 1], zone) for i in range(a, b + 1)])
+            gaps = gaps_of([(st[i], st[i + 1]) for i in range(a, b + 1)])
             bad = np.nonzero((gaps > max_gap) & (np.diff(t)[a : b + 1] > 1e-3 * h))[0] + a
             worst = max(worst, float(gaps[(hit.min() - a) : (hit.max() - a + 1)].max(initial=0.0)))
             if len(bad) == 0 or _ == MAX_REFINE:
@@ -200,8 +209,9 @@ def compute_regions(
 
 def _flow(ld: LayerData, light, model, P: np.ndarray) -> np.ndarray:
     """Unit strip direction -∇R/|∇R| (k, 2) at points P (k, 2), p and q from the mesh."""
-    _, dR = eval_reflectance(model, ld.locator.interpolate(ld.pq, P), light)
-    d = -dR
+    pq = ld.locator.interpolate(ld.pq, P)
+    _, rp, rq = evaluate_pq(model, pq[:, 0], pq[:, 1], light)
+    d = -np.column_stack([rp, rq])
     return d / (np.linalg.norm(d, axis=1, keepdims=True) + 1e-300)
 
 

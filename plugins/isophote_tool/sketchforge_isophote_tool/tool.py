@@ -69,9 +69,10 @@ class SculptIsophoteTool(Tool):
         return self.doc.push(cmd)
 
     def _select(self, p) -> None:
-        from .isophote import isophote_lines, make_band, pick_value, selected_isophote
+        from sketchforge.geometry.reflectance import LAMBERTIAN
+
+        from .isophote import band_around, picked_isophote
         from .layerdata import layer_data
-        from .reflect import LAMBERTIAN
 
         target = self._target(p)
         if target is None:
@@ -79,9 +80,8 @@ class SculptIsophoteTool(Tool):
             return
         mesh = self.doc.layer(target).mesh
         ld = layer_data(mesh, self.doc.light.direction, LAMBERTIAN)
-        c = pick_value(ld, p)
-        iso = selected_isophote(isophote_lines(ld.V2, mesh.F, ld.E, c), p)
-        band = make_band(iso, self.band, ld.outline)
+        c, iso = picked_isophote(ld, p)
+        band = band_around(ld, iso, self.band)
         self._active, self.pick = target, p
         rings = [np.asarray(g.exterior.coords) for g in getattr(band, "geoms", [band]) if g.geom_type == "Polygon"]
         self.overlay = {"isovalue": c, "isophote": np.asarray(iso.coords), "band": rings}

@@ -18,10 +18,10 @@ def warm_up(model=None, solver: str = "rk4", buckets=BATCH_BUCKETS) -> None:
 
     from sketchforge.geometry import field_jax
     from sketchforge.geometry.mesh import Mesh
+    from sketchforge.geometry.reflectance import LAMBERTIAN
 
     from .characteristics import CHAR_STEPS, integrate_characteristics
     from .layerdata import layer_data
-    from .reflect import LAMBERTIAN
     from .strips import integrate_region_strips
 
     model = model or LAMBERTIAN
