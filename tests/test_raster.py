@@ -50,18 +50,17 @@ def test_y_up_and_light_object():
     assert top_rows[0] < 6
 
 
-def test_z_buffer_keeps_the_nearest_surface():
+def test_within_a_mesh_the_nearest_surface_wins():
+    """A folded mesh (two sheets over the same pixels): the higher sheet is what shows."""
     m = hemisphere(1.0, 0.1)
-    flat = Mesh(np.c_[m.V[:, :2], np.full(m.n_vertices, 0.5)], m.F)  # plane z = 0.5, n = +z
-    low = Mesh(np.c_[m.V[:, :2], np.full(m.n_vertices, -0.5)], m.F)
-    img = render_top([m, flat], np.array([1.0, 0, 0]), 64, cel=True)
+    flat_V = np.c_[m.V[:, :2], np.full(m.n_vertices, 0.5)]  # plane z = 0.5, n = +z
+    both = Mesh(np.r_[m.V, flat_V], np.r_[m.F, m.F + m.n_vertices])
+    img = render_top([both], np.array([1.0, 0, 0]), 64, cel=True)
     # Flat plane (n·l = 0: shadow tone) wins where the sphere is below 0.5, i.e. near the rim;
     # the dome (z > 0.5 for r < 0.866) wins in the middle on its lit side.
     tone = np.round(CEL_TONES * 255).astype(np.uint8)
     assert np.all(img[32, 58] == tone[0])
     assert np.all(img[32, 40] == tone[1]) or np.all(img[32, 40] == tone[2])
-    img2 = render_top([m, low], np.array([1.0, 0, 0]), 64, cel=True)
-    assert np.all(img2[32, 40] == img[32, 40])
 
 
 def test_cel_has_three_tones_and_isophote_lines_follow_chords():
@@ -128,3 +127,17 @@ def test_write_png_roundtrip_and_atomic_replace(tmp_path):
         write_png(tmp_path / "missing" / "b.png", rgb)
     with pytest.raises(ValueError):
         encode_png(rgb.astype(np.float64))
+
+
+def test_later_mesh_covers_earlier_one_whatever_its_height():
+    """Layers are drawn back to front: a flat layer in front hides a tall dome behind it."""
+    dome = hemisphere(1.0, 0.1)
+    tall = Mesh(np.c_[dome.V[:, :2], 3.0 * dome.V[:, 2]], dome.F)
+    flat = Mesh(np.c_[dome.V[:, :2] * 0.5, np.zeros(dome.n_vertices)], dome.F)  # n·l = 0: shadow
+    light = np.array([1.0, 0.0, 0.0])
+    tone = np.round(CEL_TONES * 255).astype(np.uint8)
+    front = render_top([tall, flat], light, 64, cel=True)
+    behind = render_top([flat, tall], light, 64, cel=True)
+    # Pixel at x = +0.3 (lit side of the dome, inside the small flat disk).
+    assert np.all(front[32, 32 + 9] == tone[0])
+    assert not np.all(behind[32, 32 + 9] == tone[0])

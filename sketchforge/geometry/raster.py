@@ -54,7 +54,8 @@ def render_top(
     Parameters
     ----------
     meshes : list of Mesh
-        Drawn together with one z-buffer; framed jointly with equal aspect and a margin.
+        Back to front: a later mesh covers earlier ones (layer depth order); within a mesh the
+        largest z wins. Framed jointly with equal aspect and a margin.
     light : (3,) float64 or Light
         Direction towards the light (normalised here).
     size : int
@@ -115,8 +116,9 @@ def render_top(
     pix, depth, tri, b1, b2 = _rasterise(u, v, V[:, 2], F, size)
 
     if len(pix):
-        # z-buffer: per pixel keep the fragment with the largest z (nearest to the viewer).
-        order = np.lexsort((-depth, pix))
+        # Per pixel the later mesh wins (meshes are layers back to front: a layer drawn in
+        # front covers those behind whatever their heights); within a mesh, the largest z.
+        order = np.lexsort((-depth, -tri_mesh[tri], pix))
         pix, tri, b1, b2 = pix[order], tri[order], b1[order], b2[order]
         first = np.ones(len(pix), dtype=bool)
         first[1:] = pix[1:] != pix[:-1]
