@@ -1,0 +1,205 @@
+"""Layers -> one closed, outward-oriented 2-manifold mesh (thesis 3.2 and 4.7).
+
+Pipeline: planar sheets (:mod:`.sheet`) -> attachments (:mod:`.attach`) -> junctions cut into
+the faces below (:mod:`.remesh`) -> depth QP (:mod:`.depth`) -> faces, slits and rim bridges
+(:mod:`.stitch`).
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Mapping, Sequence
+
+import numpy as np
+
+from sketchforge.errors import ParameterError
+from sketchforge.geometry.mesh import Mesh
+
+from .attach import Attachment, find_attachments
+from .depth import build_problem, solve_depth
+from .remesh import insert_chains
+from .sheet import sheet_from_mesh, taper
+from .stitch import build_mesh
+
+#: Assembly options. ``margin``: front/back separation at the rim, in edge lengths of the
+#: layer (thesis 4.7's "small margin"); ``gap``: clearance between overlapping layers, in
+#: median edge lengths; ``reg``: pull of the parts towards the drawing plane (relative, see
+#: :mod:`.depth`); ``stiffness``: how much stiffer a layer with parts glued to it is than
+#: the parts (see :func:`.depth.build_problem`); ``solver``: "osqp" or "active_set"; ``on_bad_junction``: "raise" or "free".
+DEFAULT_PARAMS: Mapping[str, object] = {
+    "margin": 0.1,
+    "gap": 0.1,
+    "reg": 1.0,
+    "stiffness": 20.0,
+    "solver": "osqp",
+    "on_bad_junction": "raise",
+}
+
+
+@dataclass(frozen=True, eq=False)
+class AssemblyResult:
+    """The assembled mesh and what it took to make it.
+
+    Attributes
+    ----------
+    mesh : Mesh
+        Closed, outward-oriented; ``boundary``/``junction`` empty.
+    face_layer : (m,) int64
+        Index (in the input list) of the layer each triangle comes from.
+    face_kind : (m,) int8
+        0 front face, 1 back face, 2 rim bridge.
+    attachments : list of Attachment
+        In input indices.
+    components : int
+        Connected components (one per group of attached parts, one per free part).
+    n_equalities, n_inequalities, n_active : int
+        Glue rows, depth-order rows, depth rows active at the solution.
+    max_violation : float
+        Largest violation of any depth-order row (0 when all hold).
+    glue_error : float
+        Largest residual of a glue row (the glued vertices are shared, so this only measures
+        the solver's accuracy, never a crack).
+    warnings : list of str
+    timings : dict of str -> float
+        Seconds per stage.
+    """
+
+    mesh: Mesh
+    face_layer: np.ndarray
+    face_kind: np.ndarray
+    attachments: list
+    components: int
+    n_equalities: int
+    n_inequalities: int
+    n_active: int
+    max_violation: float
+    glue_error: float = 0.0
+    warnings: list = field(default_factory=list)
+    timings: dict = field(default_factory=dict)
+    solver: dict = field(default_factory=dict)
+
+
+def _params(params) -> dict:
+    p = dict(DEFAULT_PARAMS)
+    p.update(params or {})
+    for key in ("margin", "gap", "reg", "stiffness"):
+        if not (isinstance(p[key], (int, float)) and np.isfinite(p[key]) and p[key] > 0):
+            raise ParameterError(f"assembly parameter '{key}' must be a positive number, got {p[key]!r}")
+    if p["solver"] not in ("osqp", "active_set"):
+        raise ParameterError(f"assembly parameter 'solver' must be 'osqp' or 'active_set', got {p['solver']!r}")
+    if p["on_bad_junction"] not in ("raise", "free"):
+        raise ParameterError("assembly parameter 'on_bad_junction' must be 'raise' or 'free'")
+    return p
+
+
+def assemble_detailed(meshes: Sequence[Mesh | None], closed: Sequence[bool] | None = None,
+                      params=None, names: Sequence[str] | None = None) -> AssemblyResult:
+    """Assemble layer meshes, back to front, and report diagnostics.
+
+    Parameters
+    ----------
+    meshes : list of Mesh or None
+        Front surfaces of the layers, back to front (later = in front). ``None`` is skipped.
+    closed : list of bool, optional
+        True marks a free part (its junction, if any, is ignored). Default: all False, so a
+        mesh with a junction attaches.
+    params : dict, optional
+        See :data:`DEFAULT_PARAMS`.
+    names : list of str, optional
+        Layer names used in error messages (default "layer 0", ...).
+
+    Returns
+    -------
+    AssemblyResult
+    """
+    p = _params(params)
+    t0 = time.perf_counter()
+    timings = {}
+    n_in = len(meshes)
+    closed = [False] * n_in if closed is None else list(closed)
+    names = [f"layer {i}" for i in range(n_in)] if names is None else list(names)
+    keep = [i for i, m in enumerate(meshes) if m is not None and m.n_faces > 0]
+    if not keep:
+        raise ParameterError("there is no layer with a mesh to assemble")
+    knames = [names[i] for i in keep]
+    sheets = [sheet_from_mesh(k, meshes[i], bool(closed[i])) for k, i in enumerate(keep)]
+
+    attachments, warnings, free = find_attachments(sheets, knames, p["on_bad_junction"])
+    for u in free:
+        sheets[u] = sheets[u].evolve(junction=np.zeros(0, np.int64))
+    attached = {a.upper for a in attachments}
+    for u in range(len(sheets)):
+        if u not in attached and len(sheets[u].junction):
+            # junction over empty space: a free part whose whole outline is a rim
+            sheets[u] = sheets[u].evolve(junction=np.zeros(0, np.int64))
+    timings["attach"] = time.perf_counter() - t0
+
+    t = time.perf_counter()
+    for lo in sorted({a.lower for a in attachments}):
+        mine = [a for a in attachments if a.lower == lo]
+        chains = [sheets[a.upper].xy[sheets[a.upper].junction] for a in mine]
+        sheets[lo] = insert_chains(sheets[lo], chains, knames, [a.upper for a in mine])
+    timings["remesh"] = time.perf_counter() - t
+
+    t = time.perf_counter()
+    offs = []
+    for s in sheets:
+        offs.append(s.z + p["margin"] * s.h * taper(s))
+    offsets = np.r_[0, np.cumsum([s.n for s in sheets])]
+    gap = p["gap"] * float(np.median([s.h for s in sheets]))
+    P, q, Aeq, beq, Ain, bin_, pinfo = build_problem(sheets, offsets, offs, offs, attachments, gap, p["reg"],
+                                                    p["stiffness"])
+    timings["constraints"] = time.perf_counter() - t
+
+    t = time.perf_counter()
+    x, sinfo = solve_depth(P, q, Aeq, beq, Ain, bin_, method=p["solver"], pad=0.5 * gap)
+    sinfo.update(pinfo)
+    timings["solve"] = time.perf_counter() - t
+    viol = 0.0
+    if len(bin_):
+        viol = max(viol, float(np.max(bin_ - Ain @ x, initial=0.0)))
+    glue_error = float(np.max(np.abs(Aeq @ x - beq), initial=0.0))
+
+    t = time.perf_counter()
+    delta = [x[offsets[k]:offsets[k + 1]] for k in range(len(sheets))]
+    V, F, face_layer, face_kind = build_mesh(sheets, attachments, delta, offs, offs)
+    timings["stitch"] = time.perf_counter() - t
+    timings["total"] = time.perf_counter() - t0
+
+    # components: one per group of attached parts
+    parent = list(range(len(sheets)))
+
+    def root(a):
+        while parent[a] != a:
+            parent[a] = parent[parent[a]]
+            a = parent[a]
+        return a
+
+    for a in attachments:
+        parent[root(a.upper)] = root(a.lower)
+    n_comp = len({root(i) for i in range(len(sheets))})
+    keep_arr = np.array(keep)
+    return AssemblyResult(
+        mesh=Mesh(V, F),
+        face_layer=keep_arr[face_layer],
+        face_kind=face_kind,
+        attachments=[Attachment(keep[a.upper], keep[a.lower], a.side) for a in attachments],
+        components=n_comp,
+        n_equalities=int(len(beq)),
+        n_inequalities=int(len(bin_)),
+        n_active=int(sinfo.get("active", 0)),
+        max_violation=viol,
+        glue_error=glue_error,
+        warnings=warnings,
+        timings=timings,
+        solver=sinfo,
+    )
+
+
+def assemble_meshes(meshes: list[Mesh], closed: list[bool] | None = None, params=None) -> Mesh:
+    """Assemble layer meshes (back to front) into one closed, outward-oriented mesh.
+
+    See :func:`assemble_detailed` for the parameters; this returns only the mesh.
+    """
+    return assemble_detailed(meshes, closed, params).mesh

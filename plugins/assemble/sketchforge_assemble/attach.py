@@ -1,0 +1,109 @@
+"""Which part attaches to which face (thesis 4.7, first paragraph).
+
+A part drawn as an open stroke has a junction Γ_conn. Walking from the front, its junction
+attaches to the nearest layer *behind* it whose region it lies over (the part is glued to that
+layer's front face); failing that, to the nearest layer *in front* whose region holds the
+junction, on that layer's back face (the same rule seen from behind, e.g. legs moved behind
+the body). The nearest layer over the junction on a side must hold all of it; if it holds only
+part (the junction spans two layers, or runs off the layer's outline) and the other side does
+not attach either, the junction is an error (or, on request, a free part). A junction over
+empty space makes a free part.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import shapely
+
+from .errors import AttachmentError
+from .sheet import Sheet
+
+FRONT = 1
+BACK = -1
+
+
+@dataclass(frozen=True)
+class Attachment:
+    """Part ``upper`` is glued by its junction into face ``side`` of layer ``lower``.
+
+    ``upper``/``lower`` are indices in the back-to-front list ("upper" is the part that owns
+    the junction, whatever its depth); ``side`` is :data:`FRONT` (``upper`` is in front of
+    ``lower``) or :data:`BACK`.
+    """
+
+    upper: int
+    lower: int
+    side: int
+
+
+def find_attachments(sheets: list[Sheet], names: list[str], on_bad_junction: str = "raise"):
+    """Decide every attachment.
+
+    Parameters
+    ----------
+    sheets : list of Sheet
+        Back to front; a sheet with an empty ``junction`` is free.
+    names : list of str
+        Layer names for messages.
+    on_bad_junction : {"raise", "free"}
+        What to do with a junction that spans two layers or runs partly outside the layer
+        below: raise :class:`AttachmentError` (default: the person sees why the part did not
+        attach and can fix the stroke), or make the part free and report it.
+
+    Returns
+    -------
+    attachments : list of Attachment
+    warnings : list of str
+    free : set of int
+        Layers whose junction was dropped (free parts).
+    """
+    polys = [s.polygon() for s in sheets]
+    attachments: list[Attachment] = []
+    warnings: list[str] = []
+    free: set[int] = set()
+    for u, s in enumerate(sheets):
+        if len(s.junction) == 0:
+            continue
+        line = shapely.LineString(s.xy[s.junction])
+        tol = 1e-6 * max(line.length, s.h)
+        problem = None
+        attached = False
+        for side, order in ((FRONT, range(u - 1, -1, -1)), (BACK, range(u + 1, len(sheets)))):
+            hits = [i for i in order if line.intersection(polys[i]).length > tol]
+            if not hits:
+                continue
+            lower = hits[0]
+            # The junction is cut into the lower face as a slit; it must stay inside the
+            # outline, with a little clearance so the re-triangulation has no slivers.
+            clearance = 0.05 * sheets[lower].h
+            outside = line.difference(polys[lower].buffer(-clearance)).length
+            if outside <= tol:
+                attachments.append(Attachment(u, lower, side))
+                attached = True
+                break
+            # Not on this side; remember why, but still try the other side (a layer partly
+            # under the junction behind the part must not stop it attaching to the layer in
+            # front that holds the whole junction, e.g. after moving an arm behind everything).
+            if problem is not None:
+                continue
+            if len(hits) > 1 and any(
+                line.difference(polys[lower]).intersection(polys[i]).length > tol for i in hits[1:]
+            ):
+                problem = (
+                    f"the junction of layer '{names[u]}' spans two layers ('{names[lower]}' and "
+                    f"'{names[hits[1]]}'); redraw its ends so that both lie inside one layer"
+                )
+            else:
+                problem = (
+                    f"the junction of layer '{names[u]}' runs outside layer '{names[lower]}'; "
+                    f"redraw its ends so that both lie inside '{names[lower]}'"
+                )
+        if attached:
+            continue
+        if problem is not None:
+            if on_bad_junction == "raise":
+                raise AttachmentError(problem[0].upper() + problem[1:] + ".")
+            warnings.append(problem + " (assembled as a free part)")
+            free.add(u)
+    return attachments, warnings, free

@@ -1,0 +1,151 @@
+"""Checks of an assembled mesh: manifoldness, orientation, volume, components, Euler
+characteristic, degenerate and intersecting triangles. Used by the tests, the benchmark and
+:class:`~sketchforge_assemble.assemble.AssemblyResult`."""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
+
+
+def edge_counts(F: np.ndarray):
+    """Undirected edges of F (m, 3) and how many triangles use each.
+
+    Returns
+    -------
+    edges : (e, 2) int64, sorted per row
+    count : (e,) int64
+    """
+    E = np.sort(F[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+    edges, count = np.unique(E, axis=0, return_counts=True)
+    return edges, count
+
+
+def is_consistently_oriented(F: np.ndarray) -> bool:
+    """Every directed edge appears once and its reverse appears once."""
+    D = F[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+    n = int(F.max()) + 1
+    key = D[:, 0] * n + D[:, 1]
+    rkey = D[:, 1] * n + D[:, 0]
+    if len(np.unique(key)) != len(key):
+        return False
+    return bool(np.all(np.isin(rkey, key)))
+
+
+def signed_volume(V: np.ndarray, F: np.ndarray) -> float:
+    """Volume enclosed by a closed mesh; positive when its triangles face outwards."""
+    a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
+    return float(np.einsum("ij,ij->i", a, np.cross(b, c)).sum() / 6.0)
+
+
+def components(F: np.ndarray, n: int | None = None) -> np.ndarray:
+    """(n,) int64 component label of every vertex (by shared triangles)."""
+    n = int(F.max()) + 1 if n is None else n
+    r = F[:, [0, 1, 2]].ravel()
+    c = F[:, [1, 2, 0]].ravel()
+    A = sp.coo_matrix((np.ones(len(r)), (r, c)), shape=(n, n))
+    return connected_components(A, directed=False)[1]
+
+
+def euler_characteristics(F: np.ndarray) -> list[int]:
+    """V - E + F of every connected component (by triangles)."""
+    labels = components(F)
+    out = []
+    for c in np.unique(labels[F[:, 0]]):
+        Fc = F[labels[F[:, 0]] == c]
+        edges, _ = edge_counts(Fc)
+        out.append(int(len(np.unique(Fc)) - len(edges) + len(Fc)))
+    return out
+
+
+def triangle_areas(V: np.ndarray, F: np.ndarray) -> np.ndarray:
+    """(m,) float64 areas."""
+    return 0.5 * np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1)
+
+
+def _orient(a, b, c, d):
+    """Signed volume orient3d of row-wise points (k, 3)."""
+    return np.einsum("ij,ij->i", np.cross(b - a, c - a), d - a)
+
+
+def _edge_crosses_triangle(p, q, a, b, c):
+    """Row-wise: does segment pq cross triangle abc properly (coplanar cases count as no)?"""
+    s1, s2 = _orient(a, b, c, p), _orient(a, b, c, q)
+    straddle = s1 * s2 < 0
+    o1 = _orient(p, q, a, b)
+    o2 = _orient(p, q, b, c)
+    o3 = _orient(p, q, c, a)
+    inside = ((o1 > 0) & (o2 > 0) & (o3 > 0)) | ((o1 < 0) & (o2 < 0) & (o3 < 0))
+    return straddle & inside
+
+
+def candidate_pairs(V: np.ndarray, F: np.ndarray) -> np.ndarray:
+    """(k, 2) int64 triangle pairs whose bounding boxes overlap (broad phase).
+
+    Centroids go in a KD-tree queried with twice the largest centroid-to-corner distance,
+    then pairs are kept if their axis-aligned boxes overlap.
+    """
+    T = V[F]
+    cen = T.mean(axis=1)
+    rad = np.linalg.norm(T - cen[:, None, :], axis=2).max(axis=1)
+    tree = cKDTree(cen)
+    pairs = tree.query_pairs(r=2.0 * float(rad.max()), output_type="ndarray")
+    if len(pairs) == 0:
+        return pairs.reshape(0, 2)
+    d = np.linalg.norm(cen[pairs[:, 0]] - cen[pairs[:, 1]], axis=1)
+    pairs = pairs[d <= rad[pairs[:, 0]] + rad[pairs[:, 1]]]
+    lo, hi = T.min(axis=1), T.max(axis=1)
+    ok = np.all((lo[pairs[:, 0]] <= hi[pairs[:, 1]]) & (lo[pairs[:, 1]] <= hi[pairs[:, 0]]), axis=1)
+    return pairs[ok]
+
+
+def intersecting_pairs(V: np.ndarray, F: np.ndarray, face_group: np.ndarray | None = None,
+                       chunk: int = 200_000) -> np.ndarray:
+    """Triangle pairs that intersect (narrow phase on the broad-phase candidates).
+
+    Pairs that share a vertex are skipped (neighbours always touch there); coplanar overlaps
+    are not counted. With ``face_group`` (m,), only pairs from different groups (e.g. layers)
+    are tested.
+
+    Returns
+    -------
+    (k, 2) int64 triangle index pairs.
+    """
+    pairs = candidate_pairs(V, F)
+    if face_group is not None and len(pairs):
+        pairs = pairs[face_group[pairs[:, 0]] != face_group[pairs[:, 1]]]
+    if len(pairs):
+        A, B = F[pairs[:, 0]], F[pairs[:, 1]]
+        share = (A[:, :, None] == B[:, None, :]).any(axis=(1, 2))
+        pairs = pairs[~share]
+    hits = []
+    for s in range(0, len(pairs), chunk):
+        P = pairs[s:s + chunk]
+        TA, TB = V[F[P[:, 0]]], V[F[P[:, 1]]]
+        hit = np.zeros(len(P), bool)
+        for X, Y in ((TA, TB), (TB, TA)):
+            a, b, c = Y[:, 0], Y[:, 1], Y[:, 2]
+            for e0, e1 in ((0, 1), (1, 2), (2, 0)):
+                hit |= _edge_crosses_triangle(X[:, e0], X[:, e1], a, b, c)
+        hits.append(P[hit])
+    return np.vstack(hits) if hits else np.zeros((0, 2), np.int64)
+
+
+def mesh_report(V: np.ndarray, F: np.ndarray, face_layer: np.ndarray | None = None) -> dict:
+    """All checks in one dict (see the keys)."""
+    edges, count = edge_counts(F)
+    areas = triangle_areas(V, F)
+    inter = intersecting_pairs(V, F, face_layer)
+    return {
+        "vertices": int(len(V)),
+        "faces": int(len(F)),
+        "edges_not_two_faces": int(np.sum(count != 2)),
+        "consistently_oriented": is_consistently_oriented(F),
+        "volume": signed_volume(V, F),
+        "components": int(len(euler_characteristics(F))),
+        "euler": euler_characteristics(F),
+        "min_area": float(areas.min()) if len(areas) else 0.0,
+        "intersecting_pairs_between_layers": int(len(inter)),
+    }

@@ -1,0 +1,157 @@
+"""Build the closed mesh: front and back faces, slits glued to junctions, rim bridges.
+
+Topology (why it is a 2-manifold). A part's front face, back face and the rim bridge along the
+non-junction part of its outline form a sleeve: a disc whose boundary is its front junction
+chain followed by its back junction chain (the two chains share only the junction's end
+vertices). The face it attaches to is cut along the same polyline into a slit, whose boundary
+loop is the two lips sharing the slit's ends. Gluing the sleeve's loop to the slit's loop is
+the connected sum of two spheres, a sphere again: every edge keeps exactly two triangles and
+V - E + F = 2 for every tree of attached parts.
+
+Which lip takes which chain (seen in a section across the junction, the part lying on the "+"
+side): when the part sits on a front face, the face's "-" side continues into the part's front
+face and its "+" side, under the part, folds back into the part's back face; behind a back face
+it is the mirror image. Orientation then agrees on both lips without any flipping.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .attach import FRONT, Attachment
+from .sheet import Sheet, interior_on_left
+
+
+def chain_sides(sheet: Sheet, chain: np.ndarray):
+    """Which side of an inserted polyline each incident triangle corner lies on.
+
+    Parameters
+    ----------
+    sheet : Sheet
+    chain : (c,) int64
+        The polyline's vertices in order.
+
+    Returns
+    -------
+    corners : (t, 2) int64
+        (triangle, corner 0..2) pairs whose vertex is an interior vertex of the chain.
+    position : (t,) int64
+        Index of that vertex along the chain.
+    left : (t,) bool
+        True if the triangle lies to the left of the chain walked in order.
+    """
+    F = sheet.F
+    pos = np.full(sheet.n, -1, np.int64)
+    pos[chain[1:-1]] = np.arange(1, len(chain) - 1)
+    tri, corner = np.nonzero(pos[F] >= 0)
+    k = pos[F[tri, corner]]
+    p = sheet.xy[chain[k]]
+    a_next = np.arctan2(*(sheet.xy[chain[k + 1]] - p).T[::-1])
+    a_prev = np.arctan2(*(sheet.xy[chain[k - 1]] - p).T[::-1])
+    g = sheet.xy[F[tri]].mean(axis=1)
+    a_t = np.arctan2(*(g - p).T[::-1])
+    two_pi = 2.0 * np.pi
+    left = np.mod(a_t - a_next, two_pi) < np.mod(a_prev - a_next, two_pi)
+    return np.c_[tri, corner], k, left
+
+
+def build_mesh(sheets: list[Sheet], attachments: list[Attachment], delta: list[np.ndarray],
+               front_off: list[np.ndarray], back_off: list[np.ndarray]):
+    """The assembled mesh.
+
+    Parameters
+    ----------
+    sheets : list of Sheet
+        After junction insertion.
+    attachments : list of Attachment
+    delta : list of (n_i,) float64
+        Depth offset of each sheet's vertices.
+    front_off, back_off : list of (n_i,) float64
+        Front z = δ + front_off, back z = δ - back_off.
+
+    Returns
+    -------
+    V : (n, 3) float64
+    F : (m, 3) int64
+        Outward-oriented (front faces counter-clockwise seen from +z).
+    face_layer : (m,) int64
+        Layer index of each triangle.
+    face_kind : (m,) int8
+        0 front face, 1 back face, 2 rim bridge.
+    """
+    sizes = np.array([s.n for s in sheets])
+    base = np.r_[0, np.cumsum(2 * sizes)]
+    front = [base[i] + np.arange(s.n) for i, s in enumerate(sheets)]
+    back = [base[i] + s.n + np.arange(s.n) for i, s in enumerate(sheets)]
+    V = np.zeros((int(base[-1]), 3))
+    for i, s in enumerate(sheets):
+        V[front[i], :2] = s.xy
+        V[back[i], :2] = s.xy
+        V[front[i], 2] = delta[i] + front_off[i]
+        V[back[i], 2] = delta[i] - back_off[i]
+
+    # An attached part's front and back faces share the two ends of its junction.
+    remap = np.arange(len(V))
+    attached = {at.upper for at in attachments}
+    for i in attached:
+        ends = sheets[i].junction[[0, -1]]
+        remap[back[i][ends]] = front[i][ends]
+
+    faces_front = [front[i][s.F] for i, s in enumerate(sheets)]
+    faces_back = [back[i][s.F[:, ::-1]] for i, s in enumerate(sheets)]
+
+    # Slits: re-point the lower face's triangles at the part's junction chains.
+    chain_no = {}
+    for at in attachments:
+        lo = sheets[at.lower]
+        k = chain_no.get(at.lower, 0)
+        chain_no[at.lower] = k + 1
+        chain = lo.chains[k]
+        up = sheets[at.upper]
+        j = up.junction
+        faces = faces_front[at.lower] if at.side == FRONT else faces_back[at.lower]
+        # Ends of the slit: the part's shared end vertices.
+        for e in (0, len(chain) - 1):
+            lo_v = (front if at.side == FRONT else back)[at.lower][chain[e]]
+            faces[faces == lo_v] = front[at.upper][j[e]]
+        corners, pos, left = chain_sides(lo, chain)
+        plus = left == interior_on_left(up)  # same side as the part's interior
+        # On a front face the "+" lip joins the part's back chain, on a back face its front chain.
+        plus_chain = back[at.upper] if at.side == FRONT else front[at.upper]
+        minus_chain = front[at.upper] if at.side == FRONT else back[at.upper]
+        # back faces store each triangle reversed, so corner c sits in column 2 - c
+        col = corners[:, 1] if at.side == FRONT else 2 - corners[:, 1]
+        faces[corners[:, 0], col] = np.where(plus, plus_chain[j[pos]], minus_chain[j[pos]])
+
+    # Rim bridges along the outline, except along a glued junction.
+    bridges = []
+    for i, s in enumerate(sheets):
+        b = s.boundary
+        a_, b_ = b, np.roll(b, -1)
+        if i in attached:
+            jset = np.zeros(s.n, bool)
+            jset[s.junction] = True
+            # junction edges: both ends on the junction and consecutive along it
+            jpos = np.full(s.n, -1)
+            jpos[s.junction] = np.arange(len(s.junction))
+            is_j = jset[a_] & jset[b_] & (np.abs(jpos[a_] - jpos[b_]) == 1)
+            a_, b_ = a_[~is_j], b_[~is_j]
+        af, bf, ab, bb = front[i][a_], front[i][b_], back[i][a_], back[i][b_]
+        bridges.append(np.c_[bf, af, ab])
+        bridges.append(np.c_[bf, ab, bb])
+
+    parts, layer, kind = [], [], []
+    for i in range(len(sheets)):
+        for faces, kd in ((faces_front[i], 0), (faces_back[i], 1), (np.vstack(bridges[2 * i:2 * i + 2]), 2)):
+            parts.append(faces)
+            layer.append(np.full(len(faces), i))
+            kind.append(np.full(len(faces), kd, np.int8))
+    F = remap[np.vstack(parts)]
+    face_layer = np.concatenate(layer)
+    face_kind = np.concatenate(kind)
+    ok = (F[:, 0] != F[:, 1]) & (F[:, 1] != F[:, 2]) & (F[:, 2] != F[:, 0])
+    F, face_layer, face_kind = F[ok], face_layer[ok], face_kind[ok]
+    used = np.zeros(len(V), bool)
+    used[F] = True
+    new = np.cumsum(used) - 1
+    return V[used], new[F].astype(np.int64), face_layer.astype(np.int64), face_kind
