@@ -20,4 +20,6 @@ def test_bindings_keep_singleton_references():
     res = subprocess.run([sys.executable, "-c", PROBE], capture_output=True, text=True, timeout=120)
     assert res.returncode == 0, res.stderr[-500:]
     none_delta, bool_delta = map(int, res.stdout.split())
-    assert none_delta >= 0 and bool_delta >= 0
+    # A leaking binding loses one reference per call (-200 / -50); allow a few for the
+    # interpreter's own temporaries.
+    assert none_delta > -20 and bool_delta > -10, (none_delta, bool_delta)
