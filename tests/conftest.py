@@ -1,4 +1,6 @@
+import atexit
 import os
+import shutil
 import tempfile
 import sys
 from pathlib import Path
@@ -8,7 +10,9 @@ import pytest
 # Qt (when a test imports it) must never need a display unless the test is a GL test.
 os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
 # Autosaves and app settings written by tests never touch the user's own folders.
-os.environ["SKETCHFORGE_DATA_DIR"] = tempfile.mkdtemp(prefix="sketchforge-test-data-")
+_DATA_DIR = tempfile.mkdtemp(prefix="sketchforge-test-data-")
+os.environ["SKETCHFORGE_DATA_DIR"] = _DATA_DIR
+atexit.register(shutil.rmtree, _DATA_DIR, ignore_errors=True)
 sys.path.insert(0, str(Path(__file__).parent))
 
 ROOT = Path(__file__).resolve().parent.parent

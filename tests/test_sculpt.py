@@ -187,3 +187,39 @@ def test_parameter_change_reapplies_edits_with_their_own_light(real_host):
     assert rebuilt.mesh.identical(ref.layer("body").mesh)
     doc.undo_stack.undo()
     assert doc.layer("body").same_state(edited)
+
+
+def test_third_party_reflectance_model_sculpts_like_lambertian():
+    """A model registered by an outside plugin works through the journal command. Squared
+    half-Lambert is a monotone function of n·l, so its isophotes are Lambert's: the edit must
+    land close to the Lambertian one (not bit-equal: shading is interpolated in its own units)."""
+    import jax.numpy as jnp
+
+    from sketchforge.document.document import Document
+    from sketchforge.plugins.hookspecs import hookimpl
+    from sketchforge.plugins.registry import ReflectanceModel
+    from sketchforge.plugins.testing import make_test_host
+
+    class HalfLambert:
+        @hookimpl
+        def sketchforge_reflectance_models(self):
+            return [ReflectanceModel("half_lambert", lambda n, l: ((jnp.dot(n, l) + 1.0) / 2.0) ** 2)]
+
+    host = make_test_host(HalfLambert(), entry_points=True, allowlist=["inflate", "isophote_tool"])
+    ring = [[np.cos(t), 0.7 * np.sin(t)] for t in np.linspace(0, 2 * np.pi, 200, endpoint=False)]
+    results = {}
+    for model in ("lambertian", "half_lambert"):
+        doc = Document(host=host)
+        doc.execute({"command": "add_layer", "id": "body"})
+        doc.execute({"command": "set_contour", "layer": "body", "points": ring, "closed": True})
+        before = doc.layer("body")
+        entry = {"command": "sculpt_isophote", "layer": "body", "pick": [0.2, 0.1], "band": 0.3,
+                 "stroke": ISSUE_STROKE, "model": model}
+        doc.execute(entry)
+        z = doc.layer("body").mesh.V[:, 2]
+        assert np.all(np.isfinite(z)) and not doc.layer("body").mesh.identical(before.mesh)
+        results[model] = z
+        doc.undo_stack.undo()
+        assert doc.layer("body").same_state(before)
+    peak = results["lambertian"].max()
+    assert np.abs(results["half_lambert"] - results["lambertian"]).max() < 0.05 * peak

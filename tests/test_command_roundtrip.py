@@ -1,0 +1,30 @@
+"""Every registered command round-trips through to_dict/from_dict (the journal contract)."""
+
+from sketchforge.plugins.manager import default_host
+
+EXAMPLES = [
+    {"command": "add_layer", "id": "body", "name": "Body"},
+    {"command": "add_layer", "id": "x", "name": "X", "index": 0},
+    {"command": "remove_layer", "layer": "body"},
+    {"command": "rename_layer", "layer": "body", "name": "Torso"},
+    {"command": "set_layer_visible", "layer": "body", "visible": False},
+    {"command": "move_layer", "layer": "body", "index": 2},
+    {"command": "duplicate_layer", "layer": "body", "id": "body2", "name": "Body copy"},
+    {"command": "mirror_layer", "layer": "body"},
+    {"command": "set_contour", "layer": "body", "points": [[0.0, 0.0], [1.0, 0.0], [0.5, 1.0]]},
+    {"command": "set_contour", "layer": "body", "points": [[0.0, 0.0], [1.0, 0.0], [0.5, 1.0]], "closed": True},
+    {"command": "set_inflate_params", "layer": "body", "params": {"resolution": 0.05, "inflation": 1.2, "smoothing": 0.0}},
+    {"command": "set_light", "direction": [0.6, 0.8, 0.0]},
+    {"command": "sculpt_isophote", "layer": "body", "pick": [0.2, 0.1], "band": 0.3, "stroke": [[0.1, -0.3], [0.3, 0.3]]},
+    {"command": "macro", "text": "Draw layer", "children": [
+        {"command": "add_layer", "id": "a", "name": "A"},
+        {"command": "set_contour", "layer": "a", "points": [[0.0, 0.0], [1.0, 0.0], [0.5, 1.0]]}]},
+]
+
+
+def test_every_command_round_trips():
+    registry = default_host().commands
+    for entry in EXAMPLES:
+        assert registry.from_dict(entry).to_dict() == entry, entry["command"]
+    # A new command without an example here fails this test until one is added.
+    assert set(registry.names()) == {e["command"] for e in EXAMPLES}
