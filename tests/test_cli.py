@@ -85,3 +85,21 @@ def test_bad_contour_in_journal_names_entry(tmp_path):
     res = run("replay", p)
     assert res.returncode == 2
     assert "journal entry 1 (set_contour)" in res.stderr and "Traceback" not in res.stderr
+
+
+def test_replay_exports_the_assembled_model_closed_and_oriented(tmp_path):
+    from pathlib import Path
+
+    example = Path(__file__).resolve().parent.parent / "examples" / "toucan.json"
+    out = tmp_path / "toucan.obj"
+    res = run("replay", example, "--export", out)
+    assert res.returncode == 0, res.stderr
+    V, F = read_obj(out)
+    # Closed 2-manifold: every undirected edge in exactly two triangles, in opposite directions.
+    e = np.sort(np.r_[F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]], axis=1)
+    _, counts = np.unique(e, axis=0, return_counts=True)
+    assert np.all(counts == 2)
+    directed = np.r_[F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]
+    assert len(np.unique(directed, axis=0)) == len(directed)
+    volume = np.einsum("ij,ij->i", V[F[:, 0]], np.cross(V[F[:, 1]], V[F[:, 2]])).sum() / 6
+    assert volume > 0

@@ -115,3 +115,26 @@ def test_abort_macro_restores(fan_host):
     doc.push(AddLayer(id="a"))
     st.abort_macro()
     assert doc.layers == () and st.count() == 0
+
+
+def test_solver_producing_nan_rolls_back_and_says_so():
+    import numpy as np
+
+    from sketchforge.errors import SolverError
+    from sketchforge.geometry.mesh import Mesh
+    from sketchforge.plugins.hookspecs import hookimpl
+    from sketchforge.plugins.testing import make_test_host
+
+    class NaNInflater:
+        @hookimpl
+        def sketchforge_inflate(self, points, closed, params):
+            P = np.asarray(points, float)
+            V = np.c_[P, np.full(len(P), np.nan)]
+            return Mesh(V, [[0, 1, 2]], np.arange(len(P)))
+
+    doc = Document(host=make_test_host(NaNInflater()))
+    doc.push(AddLayer(id="a"))
+    before = doc.layer("a")
+    with pytest.raises(SolverError, match="non-finite heights; nothing was changed"):
+        doc.push(SetContour(layer="a", points=SQUARE))
+    assert doc.layer("a") is before and doc.undo_stack.count() == 1
