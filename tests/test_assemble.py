@@ -19,7 +19,7 @@ from sketchforge.geometry.mesh import Mesh
 from sketchforge_assemble import BACK, FRONT, AttachmentError, assemble_detailed, assemble_meshes
 from sketchforge_assemble import diagnostics as dg
 from sketchforge_assemble.plugin import sketchforge_assemble
-from sketchforge_assemble.testing import layers_from_journal, meshes_from_journal
+from sketchforge_assemble.testing import meshes_from_journal
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 

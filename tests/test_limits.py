@@ -10,7 +10,7 @@ import pytest
 
 from sketchforge.document import Document
 from sketchforge.document import fileformat as ff
-from sketchforge.errors import DocumentFormatError, LimitError
+from sketchforge.errors import LimitError
 from sketchforge.plugins.testing import make_test_host
 
 

@@ -14,13 +14,13 @@ changing the inflation parameters can re-apply it.
 from __future__ import annotations
 
 import itertools
-import math
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 import numpy as np
 
-from sketchforge.document.layer import DEFAULT_INFLATE_PARAMS, Layer, Light
+from sketchforge.document.layer import Layer, Light
+from sketchforge.geometry.inflate_params import check_inflate_params
 from sketchforge.errors import (
     DocumentFormatError,
     ParameterError,
@@ -116,20 +116,8 @@ def parse_vector(d: dict, key: str, cmd: str) -> list[float]:
     return [float(x) for x in raw]
 
 
-def check_params(params: dict) -> dict:
-    """Validate inflation parameters; return a plain dict of floats merged over the defaults."""
-    out = dict(DEFAULT_INFLATE_PARAMS)
-    for k, v in dict(params).items():
-        if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(float(v)):
-            raise ParameterError(f"inflation parameter {k!r} must be a finite number, got {v!r}")
-        out[k] = float(v)
-    if out["resolution"] <= 0:
-        raise ParameterError(f"resolution must be > 0 (a target edge length), got {out['resolution']}")
-    if out["inflation"] < 0:
-        raise ParameterError(f"inflation must be >= 0, got {out['inflation']}")
-    if not 0 <= out["smoothing"] < 1:
-        raise ParameterError(f"smoothing must be in [0, 1), got {out['smoothing']}")
-    return out
+#: Validation of inflation parameters (also used when reading a file).
+check_params = check_inflate_params
 
 
 def inflate_layer(doc, layer: Layer) -> Layer:

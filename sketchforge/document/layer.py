@@ -15,15 +15,8 @@ from typing import Any, Mapping
 import numpy as np
 
 from sketchforge.errors import ParameterError
+from sketchforge.geometry.inflate_params import DEFAULT_INFLATE_PARAMS  # noqa: F401 (re-exported)
 from sketchforge.geometry.mesh import Mesh
-
-#: Inflation parameters of a new layer. ``resolution``: target edge length in drawing units;
-#: ``inflation``: height scale; ``smoothing``: fairing weight α (0 = no fairing), see
-#: plugins/inflate for its units.
-DEFAULT_INFLATE_PARAMS: Mapping[str, float] = MappingProxyType(
-    {"resolution": 0.03, "inflation": 1.0, "smoothing": 0.5}
-)
-
 
 def _points(a) -> np.ndarray | None:
     if a is None:

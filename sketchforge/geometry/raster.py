@@ -10,15 +10,12 @@ vertex intensity, the same field the isophote polylines are extracted from.
 
 from __future__ import annotations
 
-import os
 import struct
-import tempfile
 import zlib
-from pathlib import Path
 
 import numpy as np
 
-from sketchforge.errors import ExportError
+from sketchforge.atomic import write_bytes_atomic
 from sketchforge.geometry.normals import vertex_normals
 from sketchforge.geometry.shaders import cel_shade, lambert_shade
 
@@ -252,22 +249,4 @@ def write_png(path, rgb: np.ndarray) -> None:
         If the file cannot be written (missing folder, no permission); an existing file at
         ``path`` is then left untouched.
     """
-    data = encode_png(rgb)
-    path = Path(path)
-    folder = path.parent if str(path.parent) else Path(".")
-    try:
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
-    except OSError as exc:
-        raise ExportError(f"cannot write {path}: {exc.strerror or exc}") from None
-    try:
-        with os.fdopen(fd, "wb") as fh:
-            fh.write(data)
-            fh.flush()
-            os.fsync(fh.fileno())
-        os.replace(tmp, path)
-    except OSError as exc:
-        try:
-            os.unlink(tmp)
-        except OSError:
-            pass
-        raise ExportError(f"cannot write {path}: {exc.strerror or exc}") from None
+    write_bytes_atomic(path, encode_png(rgb))

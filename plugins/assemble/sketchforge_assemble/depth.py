@@ -326,7 +326,6 @@ def solve_depth(P, q, Aeq, beq, Ain, bin_, method: str = "osqp", pad: float = 0.
     info : dict
         ``osqp_iterations``, ``iterations`` (active-set loop, 0 if not needed), ``active``.
     """
-    N = P.shape[0]
     Ain = sp.csr_matrix(Ain)
     Aeq = sp.csr_matrix(Aeq)
     info = {"method": method, "osqp_iterations": 0, "iterations": 0}

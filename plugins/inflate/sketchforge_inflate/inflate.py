@@ -23,62 +23,28 @@ smoothing : the fairing weight α of thesis 4.2.1, in [0, 1). The squared-Laplac
 
 from __future__ import annotations
 
-import math
-import numbers
-from types import MappingProxyType
 from typing import Mapping
 
 import numpy as np
 
-from sketchforge.errors import ParameterError
 from sketchforge.geometry.contour import prepare_outline, resample_outline
 from sketchforge.geometry.fairing import FairingSolver
+from sketchforge.geometry.inflate_params import DEFAULT_INFLATE_PARAMS, check_inflate_params
 from sketchforge.geometry.inflation import inflation_potential
 from sketchforge.geometry.laplacian import laplacian_and_mass
 from sketchforge.geometry.mesh import Mesh
 from sketchforge.geometry.triangulate import MAX_VERTICES, check_vertex_budget, triangulate_polygon
 
-#: Default parameters; same keys as ``sketchforge.document.layer.DEFAULT_INFLATE_PARAMS``.
-DEFAULT_PARAMS: Mapping[str, float] = MappingProxyType({"resolution": 0.03, "inflation": 1.0, "smoothing": 0.5})
+#: Default parameters (the same object as the document's defaults).
+DEFAULT_PARAMS = DEFAULT_INFLATE_PARAMS
+#: Fills in defaults and checks values (shared with the document's journal checks).
+validate_params = check_inflate_params
 
 #: The fairing energy's length unit is the shape's size (2·area/perimeter) divided by this.
 SMOOTHING_UNITS_PER_SIZE = 32.0
 
 #: Minimum angle of the triangulation, degrees.
 MIN_ANGLE = 25.0
-
-
-def validate_params(params: Mapping | None) -> dict:
-    """Defaults filled in, values checked; unknown keys ignored.
-
-    Returns
-    -------
-    dict with float ``resolution`` > 0, ``inflation`` >= 0, ``smoothing`` in [0, 1).
-
-    Raises
-    ------
-    ParameterError
-    """
-    out = dict(DEFAULT_PARAMS)
-    if params is not None:
-        if not isinstance(params, Mapping):
-            raise ParameterError(f"inflation parameters must be a mapping, got {type(params).__name__}")
-        for key in DEFAULT_PARAMS:
-            if key in params:
-                v = params[key]
-                if isinstance(v, bool) or not isinstance(v, numbers.Real):
-                    raise ParameterError(f"inflation parameter {key!r} must be a number, got {v!r}")
-                out[key] = float(v)
-    for key, v in out.items():
-        if not math.isfinite(v):
-            raise ParameterError(f"inflation parameter {key!r} must be a finite number, got {v}")
-    if out["resolution"] <= 0:
-        raise ParameterError(f"resolution (target edge length) must be > 0, got {out['resolution']}")
-    if out["inflation"] < 0:
-        raise ParameterError(f"inflation must be >= 0, got {out['inflation']}")
-    if not 0.0 <= out["smoothing"] < 1.0:
-        raise ParameterError(f"smoothing (fairing weight α) must be in [0, 1), got {out['smoothing']}")
-    return out
 
 
 def inflate_stroke(points, closed: bool = False, params: Mapping | None = None, *, max_vertices: int = MAX_VERTICES) -> Mesh:
