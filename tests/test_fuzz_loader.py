@@ -4,6 +4,7 @@ The only acceptable failure is a SketchforgeError (one readable message); no oth
 no hang (hypothesis' deadline bounds each case)."""
 
 import copy
+import os
 import json
 from datetime import timedelta
 
@@ -66,7 +67,8 @@ def _snapshot_doc():
 
 
 VALID_WITH_SNAPSHOT = _snapshot_doc()
-FUZZ = settings(max_examples=150, deadline=timedelta(seconds=20), suppress_health_check=list(HealthCheck))
+# FUZZ_EXAMPLES=3000 for a longer local run (3000 each passed before this was committed).
+FUZZ = settings(max_examples=int(os.environ.get("FUZZ_EXAMPLES", "150")), deadline=timedelta(seconds=20), suppress_health_check=list(HealthCheck))
 
 
 def open_both_ways(data, host):

@@ -56,7 +56,7 @@ def encode_array(a: np.ndarray) -> dict:
 def decode_array(d: Any, where: str) -> np.ndarray:
     if not isinstance(d, dict) or not {"dtype", "shape", "data"} <= set(d):
         raise DocumentFormatError(f"{where}: expected an array object with dtype, shape and data")
-    dt = {"float64": "<f8", "int64": "<i8"}.get(d["dtype"])
+    dt = {"float64": "<f8", "int64": "<i8"}.get(d["dtype"]) if isinstance(d["dtype"], str) else None
     shape = d["shape"]
     if dt is None:
         raise DocumentFormatError(f"{where}: unsupported dtype {d['dtype']!r}")
