@@ -20,6 +20,9 @@ from sketchforge.errors import SolverError
 
 from .layerdata import LayerData
 
+#: Largest fraction of the old rise from ∂Ω* that the height change may flatten (see below).
+RISE_LIMIT = 0.5
+
 
 def thin(P: np.ndarray, cell: float) -> np.ndarray:
     """Indices of a subset of points P (k, 2), at most one per square cell (the first one)."""
@@ -92,10 +95,28 @@ def reconstruct_heights(
     if not np.isfinite(znew).all():
         raise SolverError("the height reconstruction produced non-finite values")
     if margin > 0:
-        d = shapely.distance(shapely.points(V2[inM]), ld.outline.exterior)
+        pts = shapely.points(V2[inM])
+        d = shapely.distance(pts, ld.outline.exterior)
         w = np.clip((d - margin) / margin, 0.0, 1.0)
         w = w * w * (3 - 2 * w)
-        znew = z_old[inM] + w * (znew - z_old[inM])
+        dz = w * (znew - z_old[inM])
+        # Slope-limited fade. Strips that crossed the edited band can reach the rim with heights
+        # far from the frozen rim margin's (measured on the "m", c = 0 moved 0.1 toward the dark
+        # side: strips running along the top rim 0.1 (20% of the peak) below it). The fade alone
+        # packs that mismatch δ into one margin and adds a slope up to 1.5·δ/margin ≈ 2, more
+        # than the surface's own slope toward the rim (≈ 1.4 there): the wall reverses, its
+        # shading drops from 0.57 to -0.4 and a new c = 0 loop appears far from the stroke.
+        # A blend of two surfaces lit from the same side stays lit (n·l > 0 is a half-plane in
+        # (p, q) for an in-plane light); only that δ·∇w term can flip it. So where the change
+        # flattens the old rise from ∂Ω* (rise = z_old - z_old at the nearest point of ∂Ω*),
+        # it is capped at RISE_LIMIT · |rise|: the old slope toward the rim keeps at least
+        # about half its value and the fade widens by itself where the mismatch is large,
+        # nowhere else (thesis 4.3: small variations near ∂Ω have a large impact).
+        Q = shapely.get_coordinates(shapely.shortest_line(pts, ld.omega_star(margin).boundary))[1::2]
+        rise = z_old[inM] - ld.locator.interpolate(z_old, Q)
+        lim = RISE_LIMIT * np.abs(rise)
+        dz = np.where(dz * rise < 0, np.clip(dz, -lim, lim), dz)
+        znew = z_old[inM] + dz
     # Strips can dip below the drawing plane (thesis ch. 5): cap at 0.
     z[inM] = np.maximum(znew, 0.0)
     return z, inM
