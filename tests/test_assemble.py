@@ -134,6 +134,52 @@ def test_ray_from_front_hits_the_part_in_front_first():
     assert ids[_top_layer(res, x, y)] == "eye"
 
 
+def _face_z(V, F, pts):
+    """z of the triangulated surface (V, F) at each point (q, 2); NaN where no triangle is hit."""
+    a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
+    v0, v1 = b[:, :2] - a[:, :2], c[:, :2] - a[:, :2]
+    den = v0[:, 0] * v1[:, 1] - v1[:, 0] * v0[:, 1]
+    out = np.full(len(pts), np.nan)
+    for j, p in enumerate(pts):
+        v2 = p - a[:, :2]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            l1 = (v2[:, 0] * v1[:, 1] - v1[:, 0] * v2[:, 1]) / den
+            l2 = (v0[:, 0] * v2[:, 1] - v2[:, 0] * v0[:, 1]) / den
+        hit = np.flatnonzero((np.abs(den) > 1e-14) & (l1 >= -1e-12) & (l2 >= -1e-12) & (l1 + l2 <= 1 + 1e-12))
+        if len(hit):
+            h = hit[0]
+            out[j] = (1 - l1[h] - l2[h]) * a[h, 2] + l1[h] * b[h, 2] + l2[h] * c[h, 2]
+    return out
+
+
+def _clearance(res, upper: int, lower: int) -> float:
+    """Minimum of (back face of ``upper``) - (front face of ``lower``) over their overlap,
+    measured like the vertex depth rows: at every vertex of either face, against the other face."""
+    V, F = res.mesh.V, res.mesh.F
+    back = F[(res.face_layer == upper) & (res.face_kind == 1)]
+    front = F[(res.face_layer == lower) & (res.face_kind == 0)]
+    vb, vf = np.unique(back), np.unique(front)
+    c = np.r_[V[vb, 2] - _face_z(V, front, V[vb, :2]), _face_z(V, back, V[vf, :2]) - V[vf, 2]]
+    c = c[np.isfinite(c)]
+    assert len(c), "the two layers do not overlap"
+    return float(c.min())
+
+
+@pytest.mark.parametrize("name", ["creature", "toucan"])
+def test_free_part_sits_on_the_layer_below(name):
+    # A closed outline drawn over a layer (the eye on the head) is a free part; it must rest on
+    # that layer, just clear of it, rather than float in front of it (visible from the side).
+    layers, res = _assembled(name)
+    ids = [layer.id for layer in layers]
+    gap = res.solver["gap"]
+    tol = 0.25 * gap
+    clearance = _clearance(res, ids.index("eye"), ids.index("head"))
+    print(f"{name}: eye clearance above the head {clearance:.5f} (gap {gap:.5f})")
+    assert gap - tol <= clearance <= 2 * gap + tol
+    assert set(res.solver["free_shift"]) == {ids.index("eye")}  # only the free part moved
+    assert res.max_violation <= 0.0
+
+
 def test_moving_a_layer_behind_flips_what_the_ray_sees():
     layers, meshes, _ = _inflated("creature")
     ids = [layer.id for layer in layers]
