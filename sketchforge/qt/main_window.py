@@ -370,7 +370,7 @@ class MainWindow(QMainWindow):
             self.sculpt_panel.show_state(self.sculpt)
 
     def _model_changed(self, name: str) -> None:
-        self.sculpt.options = {} if name == "lambertian" else {"model": name}
+        self.sculpt.set_options({} if name == "lambertian" else {"model": name})
 
     def _light_toggled(self, on: bool) -> None:
         self.act_light.setChecked(on)

@@ -7,9 +7,10 @@ band radius, stroke), prepared off the GUI thread (progress + cancel in the stat
 pushed. Drawing again after an attempt replaces it: the attempt is undone first, and redone if
 the new one fails. An edit that changes nothing reports the plugin's reason.
 
-The preview (isophote and band) uses the geometry core's own functions; the edit itself is
-entirely the plugin's command. Without the plugin, picking still previews and the panel says
-the tool is not installed.
+The gesture's logic (pick, isophote, band, options, building the command) is the plugin's
+``SculptIsophoteTool`` (``host.tools["sculpt_isophote"]``); this controller only draws its
+``overlay`` on the canvas, runs the command on a worker thread, replaces the last attempt and
+reports status. Without the plugin the panel says the tool is not installed.
 """
 
 from __future__ import annotations
@@ -18,13 +19,10 @@ import numpy as np
 from PySide6.QtCore import QObject, Signal
 
 from sketchforge.errors import SketchforgeError
-from sketchforge.geometry.band import band as make_band
-from sketchforge.geometry.intensity import vertex_intensity
-from sketchforge.geometry.isophotes import isophotes, isovalue_at, select_isophote
 from sketchforge.qt.render2d import polygon_rings
 
-COMMAND_NAME = "sculpt_isophote"
-PLUGIN_MISSING = "isophote tool plugin not installed: picking previews the band, but strokes cannot be applied"
+TOOL_NAME = COMMAND_NAME = "sculpt_isophote"
+PLUGIN_MISSING = "isophote tool plugin not installed: isophotes cannot be picked or redrawn"
 #: Band radius limits, drawing units.
 MIN_RADIUS, MAX_RADIUS = 0.005, 2.0
 
@@ -42,33 +40,62 @@ class SculptController(QObject):
         self.radius = 0.15
         self.show_strips = False
         self.show_regions = False
-        self.options: dict = {}  # extra command fields from the panel (the reflectance model)
         self.status = ""
-        self.layer_id: str | None = None
-        self.pick_point: np.ndarray | None = None
-        self.isovalue: float | None = None
-        self._isophote: np.ndarray | None = None
-        self._stroke: list[np.ndarray] = []
         self._last_attempt = None
         self.last_info: dict = {}
+        self.tool = self._make_tool()
+
+    def _make_tool(self):
+        try:
+            cls = (getattr(self.host, "tools", None) or {}).get(TOOL_NAME)
+        except SketchforgeError:
+            cls = None
+        return None if cls is None else cls(self.doc, band=self.radius)
 
     # --- availability -----------------------------------------------------------------------
-    def command_class(self):
-        try:
-            return self.host.command_class(COMMAND_NAME)
-        except SketchforgeError:
-            return None
-
     def available(self) -> bool:
-        return self.command_class() is not None
+        return self.tool is not None
+
+    # --- the tool's state, for the panel, the window and tests ---------------------------------
+    @property
+    def layer_id(self) -> str | None:
+        return None if self.tool is None else self.tool.layer_id
+
+    @property
+    def pick_point(self) -> np.ndarray | None:
+        return None if self.tool is None else self.tool.pick
+
+    @property
+    def isovalue(self) -> float | None:
+        return None if self.tool is None else self.tool.isovalue
+
+    @property
+    def _isophote(self) -> np.ndarray | None:
+        return None if self.tool is None else self.tool.isophote
+
+    @property
+    def options(self) -> dict:
+        return {} if self.tool is None else dict(self.tool.options)
+
+    @options.setter
+    def options(self, options: dict) -> None:
+        self.set_options(options)
+
+    def set_options(self, options: dict) -> None:
+        """Extra command fields from the panel (the reflectance model); re-shows the pick."""
+        if self.tool is None:
+            return
+        try:
+            self.tool.set_options(options)
+        except SketchforgeError as exc:
+            self._fail(exc)
+            return
+        self._show_pick()
 
     # --- state ------------------------------------------------------------------------------------
     def reset(self) -> None:
-        self.layer_id = None
-        self.pick_point = None
-        self.isovalue = None
-        self._isophote = None
-        self._stroke = []
+        if self.tool is not None:
+            self.tool.reset()
         self._last_attempt = None
         self.last_info = {}
         for name in ("isophote", "band", "stroke", "strips", "regions"):
@@ -83,118 +110,93 @@ class SculptController(QObject):
         r = float(np.clip(radius, MIN_RADIUS, MAX_RADIUS))
         if r == self.radius:
             return
+        if self.tool is not None and not self.tool.set_band(r):
+            self.message.emit(self.tool.message)
+            return
         self.radius = r
-        self._update_band()
+        self._show_band()
         self.changed.emit()
 
     def wheel(self, delta: int) -> bool:
         """The mouse wheel changes the band radius once an isophote is picked."""
-        if self._isophote is None:
+        if self.pick_point is None:
             return False
         self.set_radius(self.radius * 1.1 ** (delta / 120.0))
         return True
 
+    # --- overlays from the tool ---------------------------------------------------------------
+    def _show_band(self) -> None:
+        ov = {} if self.tool is None else self.tool.overlay
+        self.canvas.set_overlay("band", list(ov.get("band", [])))
+
+    def _show_pick(self) -> None:
+        ov = {} if self.tool is None else self.tool.overlay
+        iso = ov.get("isophote")
+        self.canvas.set_overlay("isophote", [] if iso is None else [iso])
+        self._show_band()
+
+    def _show_stroke(self) -> None:
+        stroke = None if self.tool is None else self.tool.overlay.get("stroke")
+        self.canvas.set_overlay("stroke", [] if stroke is None else [stroke])
+
     # --- pick ---------------------------------------------------------------------------------
     def pick(self, point) -> bool:
-        point = np.asarray(point, dtype=np.float64)
-        light = self.doc.light.direction
-        for layer in reversed(self.doc.layers):  # front-most first
-            mesh = layer.mesh
-            if not layer.visible or mesh is None or mesh.n_faces == 0:
-                continue
-            E = vertex_intensity(mesh.V, mesh.F, light)
-            try:
-                c = isovalue_at(mesh, E, point)
-            except SketchforgeError:
-                continue  # not on this layer
-            try:
-                lines, _ = isophotes(mesh.V[:, :2], mesh.F, E, c)
-                line = lines[select_isophote(lines, point)]
-            except SketchforgeError as exc:
-                self.message.emit(str(exc))
-                self._set_status(str(exc))
-                return False
-            self.layer_id, self.pick_point, self.isovalue, self._isophote = layer.id, point, c, line
-            self._stroke = []
-            self._last_attempt = None
-            self.canvas.set_overlay("isophote", [line])
-            self.canvas.set_overlay("stroke", [])
-            self.canvas.set_overlay("strips", [])
-            self.canvas.set_overlay("regions", [])
-            self._update_band()
-            self.layer_picked.emit(layer.id)
-            if self.available():
-                self._set_status(f"isophote n·l = {c:.3f} on {layer.name}: draw its new course inside the band")
-            else:
-                self._set_status(PLUGIN_MISSING)
-            return True
-        self.message.emit("the pick is not on a visible shape: click on a shape to choose an isophote")
-        return False
-
-    def _update_band(self) -> None:
-        if self._isophote is None or self.layer_id not in self.doc.layer_ids():
-            self.canvas.set_overlay("band", [])
-            return
-        mesh = self.doc.layer(self.layer_id).mesh
-        try:
-            geom = make_band(self._isophote, self.radius, mesh.V[mesh.boundary, :2])
-        except SketchforgeError as exc:
-            self.message.emit(str(exc))
-            self.canvas.set_overlay("band", [])
-            return
-        self.canvas.set_overlay("band", polygon_rings(geom))
+        if self.tool is None:
+            self.message.emit(PLUGIN_MISSING)
+            self._set_status(PLUGIN_MISSING)
+            return False
+        self._last_attempt = None
+        self.last_info = {}
+        for name in ("stroke", "strips", "regions"):
+            self.canvas.set_overlay(name, [])
+        ok = self.tool.pick_at(point)
+        self._show_pick()
+        if not ok:
+            self.message.emit(self.tool.message)
+            self._set_status(self.tool.message)
+            return False
+        if self.tool.message:  # the band could not be made
+            self.message.emit(self.tool.message)
+        layer = self.doc.layer(self.tool.layer_id)
+        self.layer_picked.emit(layer.id)
+        self._set_status(f"isophote n·l = {self.tool.isovalue:.3f} on {layer.name}: draw its new course inside the band")
+        return True
 
     # --- stroke -------------------------------------------------------------------------------
     def stroke_press(self, pos) -> None:
-        self._stroke = [np.asarray(pos, dtype=np.float64)]
-        self.canvas.set_overlay("stroke", [np.array(self._stroke)])
-
-    def _add(self, pos) -> None:
-        p = np.asarray(pos, dtype=np.float64)
-        if not self._stroke or not np.array_equal(p, self._stroke[-1]):  # the release repeats the last move
-            self._stroke.append(p)
+        if self.tool is not None:
+            self.tool.press(pos)
+            self._show_stroke()
 
     def stroke_move(self, pos) -> None:
-        if self._stroke:
-            self._add(pos)
-            self.canvas.set_overlay("stroke", [np.array(self._stroke)])
+        if self.tool is not None:
+            self.tool.move(pos)
+            self._show_stroke()
 
     def cancel(self) -> None:
-        self._stroke = []
+        if self.tool is not None:
+            self.tool.cancel()
         self.canvas.set_overlay("stroke", [])
 
     def stroke_release(self, pos) -> None:
-        if not self._stroke:
-            return
-        self._add(pos)
-        stroke = np.array(self._stroke)
-        self.canvas.set_overlay("stroke", [stroke])
-        if self.pick_point is None or self.layer_id not in self.doc.layer_ids():
-            self.message.emit("pick an isophote first (click on the shape), then redraw it")
-            return
-        cls = self.command_class()
-        if cls is None:
+        if self.tool is None:
             self.message.emit(PLUGIN_MISSING)
             self._set_status(PLUGIN_MISSING)
             return
+        stroke = self.tool.end_stroke(pos)
+        if not len(stroke):
+            return
+        self._show_stroke()
         try:
-            cmd = cls.from_dict(self.command_dict(stroke))
+            cmd = self.tool.command_for(stroke)
         except SketchforgeError as exc:
             self._fail(exc)
             return
         self.apply(cmd)
 
     def command_dict(self, stroke) -> dict:
-        """The journal entry of an edit: what replay needs (the light is the document's)."""
-        d = {
-            "command": COMMAND_NAME,
-            "layer": self.layer_id,
-            "pick": [float(v) for v in self.pick_point],
-            "band": float(self.radius),
-            "stroke": np.asarray(stroke, dtype=np.float64).tolist(),
-        }
-        d.update(self.options)
-        return d
+        """The journal entry of an edit (the tool's)."""
+        return self.tool.command_dict(stroke)
 
     def apply(self, cmd) -> None:
         """Replace the last attempt (if it is still on top of the history) with ``cmd``."""

@@ -95,7 +95,7 @@ def test_autosave_is_offered_back_after_a_crash(tmp_path, monkeypatch, qtbot):
     from sketchforge.document import fileformat as ff
     from sketchforge.document.autosave import find_recoverable
     from sketchforge.plugins.testing import FanInflater, make_test_host
-    from sketchforge.qt import errors_ui, main_window
+    from sketchforge.qt import main_window
     from sketchforge.qt.main_window import MainWindow
 
     monkeypatch.setenv("SKETCHFORGE_DATA_DIR", str(tmp_path / "data"))

@@ -9,7 +9,6 @@ import numpy as np
 import pytest
 from PySide6.QtCore import Qt
 from PySide6.QtGui import QColor
-from PySide6.QtWidgets import QApplication
 
 from qt_helpers import circle, wait_idle
 from sketchforge.document import commands as C
@@ -39,7 +38,6 @@ def test_view_y_axis_points_up(make_window):
 
 
 def pixel_size(w) -> float:
-    a, b = w.canvas.widget_to_doc(w.canvas.doc_to_widget((0, 0))), w.canvas.widget_to_doc(w.canvas.doc_to_widget((1, 0)))
     return 1.0 / (w.canvas.doc_to_widget((1, 0)).x() - w.canvas.doc_to_widget((0, 0)).x())
 
 

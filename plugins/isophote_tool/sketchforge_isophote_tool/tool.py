@@ -1,90 +1,275 @@
-"""The isophote sculpt gesture: click to pick an isophote, then draw its new path.
+"""The isophote sculpt gesture (thesis figure 4.3): click to pick an isophote, then redraw it.
 
-State machine (document coordinates, no Qt):
-  press/release without moving  -> pick: the isovalue, the isophote and the band go to
-                                   ``overlay`` for display
-  press-move-release after a pick -> the stroke; on release a ``sculpt_isophote`` command is
-                                   pushed and the tool returns to picking.
+This is the one implementation of the gesture's logic; the Qt front end
+(``sketchforge/qt/sculpt.py``) drives it and only adds drawing, threads and status text.
+No Qt here: positions are document coordinates (x right, y up).
+
+API (what a front end calls)
+----------------------------
+``pick_at(point) -> bool``
+    Pick on the front-most visible layer under ``point``: the isovalue c there (0 in shadow),
+    the component of the isophote E = c nearest to the point and the band around it, computed
+    exactly as the ``sculpt_isophote`` command will (same cached layer data, same reflectance
+    model). Fills :attr:`overlay` and returns True; a pick off every shape, or with no
+    isophote, sets :attr:`message`, clears the pick and returns False.
+``set_band(radius) -> bool``
+    The band radius (drawing units); recomputes the band overlay. A radius that is not a
+    positive number keeps the old one, sets :attr:`message` and returns False.
+``set_options(options)``
+    Extra command fields, e.g. ``{"model": "oren_nayar"}`` (a registered reflectance model;
+    ``{}`` is Lambertian). The pick uses this model too, so a current pick is recomputed.
+    Raises SculptError for an unknown key or model.
+``command_for(stroke) -> SculptIsophote``
+    The ``sculpt_isophote`` command for the current pick, band and options and a redrawn
+    ``stroke`` (k, 2), *not* pushed: a front end may run ``cmd.prepare(doc)`` on a worker
+    thread and push it later. Raises SculptError without a pick.
+``command_dict(stroke) -> dict``
+    Its journal entry.
+``press / move / release``
+    The headless gesture. press-release without moving picks (as ``pick_at``); after a pick,
+    press-move-release redraws: ``release`` builds the command, pushes it synchronously,
+    returns it and the tool goes back to picking. A drag without a pick only sets
+    :attr:`message`. ``end_stroke(pos)`` ends a drag without pushing (front ends that push
+    on their own).
+
+State
+-----
+``pick`` (2,) or None, ``layer_id``, ``isovalue``, ``isophote`` (k, 2), ``band`` (radius),
+``options``, ``message`` (the last problem, "" if none) and ``overlay``: plain data for
+drawing — ``"isophote"`` (k, 2) float64, ``"band"`` list of (m, 2) rings (exteriors and
+holes), ``"isovalue"`` float, ``"layer"`` the picked layer id, ``"stroke"`` (k, 2) while a
+stroke is drawn.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from sketchforge.errors import SculptError, SketchforgeError
 from sketchforge.tools.base import Tool
 
 from .command import SculptIsophote
+
+COMMAND_NAME = SculptIsophote.name
+#: Keys :meth:`SculptIsophoteTool.set_options` accepts (extra fields of the command dict).
+OPTION_KEYS = ("model",)
+NOT_ON_A_SHAPE = "the pick is not on a visible shape: click on a shape to choose an isophote"
+PICK_FIRST = "pick an isophote first (click on the shape), then redraw it"
+
+
+def _rings(geom) -> list[np.ndarray]:
+    """Exterior and interior rings of a shapely (Multi)Polygon as (m, 2) float64 arrays."""
+    if geom is None or geom.is_empty:
+        return []
+    out: list[np.ndarray] = []
+    for g in getattr(geom, "geoms", [geom]):
+        if g.geom_type == "Polygon":
+            out.append(np.asarray(g.exterior.coords, dtype=np.float64)[:, :2])
+            out.extend(np.asarray(r.coords, dtype=np.float64)[:, :2] for r in g.interiors)
+        elif hasattr(g, "geoms"):
+            out.extend(_rings(g))
+    return out
 
 
 class SculptIsophoteTool(Tool):
     name = "sculpt_isophote"
     label = "Redraw isophote"
 
-    def __init__(self, doc, layer: str | None = None, band: float = 0.3) -> None:
+    def __init__(self, doc, layer: str | None = None, band: float = 0.3, options: dict | None = None) -> None:
         super().__init__(doc)
+        #: Restrict picks to this layer id (None: the front-most visible layer under the point).
         self.layer = layer
         self.band = float(band)
+        self.options: dict = {}
+        self.message = ""
         self.pick: np.ndarray | None = None
+        self.layer_id: str | None = None
+        self.isovalue: float | None = None
+        self.isophote: np.ndarray | None = None
+        self._iso_geom = None  # shapely LineString of the picked isophote
+        self._ld = None  # the picked layer's LayerData
         self._stroke: list[np.ndarray] = []
         self._pressed = False
+        if options:
+            self.set_options(options)
 
-    def _target(self, pos) -> str | None:
+    # --- model --------------------------------------------------------------------------------
+    def model(self):
+        """The solver-side reflectance model the command will use."""
+        from .command import _model
+
+        return _model(self.doc, self.options.get("model", "lambertian"))
+
+    def set_options(self, options: dict) -> None:
+        options = dict(options or {})
+        unknown = set(options) - set(OPTION_KEYS)
+        if unknown:
+            raise SculptError(f"unknown sculpt tool options {sorted(unknown)}; known: {list(OPTION_KEYS)}")
+        if options.get("model") == "lambertian":
+            options.pop("model")
+        old = self.options
+        self.options = options
+        try:
+            self.model()  # an unknown model name raises here, not at the first stroke
+        except SculptError:
+            self.options = old
+            raise
+        if self.pick is not None and options != old:
+            self.pick_at(self.pick)  # the isophote through the pick depends on the model
+
+    # --- pick ---------------------------------------------------------------------------------
+    def _candidates(self):
         if self.layer is not None:
-            return self.layer
+            ids = self.doc.layer_ids()
+            return [self.doc.layer(self.layer)] if self.layer in ids else []
+        return [lay for lay in reversed(self.doc.layers) if lay.visible]  # front-most first
+
+    def _clear_pick(self) -> None:
+        self.pick = self.layer_id = self.isovalue = self.isophote = None
+        self._iso_geom = self._ld = None
+        self._stroke = []
+        self.overlay = {}
+
+    def pick_at(self, point) -> bool:
         import shapely
 
-        from .layerdata import outline_polygon
+        from .isophote import picked_isophote
+        from .layerdata import layer_data, outline_polygon
 
-        for lay in reversed(self.doc.layers):  # front first
-            if lay.visible and lay.mesh is not None and outline_polygon(lay.mesh).contains(shapely.Point(pos)):
-                return lay.id
-        return None
+        try:
+            p = self.as_point(point)
+        except ValueError:
+            p = np.full(2, np.nan)
+        if not np.isfinite(p).all():
+            self._clear_pick()
+            self.message = f"the pick must be one finite point [x, y], got {np.ravel(point).tolist()}"
+            return False
+        model = self.model()
+        for lay in self._candidates():
+            mesh = lay.mesh
+            if mesh is None or mesh.n_faces == 0:
+                continue
+            if not outline_polygon(mesh).covers(shapely.Point(p)):
+                continue
+            ld = layer_data(mesh, self.doc.light.direction, model)
+            if ld.locator.locate(p.reshape(1, 2))[0][0] < 0:
+                continue  # not on this layer after all
+            try:
+                c, iso = picked_isophote(ld, p)
+            except SculptError as exc:
+                self._clear_pick()
+                self.message = str(exc)
+                return False
+            self._clear_pick()
+            self.pick, self.layer_id, self.isovalue = p, lay.id, float(c)
+            self._iso_geom, self._ld = iso, ld
+            self.isophote = np.asarray(iso.coords, dtype=np.float64)[:, :2]
+            self.overlay = {"isophote": self.isophote, "band": [], "isovalue": self.isovalue, "layer": lay.id}
+            self.message = ""
+            self._update_band()
+            return True
+        self._clear_pick()
+        self.message = NOT_ON_A_SHAPE
+        return False
+
+    # --- band ---------------------------------------------------------------------------------
+    def set_band(self, radius) -> bool:
+        try:
+            r = float(radius)
+        except (TypeError, ValueError):
+            r = float("nan")
+        if not (np.isfinite(r) and r > 0):
+            self.message = f"the band radius must be a positive number, got {radius}"
+            return False
+        old = self.band
+        self.band = r
+        if not self._update_band():
+            self.band = old
+            self._update_band()
+            return False
+        return True
+
+    def _update_band(self) -> bool:
+        from .isophote import band_around
+
+        if self._iso_geom is None:
+            return True
+        try:
+            geom = band_around(self._ld, self._iso_geom, self.band)
+        except SketchforgeError as exc:
+            self.message = str(exc)
+            return False
+        self.overlay["band"] = _rings(geom)
+        return True
+
+    # --- command ------------------------------------------------------------------------------
+    def command_dict(self, stroke) -> dict:
+        """The journal entry of an edit: what replay needs (the light is the document's)."""
+        if self.pick is None or self.layer_id not in self.doc.layer_ids():
+            raise SculptError(PICK_FIRST)
+        d = {
+            "command": COMMAND_NAME,
+            "layer": self.layer_id,
+            "pick": [float(v) for v in self.pick],
+            "band": float(self.band),
+            "stroke": np.asarray(stroke, dtype=np.float64).reshape(-1, 2).tolist(),
+        }
+        d.update(self.options)
+        return d
+
+    def command_for(self, stroke) -> SculptIsophote:
+        """The command for the current pick and ``stroke``, built but not pushed."""
+        return SculptIsophote.from_dict(self.command_dict(stroke))
+
+    # --- headless gesture ---------------------------------------------------------------------
+    def _add(self, p: np.ndarray) -> None:
+        if not self._stroke or not np.array_equal(p, self._stroke[-1]):  # a release repeats the last move
+            self._stroke.append(p)
 
     def press(self, pos) -> None:
-        p = self.as_point(pos)
         self._pressed = True
-        if self.pick is None:
-            return
-        self._stroke = [p]
+        self._stroke = [self.as_point(pos)]
+        self.overlay["stroke"] = np.array(self._stroke)
 
     def move(self, pos) -> None:
-        if self._pressed and self.pick is not None and self._stroke:
-            self._stroke.append(self.as_point(pos))
+        if self._pressed and self._stroke:
+            self._add(self.as_point(pos))
             self.overlay["stroke"] = np.array(self._stroke)
+
+    def end_stroke(self, pos) -> np.ndarray:
+        """End a press-move-release and return its points (k, 2) without pushing anything;
+        ``overlay["stroke"]`` keeps them for display."""
+        if self._stroke:
+            self._add(self.as_point(pos))
+        stroke = np.array(self._stroke) if self._stroke else np.zeros((0, 2))
+        self._stroke, self._pressed = [], False
+        if len(stroke):
+            self.overlay["stroke"] = stroke
+        return stroke
 
     def release(self, pos):
         p = self.as_point(pos)
-        self._pressed = False
+        stroke = self.end_stroke(p)
+        if len(stroke) < 2:  # a click: (re-)pick
+            self.overlay.pop("stroke", None)
+            self.pick_at(p)
+            return None
         if self.pick is None:
-            self._select(p)
+            self.overlay.pop("stroke", None)
+            self.message = PICK_FIRST
             return None
-        if len(self._stroke) < 2:  # a click after a pick re-picks
-            self._stroke = []
-            self._select(p)
-            return None
-        self._stroke.append(p)
-        cmd = SculptIsophote(layer=self._active, pick=self.pick.tolist(), band=self.band,
-                             stroke=np.array(self._stroke).tolist())
-        self.pick, self._stroke, self.overlay = None, [], {}
-        return self.doc.push(cmd)
-
-    def _select(self, p) -> None:
-        from sketchforge.geometry.reflectance import LAMBERTIAN
-
-        from .isophote import band_around, picked_isophote
-        from .layerdata import layer_data
-
-        target = self._target(p)
-        if target is None:
-            self.overlay = {}
-            return
-        mesh = self.doc.layer(target).mesh
-        ld = layer_data(mesh, self.doc.light.direction, LAMBERTIAN)
-        c, iso = picked_isophote(ld, p)
-        band = band_around(ld, iso, self.band)
-        self._active, self.pick = target, p
-        rings = [np.asarray(g.exterior.coords) for g in getattr(band, "geoms", [band]) if g.geom_type == "Polygon"]
-        self.overlay = {"isovalue": c, "isophote": np.asarray(iso.coords), "band": rings}
+        cmd = self.doc.push(self.command_for(stroke))
+        self._clear_pick()  # the surface changed: back to picking
+        self.message = ""
+        return cmd
 
     def cancel(self) -> None:
-        self.pick, self._stroke, self.overlay = None, [], {}
+        """Drop the stroke in progress (the pick stays)."""
+        self._stroke, self._pressed = [], False
+        self.overlay.pop("stroke", None)
+
+    def reset(self) -> None:
+        """Forget the pick and any stroke."""
+        self._pressed = False
+        self._clear_pick()
+        self.message = ""
