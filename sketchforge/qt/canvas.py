@@ -253,14 +253,14 @@ class Canvas(pg.GraphicsView):
 
     def set_reference_image(self, path: str | None) -> None:
         """Show an image under the drawing, fitted to the current view (None removes it)."""
+        img = QImage(path) if path else None
+        if img is not None and img.isNull():  # checked first: a bad file keeps the old image
+            raise SketchforgeError(f"cannot read the image {path}")
         if self._reference is not None:
             self.vb.removeItem(self._reference)
             self._reference = None
-        if not path:
+        if img is None:
             return
-        img = QImage(path)
-        if img.isNull():
-            raise SketchforgeError(f"cannot read the image {path}")
         img = img.convertToFormat(QImage.Format.Format_RGBA8888)
         w, h = img.width(), img.height()
         arr = np.frombuffer(img.constBits(), dtype=np.uint8).reshape(h, img.bytesPerLine() // 4, 4)[:, :w].copy()

@@ -426,9 +426,14 @@ class MainWindow(QMainWindow):
     def set_params(self, params: dict) -> None:
         if self.current_layer is None or self._refuse_if_busy():
             return
+        edits = len(self.doc.layer(self.current_layer).edits)
+        # With sculpt edits the layer is re-inflated and its edits re-applied in order (or the
+        # change is refused with the reason); say so, since it takes longer and may fail.
+        label = f"Inflating and re-applying {edits} sculpt edit{'s' * (edits != 1)}" if edits else "Inflating"
         self.runner.run(
             C.SetInflateParams(layer=self.current_layer, params=params),
-            label="Inflating",
+            label=label,
+            on_done=(lambda *_: self.show_message(f"re-applied {edits} sculpt edit{'s' * (edits != 1)} to the rebuilt surface")) if edits else None,
             on_error=lambda exc: self._sync_current_layer() or False,
         )
 

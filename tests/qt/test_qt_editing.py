@@ -294,3 +294,35 @@ def test_observation_without_opengl_explains(make_window):
     assert "OpenGL" in w.view3d.info.text()
     w.set_mode("editing")
     assert w.center.currentWidget() is w.canvas
+
+
+def test_reference_image_shows_under_the_drawing_upright(make_window, tmp_path):
+    """A reference image lies under the drawing (behind layers), fitted to the view, top row
+    up; an unreadable file is a clear error and removes nothing."""
+    import numpy as np
+
+    from sketchforge.errors import SketchforgeError
+    from sketchforge.geometry.raster import write_png
+
+    rgb = np.zeros((40, 60, 3), np.uint8)
+    rgb[:20] = (255, 0, 0)  # top half red, bottom half black
+    path = tmp_path / "ref.png"
+    write_png(path, rgb)
+    w = make_window()
+    w.canvas.set_reference_image(str(path))
+    item = w.canvas._reference
+    assert item is not None and item.zValue() < 0
+    rect = item.mapRectToParent(item.boundingRect())
+    view = w.canvas.vb.viewRect()
+    assert view.contains(rect.center()) and rect.width() <= view.width() + 1e-9
+    data = item.image  # [x, y] with y up: the top (largest y) columns hold the red half
+    assert data[:, -1, 0].min() == 255 and data[:, 0, 0].max() == 0
+    bad = tmp_path / "not_an_image.png"
+    bad.write_bytes(b"nope")
+    try:
+        w.canvas.set_reference_image(str(bad))
+    except SketchforgeError as exc:
+        assert "cannot read the image" in str(exc)
+        assert w.canvas._reference is item  # the previous image stays
+    else:
+        raise AssertionError("an unreadable image must be an error")
