@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.ndimage as ndi
 
+from sketchforge.geometry.intensity import face_gradient
 from sketchforge.geometry.locate import TriangleLocator
 from sketchforge.numerics import enable_x64
 
@@ -347,15 +348,9 @@ def _bary(P, xy):
 
 
 def face_gradients(V2: np.ndarray, F: np.ndarray, values: np.ndarray) -> np.ndarray:
-    """Per-face gradient (m, k, 2) of the piecewise-linear field ``values`` (n, k)."""
-    P = V2[F]
-    e1, e2 = P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]
-    det = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
-    d1 = values[F[:, 1]] - values[F[:, 0]]  # (m, k)
-    d2 = values[F[:, 2]] - values[F[:, 0]]
-    gx = (d1 * e2[:, 1, None] - d2 * e1[:, 1, None]) / det[:, None]
-    gy = (d2 * e1[:, 0, None] - d1 * e2[:, 0, None]) / det[:, None]
-    return np.stack([gx, gy], axis=2)
+    """Per-face gradient (m, k, 2) of the piecewise-linear field ``values`` (n, k): the core's
+    :func:`~sketchforge.geometry.intensity.face_gradient`, column by column."""
+    return np.stack([face_gradient(V2, F, values[:, j]) for j in range(values.shape[1])], axis=1)
 
 
 def make_bucket_field(
