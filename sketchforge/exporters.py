@@ -14,6 +14,7 @@ import numpy as np
 
 from sketchforge.atomic import write_bytes_atomic
 from sketchforge.geometry.mesh import Mesh
+from sketchforge.geometry.normals import face_normals
 
 
 def obj_bytes(mesh: Mesh) -> bytes:
@@ -37,16 +38,9 @@ def ply_bytes(mesh: Mesh) -> bytes:
     return header + mesh.V.astype("<f4").tobytes() + faces.tobytes()
 
 
-def face_normals(V: np.ndarray, F: np.ndarray) -> np.ndarray:
-    """Unit normals (m,3) float64 of triangles F (m,3) int64 over V (n,3) float64 (0 for degenerate)."""
-    n = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
-    length = np.linalg.norm(n, axis=1, keepdims=True)
-    return np.divide(n, length, out=np.zeros_like(n), where=length > 0)
-
-
 def stl_bytes(mesh: Mesh) -> bytes:
     rec = np.zeros(mesh.n_faces, dtype=[("n", "<f4", (3,)), ("v", "<f4", (3, 3)), ("attr", "<u2")])
-    rec["n"] = face_normals(mesh.V, mesh.F)
+    rec["n"] = face_normals(mesh.V, mesh.F)[0]
     rec["v"] = mesh.V[mesh.F]
     header = b"sketchforge binary STL".ljust(80, b" ")
     return header + struct.pack("<I", mesh.n_faces) + rec.tobytes()

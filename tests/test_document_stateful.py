@@ -2,7 +2,6 @@
 undo of everything restores the initial document exactly, redo restores the final one,
 save -> open gives bit-identical meshes, and replaying the journal agrees with the snapshot."""
 
-import json
 
 import numpy as np
 from hypothesis import HealthCheck, settings
@@ -25,6 +24,7 @@ from sketchforge.document.commands import (
     new_gesture_id,
 )
 from sketchforge.plugins.testing import FanInflater, make_test_host
+from tests_support import assert_save_open_replay_agree, assert_undo_all_redo_all
 
 HOST = make_test_host(FanInflater())
 
@@ -113,22 +113,12 @@ class DocumentMachine(RuleBasedStateMachine):
 
     @rule()
     def save_and_open(self):
-        data = json.loads(ff.dumps(self.doc))
-        reopened = ff.document_from_dict(data, "t", host=HOST)
-        assert ff.compare(self.doc, reopened) == []
-        replayed = ff.document_from_dict(data, "t", host=HOST, use_snapshot=False)
-        assert ff.compare(self.doc, replayed) == []
+        assert_save_open_replay_agree(self.doc, HOST)
 
     @invariant()
     def undo_all_then_redo_all(self):
-        st_ = self.doc.undo_stack
-        final = ff.document_to_dict(self.doc)
         final_state = snapshot(self.doc)
-        index = st_.index
-        st_.set_index(0)
-        assert ff.document_to_dict(self.doc)["snapshot"] == self.initial["snapshot"]
-        st_.set_index(index)
-        assert ff.document_to_dict(self.doc) == final
+        assert_undo_all_redo_all(self.doc, self.initial["snapshot"])
         # Identity, not only equality: redo reuses the very same mesh objects.
         for (a, b) in zip(snapshot(self.doc)[0], final_state[0]):
             assert a[7] is b[7]

@@ -15,6 +15,7 @@ from sketchforge.document import fileformat as ff
 from sketchforge.document.commands import new_gesture_id
 from sketchforge.errors import SketchforgeError
 from sketchforge.plugins.manager import default_host
+from tests_support import assert_save_open_replay_agree, assert_undo_all_redo_all
 
 COARSE = {"resolution": 0.09, "inflation": 1.0, "smoothing": 0.5}
 
@@ -104,31 +105,25 @@ class RealDocumentMachine(RuleBasedStateMachine):
 
     @rule()
     def save_open_replay(self):
-        data = json.loads(ff.dumps(self.doc))
-        assert ff.compare(self.doc, ff.document_from_dict(data, "t", host=self.host)) == []
-        assert ff.compare(self.doc, ff.document_from_dict(data, "t", host=self.host, use_snapshot=False)) == []
+        assert_save_open_replay_agree(self.doc, self.host)
 
     @rule()
     def assembly_is_reproducible(self):
+        """After undo-all/redo-all, and in the document reopened from a save, the assembled
+        model is recomputed bit for bit."""
         a = self.doc.assembled()
         event(f"assembled {0 if a is None else len(self.doc.layers)} layers")
         st_ = self.doc.undo_stack
         i = st_.index
         st_.set_index(0)
         st_.set_index(i)
-        self.doc._assembled_revision = -1  # force a recomputation from the restored layers
-        b = self.doc.assembled()
-        assert (a is None and b is None) or a.identical(b)
+        reopened = ff.document_from_dict(json.loads(ff.dumps(self.doc)), "t", host=self.host)
+        for b in (self.doc.assembled(), reopened.assembled()):
+            assert (a is None and b is None) or a.identical(b)
 
     @invariant()
     def undo_all_redo_all(self):
-        st_ = self.doc.undo_stack
-        final = ff.document_to_dict(self.doc)
-        i = st_.index
-        st_.set_index(0)
-        assert ff.document_to_dict(self.doc)["snapshot"] == self.initial
-        st_.set_index(i)
-        assert ff.document_to_dict(self.doc) == final
+        assert_undo_all_redo_all(self.doc, self.initial)
 
 
 TestRealDocument = RealDocumentMachine.TestCase

@@ -112,8 +112,8 @@ def find_recoverable(folder: Path | None = None) -> list[Recoverable]:
 
 
 def recover(item: Recoverable, host=None):
-    """Open an autosave as a document with unsaved changes (the autosave file is kept until
-    the user saves or discards)."""
+    """Open an autosave as a document with unsaved changes. The file itself is left alone;
+    the caller removes it once a new autosaver has taken over."""
     doc = ff.load(item.path, host=host)
     doc.undo_stack.reset_clean()  # the recovered state is not the saved file
     return doc

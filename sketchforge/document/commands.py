@@ -116,10 +116,6 @@ def parse_vector(d: dict, key: str, cmd: str) -> list[float]:
     return [float(x) for x in raw]
 
 
-#: Validation of inflation parameters (also used when reading a file).
-check_params = check_inflate_params
-
-
 def inflate_layer(doc, layer: Layer) -> Layer:
     """``layer`` with a mesh freshly inflated from its points and parameters, and its sculpt
     edits re-applied in order. Raises before anything changes."""
@@ -222,15 +218,12 @@ class ReplaceLayerCommand(Command):
 
     def prepare(self, doc) -> None:
         old = doc.layer(self.layer)
-        if self._new is None or old is not self._old:
-            self._new = self.compute(doc, old)
+        if self._new is None or old is not self._old:  # first time, or the layer changed since
+            self._new = self.compute(doc, old)  # may raise: nothing has changed yet
             self._old = old
 
     def do(self, doc) -> None:
-        old = doc.layer(self.layer)
-        if self._new is None or old is not self._old:  # first do, or the layer changed since
-            new = self.compute(doc, old)  # may raise: nothing has changed yet
-            self._old, self._new = old, new
+        self.prepare(doc)  # computes only on the first do or if the layer changed; may raise
         doc._replace_layer(self._new)
 
     def undo(self, doc) -> None:
@@ -324,7 +317,7 @@ class SetInflateParams(ReplaceLayerCommand):
         return "Set inflation parameters"
 
     def compute(self, doc, old: Layer) -> Layer:
-        merged = check_params({**dict(old.params), **self.params})
+        merged = check_inflate_params({**dict(old.params), **self.params})
         return inflate_layer(doc, old.evolve(params=merged))
 
     def to_dict(self) -> dict:
@@ -333,7 +326,7 @@ class SetInflateParams(ReplaceLayerCommand):
     @classmethod
     def from_dict(cls, d: dict) -> "SetInflateParams":
         params = parse_field(d, "params", dict, cls.name)
-        check_params(params)
+        check_inflate_params(params)
         return cls(layer=parse_field(d, "layer", str, cls.name), params=dict(params))
 
 
@@ -480,10 +473,9 @@ class MacroCommand(Command):
 
     name: ClassVar[str] = "macro"
 
-    def __init__(self, text: str = "", children: list | None = None, _done: bool = False) -> None:
+    def __init__(self, text: str = "", children: list | None = None) -> None:
         self.text_ = text
         self.children = list(children or [])
-        self._done = _done
 
     def text(self) -> str:
         return self.text_ or "Group"

@@ -94,12 +94,12 @@ class Document:
         return self.push(self.host.commands.from_dict(entry))
 
     # --- assembled model (derived, cached) --------------------------------------------------------
-    def assembled(self, params: dict | None = None):
+    def assembled(self):
         """The assembled model of the visible layers (None without an assembler or meshes).
-        Cached until the next change."""
+        Cached until the next change of a layer (the light does not invalidate it)."""
         if self._assembled_revision != self.geometry_revision:
             parts = [layer for layer in self._layers if layer.visible and layer.mesh is not None]
-            self._assembled = self.host.assemble(parts, params or {}) if parts else None
+            self._assembled = self.host.assemble(parts, {}) if parts else None
             self._assembled_revision = self.geometry_revision
         return self._assembled
 
@@ -141,13 +141,23 @@ class Document:
         self.light_changed.emit(light)
 
     # --- comparison (tests, replay checks) --------------------------------------------------------
+    def differences(self, other: "Document") -> list[str]:
+        """What differs between the two states (empty when layers, meshes bit for bit, and
+        light are equal)."""
+        out = []
+        if self._light != other._light:
+            out.append(f"light differs: {self._light} vs {other._light}")
+        ia, ib = self.layer_ids(), other.layer_ids()
+        if ia != ib:
+            return out + [f"layers differ: {ia} vs {ib}"]
+        for la, lb in zip(self._layers, other._layers):
+            if not la.same_state(lb):
+                mesh_differs = (la.mesh is None) != (lb.mesh is None) or (la.mesh is not None and not la.mesh.identical(lb.mesh))
+                out.append(f"layer {la.id!r}: {'mesh' if mesh_differs else 'fields'} differ")
+        return out
+
     def same_state(self, other: "Document") -> bool:
-        """Equal layers (meshes bit-identical) and light."""
-        return (
-            len(self._layers) == len(other._layers)
-            and all(a.same_state(b) for a, b in zip(self._layers, other._layers))
-            and self._light == other._light
-        )
+        return not self.differences(other)
 
     def restore_state(self, layers: list[Layer], light: Light) -> None:
         """Set the whole state at once (opening a file). Not undoable: clears history."""

@@ -26,10 +26,10 @@ from typing import Any
 import numpy as np
 
 from sketchforge.atomic import write_bytes_atomic
-from sketchforge.document.commands import check_params
 from sketchforge.document.document import Document
 from sketchforge.document.layer import Layer, Light
 from sketchforge.errors import DocumentFormatError, ExportError, LimitError, SketchforgeError
+from sketchforge.geometry.inflate_params import check_inflate_params
 from sketchforge.geometry.mesh import Mesh
 
 FORMAT_NAME = "sketchforge"
@@ -155,7 +155,7 @@ def _layer_from_dict(d: Any, where: str) -> Layer:
     if not isinstance(params, dict) or not isinstance(edits, list) or not all(isinstance(e, dict) for e in edits):
         raise DocumentFormatError(f"{where}: params must be an object and edits a list of objects")
     try:
-        params = check_params(params)
+        params = check_inflate_params(params)
     except SketchforgeError as exc:
         raise DocumentFormatError(f"{where}.params: {exc}") from None
     visible, closed = d.get("visible", True), d.get("closed", False)
@@ -212,7 +212,6 @@ def document_from_dict(data: Any, source: str = "document", host=None, use_snaps
     doc.restore_state(layers, cur_light)
     doc.initial_light = light
     doc.base_journal = [dict(e) for e in journal]
-    doc.undo_stack.set_clean()
     return doc
 
 
@@ -230,28 +229,15 @@ def replay_journal(light: Light, journal: list, source: str = "journal", host=No
             raise DocumentFormatError(f"{source}: journal entry {i} ({name}): {exc}") from exc
         if progress is not None:
             progress(i + 1, len(journal))
-    # Replayed state is the new base: undo starts here.
+    # Commands ran outside the undo stack: the replayed state is the new base (and clean).
     doc.initial_light = light
     doc.base_journal = [dict(e) for e in journal]
-    doc.undo_stack.clear()
-    doc.undo_stack.set_clean()
     return doc
 
 
 def compare(a: Document, b: Document) -> list[str]:
     """Differences between two documents' states (empty when bit-identical)."""
-    out = []
-    if a.light != b.light:
-        out.append(f"light differs: {a.light} vs {b.light}")
-    ia, ib = a.layer_ids(), b.layer_ids()
-    if ia != ib:
-        out.append(f"layers differ: {ia} vs {ib}")
-        return out
-    for la, lb in zip(a.layers, b.layers):
-        if not la.same_state(lb):
-            what = "mesh" if (la.mesh is None) != (lb.mesh is None) or (la.mesh and not la.mesh.identical(lb.mesh)) else "fields"
-            out.append(f"layer {la.id!r}: {what} differ")
-    return out
+    return a.differences(b)
 
 
 # --- files ----------------------------------------------------------------------------------

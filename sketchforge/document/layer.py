@@ -18,6 +18,7 @@ from sketchforge.errors import ParameterError
 from sketchforge.geometry.inflate_params import DEFAULT_INFLATE_PARAMS  # noqa: F401 (re-exported)
 from sketchforge.geometry.mesh import Mesh
 
+
 def _points(a) -> np.ndarray | None:
     if a is None:
         return None

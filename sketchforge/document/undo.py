@@ -170,7 +170,7 @@ class UndoStack:
     def begin_macro(self, text: str) -> None:
         from sketchforge.document.commands import MacroCommand
 
-        self._macros.append(MacroCommand(text=text, children=[], _done=True))
+        self._macros.append(MacroCommand(text=text, children=[]))
 
     def end_macro(self) -> "Command | None":
         """Close the innermost macro; an empty macro is dropped."""

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from sketchforge.document.commands import AddLayer, SetContour
+from sketchforge.document.commands import AddLayer, Command, SetContour
 from sketchforge.tools.base import Tool
 
 
@@ -12,7 +12,10 @@ class DrawContourTool(Tool):
     """Press-move-release draws a stroke. On release the stroke becomes the contour of
     ``target_layer`` (redraw) or of a new layer on top (a macro: add layer + set contour, one
     undo step). A failed inflation (self-intersecting stroke...) leaves the document as it was
-    and re-raises the error for the front end to show."""
+    and re-raises the error for the front end to show.
+
+    A front end that inflates on a worker thread uses :meth:`commands_for` and runs the
+    commands itself; ``release`` runs them synchronously (scripts, tests)."""
 
     name = "draw"
     label = "Draw contour"
@@ -32,6 +35,16 @@ class DrawContourTool(Tool):
             self._points.append(self.as_point(pos))
             self.overlay = {"stroke": np.array(self._points)}
 
+    def commands_for(self, points) -> tuple[list[Command], Command]:
+        """(commands to push first, the inflating command) for a finished stroke: nothing and
+        a SetContour for a redraw; an AddLayer (with its id fixed now) and a SetContour for a
+        new layer, meant to be one macro "Draw layer"."""
+        pts = np.asarray(points, dtype=np.float64)
+        if self.target_layer is not None:
+            return [], SetContour(layer=self.target_layer, points=pts, closed=self.closed)
+        add = AddLayer(id=self.doc.new_layer_id())
+        return [add], SetContour(layer=add.id, points=pts, closed=self.closed)
+
     def release(self, pos):
         if not self._points:
             return None
@@ -39,13 +52,15 @@ class DrawContourTool(Tool):
         pts = np.array(self._points)
         self._points = []
         self.overlay = {}
+        before, main = self.commands_for(pts)
+        if not before:
+            return self.doc.push(main)
         stack = self.doc.undo_stack
-        if self.target_layer is not None:
-            return self.doc.push(SetContour(layer=self.target_layer, points=pts, closed=self.closed))
         stack.begin_macro("Draw layer")
         try:
-            add = self.doc.push(AddLayer())
-            self.doc.push(SetContour(layer=add.id, points=pts, closed=self.closed))
+            for cmd in before:
+                self.doc.push(cmd)
+            self.doc.push(main)
         except Exception:
             stack.abort_macro()
             raise

@@ -1,0 +1,75 @@
+"""Exported files hold the mesh: read each format back and compare vertices and triangles."""
+
+import json
+import struct
+
+import numpy as np
+import pytest
+
+from sketchforge import exporters as ex
+from sketchforge.geometry.mesh import Mesh
+
+MESH = Mesh(
+    [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1.25]],
+    [[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]],  # a tetrahedron, outward
+)
+
+
+def read_obj(b):
+    V = [list(map(float, l.split()[1:])) for l in b.decode().splitlines() if l.startswith("v ")]
+    F = [[int(x) - 1 for x in l.split()[1:]] for l in b.decode().splitlines() if l.startswith("f ")]
+    return np.array(V), np.array(F)
+
+
+def read_ply(b):
+    head, body = b.split(b"end_header\n", 1)
+    nv = int(head.split(b"element vertex ")[1].split()[0])
+    V = np.frombuffer(body[: 12 * nv], "<f4").reshape(-1, 3)
+    faces = np.frombuffer(body[12 * nv :], dtype=[("n", "u1"), ("i", "<i4", (3,))])
+    assert np.all(faces["n"] == 3)
+    return V, faces["i"]
+
+
+def read_stl(b):
+    n = struct.unpack("<I", b[80:84])[0]
+    rec = np.frombuffer(b[84:], dtype=[("n", "<f4", (3,)), ("v", "<f4", (3, 3)), ("a", "<u2")])
+    assert len(rec) == n
+    return rec
+
+
+def read_glb(b):
+    magic, version, total = struct.unpack("<III", b[:12])
+    assert (magic, version, total) == (0x46546C67, 2, len(b))
+    jlen = struct.unpack("<I", b[12:16])[0]
+    gltf = json.loads(b[20 : 20 + jlen])
+    blob = b[20 + jlen + 8 :]
+    views = gltf["bufferViews"]
+    V = np.frombuffer(blob[views[0]["byteOffset"] :][: views[0]["byteLength"]], "<f4").reshape(-1, 3)
+    F = np.frombuffer(blob[views[1]["byteOffset"] :][: views[1]["byteLength"]], "<u4").reshape(-1, 3)
+    return V, F, gltf
+
+
+@pytest.mark.parametrize("fmt", ["obj", "ply", "glb"])
+def test_vertices_and_triangles_round_trip(fmt):
+    data = {"obj": ex.obj_bytes, "ply": ex.ply_bytes, "glb": ex.glb_bytes}[fmt](MESH)
+    V, F = {"obj": read_obj, "ply": read_ply, "glb": lambda b: read_glb(b)[:2]}[fmt](data)
+    np.testing.assert_allclose(V, MESH.V, atol=1e-6)
+    np.testing.assert_array_equal(F, MESH.F)
+
+
+def test_stl_has_outward_unit_normals_and_corners():
+    rec = read_stl(ex.stl_bytes(MESH))
+    np.testing.assert_allclose(rec["v"], MESH.V[MESH.F], atol=1e-6)
+    centroid = MESH.V.mean(axis=0)
+    outward = np.einsum("ij,ij->i", rec["n"], rec["v"].mean(axis=1) - centroid)
+    assert np.all(outward > 0) and np.allclose(np.linalg.norm(rec["n"], axis=1), 1, atol=1e-6)
+
+
+def test_gltf_embeds_the_same_buffer_as_glb():
+    import base64
+
+    gltf = json.loads(ex.gltf_bytes(MESH))
+    blob = base64.b64decode(gltf["buffers"][0]["uri"].split(",", 1)[1])
+    V_glb, F_glb, meta = read_glb(ex.glb_bytes(MESH))
+    assert blob[: V_glb.nbytes] == V_glb.tobytes()
+    assert meta["accessors"][0]["max"] == pytest.approx(MESH.V.max(axis=0).tolist())
