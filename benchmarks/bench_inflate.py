@@ -15,7 +15,7 @@ import scipy.sparse.linalg as sla
 
 from sketchforge.geometry.contour import prepare_outline, resample_outline
 from sketchforge.geometry.fairing import FairingSolver
-from sketchforge.geometry.inflation import inflation_potential
+from sketchforge.geometry.inflation import inflate_heights
 from sketchforge.geometry.laplacian import laplacian_and_mass
 from sketchforge.geometry.triangulate import triangulate_polygon
 from sketchforge_inflate import DEFAULT_PARAMS, SMOOTHING_UNITS_PER_SIZE, inflate_stroke
@@ -53,7 +53,7 @@ def stages(points, h, alpha):
     L, M = laplacian_and_mass(tri.V2, tri.F)
     t["L,M"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    z = np.sqrt(np.maximum(inflation_potential(L, M, tri.boundary), 0))
+    z = inflate_heights(tri.V2, tri.F, tri.boundary, 1.0, L, M)
     t["inflate"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     unit = 2 * outline.area / outline.perimeter / SMOOTHING_UNITS_PER_SIZE

@@ -12,9 +12,9 @@ for a given ``h``. Surfaces with known normals and gradients:
 from __future__ import annotations
 
 import numpy as np
-import triangle
 
 from sketchforge.geometry.mesh import Mesh
+from sketchforge.geometry.triangulate import triangulate_polygon
 
 
 def disk(radius: float = 1.0, h: float = 0.1, center=(0.0, 0.0)):
@@ -29,17 +29,8 @@ def disk(radius: float = 1.0, h: float = 0.1, center=(0.0, 0.0)):
     nb = max(8, int(np.ceil(2 * np.pi * radius / h)))
     t = 2 * np.pi * np.arange(nb) / nb
     pts = np.c_[radius * np.cos(t), radius * np.sin(t)] + np.asarray(center, dtype=float)
-    seg = np.c_[np.arange(nb), (np.arange(nb) + 1) % nb]
-    area = np.sqrt(3) / 4 * h * h
-    # Fixed-point area: triangle reads the 'e' of '3.6e-05' as a switch.
-    out = triangle.triangulate({"vertices": pts, "segments": seg}, f"pq30Ya{area:.10f}")
-    V2 = np.asarray(out["vertices"], dtype=np.float64)
-    F = np.asarray(out["triangles"], dtype=np.int64)
-    a, b, c = V2[F[:, 0]], V2[F[:, 1]], V2[F[:, 2]]
-    cw = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0]) < 0
-    F[cw] = F[cw][:, ::-1]
-    # 'Y' keeps the boundary points as given, and triangle puts input points first.
-    return V2, F, np.arange(nb, dtype=np.int64)
+    tri = triangulate_polygon(pts, h, min_angle=30.0)
+    return tri.V2, tri.F, tri.boundary
 
 
 def hemisphere(radius: float = 1.0, h: float = 0.1) -> Mesh:

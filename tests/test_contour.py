@@ -139,7 +139,6 @@ def test_figure_eight_is_rejected():
 
 
 def test_closing_line_that_crosses_the_stroke_is_rejected():
-    # A spiral-ish hook: the straight line from the end back to the start cuts the stroke.
     # A hook whose last leg sits between the start and the end: the closing line cuts it.
     C = np.array([[0, 0], [0, 2], [3, 2], [3, -1], [1, -1], [1, 1], [2, 1]], dtype=float)
     P = np.vstack([C[i] + (C[i + 1] - C[i]) * t for i in range(len(C) - 1) for t in np.linspace(0, 1, 20, endpoint=False)] + [C[-1:]])

@@ -9,7 +9,10 @@ import pytest
 from inflate_shapes import circle, ellipse, figure_eight, letter_m, min_angles, signed_face_areas, star
 from sketchforge.document.layer import DEFAULT_INFLATE_PARAMS
 from sketchforge.errors import ContourError, LimitError, ParameterError
-from sketchforge.geometry.contour import clean_contour
+from sketchforge.geometry.contour import clean_contour, signed_area
+from sketchforge.geometry.inflation import inflate_heights
+from sketchforge.geometry.intensity import face_gradient
+from sketchforge.geometry.laplacian import laplacian_and_mass
 from sketchforge.geometry.mesh import Mesh
 from sketchforge.geometry.triangulate import MAX_VERTICES
 from sketchforge.plugins import hookspecs
@@ -30,15 +33,9 @@ def _ellipsoid_error(mesh, height):
 
 def _rim_slope(mesh):
     """Mean |∇z| over the triangles that touch the boundary."""
-    V, F = mesh.V, mesh.F
-    on_rim = np.isin(F, mesh.boundary).any(axis=1)
-    P, z = V[F[on_rim]][:, :, :2], V[F[on_rim]][:, :, 2]
-    e1, e2 = P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]
-    det = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
-    dz1, dz2 = z[:, 1] - z[:, 0], z[:, 2] - z[:, 0]
-    gx = (dz1 * e2[:, 1] - dz2 * e1[:, 1]) / det
-    gy = (e1[:, 0] * dz2 - e2[:, 0] * dz1) / det
-    return np.hypot(gx, gy).mean()
+    on_rim = np.isin(mesh.F, mesh.boundary).any(axis=1)
+    G = face_gradient(mesh.V, mesh.F[on_rim], mesh.V[:, 2])
+    return np.hypot(G[:, 0], G[:, 1]).mean()
 
 
 def _check_contract(mesh):
@@ -56,8 +53,7 @@ def _check_contract(mesh):
     border = {e for e in keys if (e[1], e[0]) not in keys}
     b = mesh.boundary
     assert border == set(zip(b.tolist(), np.roll(b, -1).tolist()))
-    x, y = mesh.V[b, 0], mesh.V[b, 1]
-    assert np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y) > 0
+    assert signed_area(mesh.V[b, :2]) > 0
 
 
 def test_default_params_match_the_document_defaults():
@@ -99,11 +95,14 @@ def test_fairing_smooths_the_rim_without_flattening():
 
 
 def test_smoothing_zero_is_exactly_the_unfaired_mesh():
-    a = inflate_stroke(star()[0], True, {"resolution": 0.05, "smoothing": 0.0})
-    b = inflate_stroke(star()[0], True, {"resolution": 0.05, "smoothing": 0})
-    assert a.identical(b)
-    c = inflate_stroke(star()[0], True, {"resolution": 0.05, "smoothing": 1e-3})
-    assert not a.identical(c)
+    a = inflate_stroke(star()[0], True, {"resolution": 0.05, "inflation": 0.8, "smoothing": 0.0})
+    # Bit for bit the sqrt-inflation of the same triangulation, with no fairing applied.
+    L, M = laplacian_and_mass(a.V[:, :2], a.F)
+    unfaired = inflate_heights(a.V, a.F, a.boundary, 0.8, L, M)
+    assert a.V[:, 2].tobytes() == unfaired.tobytes()
+    c = inflate_stroke(star()[0], True, {"resolution": 0.05, "inflation": 0.8, "smoothing": 1e-3})
+    assert np.array_equal(a.V[:, :2], c.V[:, :2]) and np.array_equal(a.F, c.F)
+    assert not np.array_equal(a.V[:, 2], c.V[:, 2])
 
 
 def test_faired_peak_agrees_across_resolutions():

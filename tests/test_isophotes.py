@@ -5,15 +5,11 @@ import pytest
 
 from meshes import disk, gaussian_bump, hemisphere
 from sketchforge.errors import SculptError
+from sketchforge.geometry.contour import signed_area
 from sketchforge.geometry.intensity import vertex_intensity
 from sketchforge.geometry.isophotes import isophotes, isovalue_at, select_isophote
 
 L = np.array([np.cos(0.3), np.sin(0.3), 0.0])
-
-
-def _signed_area(line):
-    x, y = line[:, 0], line[:, 1]
-    return 0.5 * np.sum(x[:-1] * y[1:] - x[1:] * y[:-1])
 
 
 def test_one_triangle_by_hand():
@@ -68,8 +64,9 @@ def test_closed_isophote_on_gaussian_bump():
     r = np.hypot(line[:, 0], line[:, 1])
     r0 = 0.35 * np.sqrt(2 * np.log(2))
     assert np.abs(r - r0).max() < 0.005
-    assert _signed_area(line) > 0  # counter-clockwise around the bright (higher) side
-    assert _signed_area(line) == pytest.approx(np.pi * r0**2, rel=0.01)
+    area = signed_area(line[:-1, :2])  # the closed curve repeats its first point
+    assert area > 0  # counter-clockwise around the bright (higher) side
+    assert area == pytest.approx(np.pi * r0**2, rel=0.01)
 
 
 def test_vertex_exactly_on_the_isovalue():

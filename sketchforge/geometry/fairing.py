@@ -77,14 +77,12 @@ class FairingSolver:
     """
 
     def __init__(self, L, M, boundary, alpha: float, length_unit: float = 1.0) -> None:
-        self.alpha = float(alpha)
         self.beta = fairing_weight(alpha, length_unit)
-        self.boundary = np.asarray(boundary, dtype=np.int64)
         self._M = sp.csc_matrix(M)
         self._solver = None
         if self.beta > 0.0:
             Q = self.beta * squared_laplacian_matrix(L, M) + self._M
-            self._solver = DirichletSolver(Q, self.boundary)
+            self._solver = DirichletSolver(Q, boundary)
 
     def solve(self, z0) -> np.ndarray:
         """

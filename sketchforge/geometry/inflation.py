@@ -17,7 +17,7 @@ from sketchforge.geometry.laplacian import laplacian_and_mass
 from sketchforge.geometry.dirichlet import DirichletSolver
 
 
-def inflation_potential(L, M, boundary, solver: DirichletSolver | None = None) -> np.ndarray:
+def inflation_potential(L, M, boundary) -> np.ndarray:
     """u = z² before scaling: the solution of (-L) u = 4 M 1 with u = 0 on the boundary.
 
     Parameters
@@ -28,17 +28,13 @@ def inflation_potential(L, M, boundary, solver: DirichletSolver | None = None) -
         Lumped mass matrix.
     boundary : (k,) int64
         Vertices held at u = 0.
-    solver : DirichletSolver, optional
-        A factorisation of -L with these boundary vertices, to reuse.
 
     Returns
     -------
     u : (n,) float64, exactly 0 on the boundary; may dip below 0 by rounding where the mesh
         has obtuse triangles (no discrete maximum principle), callers clamp.
     """
-    if solver is None:
-        solver = DirichletSolver(-sp.csc_matrix(L), boundary)
-    return solver.solve(4.0 * np.asarray(M.diagonal(), dtype=np.float64))
+    return DirichletSolver(-sp.csc_matrix(L), boundary).solve(4.0 * np.asarray(M.diagonal(), dtype=np.float64))
 
 
 def inflate_heights(V, F, boundary, inflation: float = 1.0, L=None, M=None) -> np.ndarray:

@@ -18,6 +18,13 @@ import numpy as np
 NZ_MIN = 1e-2
 
 
+def _face_cross(V, F) -> np.ndarray:
+    """(m, 3) unnormalised face normals (b - a) x (c - a): twice the area times the unit normal."""
+    V = np.asarray(V, dtype=np.float64)
+    F = np.asarray(F, dtype=np.int64)
+    return np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+
+
 def face_normals(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Unit face normals and face areas.
 
@@ -35,9 +42,7 @@ def face_normals(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     area : (m,) float64
         Triangle areas in 3D.
     """
-    V = np.asarray(V, dtype=np.float64)
-    F = np.asarray(F, dtype=np.int64)
-    cross = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+    cross = _face_cross(V, F)
     norm = np.linalg.norm(cross, axis=1)
     N = np.zeros_like(cross)
     N[:, 2] = 1.0
@@ -63,9 +68,8 @@ def vertex_normals(V: np.ndarray, F: np.ndarray) -> np.ndarray:
     (n, 3) float64
         Unit normals; (0, 0, 1) for a vertex without faces or whose faces cancel out.
     """
-    V = np.asarray(V, dtype=np.float64)
     F = np.asarray(F, dtype=np.int64)
-    cross = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+    cross = _face_cross(V, F)
     acc = np.zeros((len(V), 3))
     for k in range(3):
         np.add.at(acc, F[:, k], cross)

@@ -16,6 +16,7 @@ import zlib
 import numpy as np
 
 from sketchforge.atomic import write_bytes_atomic
+from sketchforge.geometry.merge import merge_meshes
 from sketchforge.geometry.normals import vertex_normals
 from sketchforge.geometry.shaders import cel_shade, lambert_shade
 
@@ -91,19 +92,11 @@ def render_top(
         return _to_uint8(image)
 
     centre, scale = _frame(meshes, size, margin)
-    # Stack every mesh into one vertex/triangle list; keep which mesh each triangle came from.
-    Vs, Ns, Fs, mid = [], [], [], []
-    offset = 0
-    for k, m in enumerate(meshes):
-        Vs.append(m.V)
-        Ns.append(vertex_normals(m.V, m.F))
-        Fs.append(m.F + offset)
-        mid.append(np.full(m.n_faces, k, dtype=np.int64))
-        offset += m.n_vertices
-    V = np.concatenate(Vs)
-    N = np.concatenate(Ns)
-    F = np.concatenate(Fs)
-    tri_mesh = np.concatenate(mid)
+    # One vertex/triangle list for every mesh; keep which mesh each triangle came from.
+    merged = merge_meshes(meshes)
+    V, F = merged.V, merged.F
+    N = vertex_normals(V, F)
+    tri_mesh = np.repeat(np.arange(len(meshes)), [m.n_faces for m in meshes])
     E = N @ l
 
     # Continuous pixel coordinates: column = u, row = v, pixel (r, c) has its centre at

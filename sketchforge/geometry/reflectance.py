@@ -52,6 +52,15 @@ def normal_from_pq(p, q):
     return jnp.stack([-p, -q, jnp.ones_like(p)]) / jnp.sqrt(1.0 + p * p + q * q)
 
 
+def _pq_form(R: Callable) -> Callable:
+    """R(n, l) composed with n(p, q): ``r(p, q, l)``, not compiled."""
+
+    def r_pq(p, q, l):
+        return R(normal_from_pq(p, q), l)
+
+    return r_pq
+
+
 @lru_cache(maxsize=None)
 def reflectance_pq(model: ReflectanceModel) -> Callable:
     """R(p, q, l) for a model, jit-compiled.
@@ -66,12 +75,7 @@ def reflectance_pq(model: ReflectanceModel) -> Callable:
         ``R(p, q, l)``: p, q scalar float64, l (3,) float64 -> scalar float64. Traceable, so it
         can be called inside another ``jax.jit``/``vmap`` (the strip right-hand side).
     """
-    R = model.R
-
-    def r_pq(p, q, l):
-        return R(normal_from_pq(p, q), l)
-
-    return jax.jit(r_pq)
+    return jax.jit(_pq_form(model.R))
 
 
 @lru_cache(maxsize=None)
@@ -83,12 +87,7 @@ def reflectance_pq_grad(model: ReflectanceModel) -> Callable:
     callable
         ``f(p, q, l) -> (R, R_p, R_q)``, scalars float64; traceable.
     """
-    R = model.R
-
-    def r_pq(p, q, l):
-        return R(normal_from_pq(p, q), l)
-
-    value_and_grad = jax.value_and_grad(r_pq, argnums=(0, 1))
+    value_and_grad = jax.value_and_grad(_pq_form(model.R), argnums=(0, 1))
 
     def f(p, q, l):
         r, (rp, rq) = value_and_grad(p, q, l)

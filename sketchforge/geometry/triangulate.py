@@ -20,6 +20,9 @@ from sketchforge.errors import LimitError
 #: the resolution.
 MAX_VERTICES = 200_000
 
+#: Minimum triangle angle, degrees (Triangle's ``q``), used by the inflate pipeline.
+MIN_ANGLE = 25.0
+
 #: Vertices per max-area triangle, measured on disks and ellipses with ``q25`` (0.78); the
 #: boundary vertices are counted separately.
 _VERTICES_PER_MAX_AREA = 0.8
@@ -31,13 +34,11 @@ class Triangulation(NamedTuple):
     V2 : (n, 2) float64, vertex positions; the first k are the input polygon, in order.
     F : (m, 3) int64, triangles, counter-clockwise.
     boundary : (k,) int64, the boundary loop (``arange(k)``), counter-clockwise.
-    is_boundary : (n,) bool, vertex markers.
     """
 
     V2: np.ndarray
     F: np.ndarray
     boundary: np.ndarray
-    is_boundary: np.ndarray
 
 
 def max_triangle_area(edge_length: float) -> float:
@@ -68,7 +69,7 @@ def _format_area(a: float) -> str:
     return np.format_float_positional(a, precision=17, unique=True, trim="-")
 
 
-def triangulate_polygon(P, max_edge: float, min_angle: float = 25.0) -> Triangulation:
+def triangulate_polygon(P, max_edge: float, min_angle: float = MIN_ANGLE) -> Triangulation:
     """Quality-mesh the inside of a simple counter-clockwise polygon.
 
     Parameters
@@ -103,6 +104,4 @@ def triangulate_polygon(P, max_edge: float, min_angle: float = 25.0) -> Triangul
     cross = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
     flip = cross < 0
     F[flip] = F[flip][:, [0, 2, 1]]
-    is_boundary = np.zeros(len(V2), dtype=bool)
-    is_boundary[:k] = True
-    return Triangulation(V2, F, np.arange(k, dtype=np.int64), is_boundary)
+    return Triangulation(V2, F, np.arange(k, dtype=np.int64))

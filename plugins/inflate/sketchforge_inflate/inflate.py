@@ -30,10 +30,10 @@ import numpy as np
 from sketchforge.geometry.contour import prepare_outline, resample_outline
 from sketchforge.geometry.fairing import FairingSolver
 from sketchforge.geometry.inflate_params import DEFAULT_INFLATE_PARAMS, check_inflate_params
-from sketchforge.geometry.inflation import inflation_potential
+from sketchforge.geometry.inflation import inflate_heights
 from sketchforge.geometry.laplacian import laplacian_and_mass
 from sketchforge.geometry.mesh import Mesh
-from sketchforge.geometry.triangulate import MAX_VERTICES, check_vertex_budget, triangulate_polygon
+from sketchforge.geometry.triangulate import MAX_VERTICES, MIN_ANGLE, check_vertex_budget, triangulate_polygon
 
 #: Default parameters (the same object as the document's defaults).
 DEFAULT_PARAMS = DEFAULT_INFLATE_PARAMS
@@ -42,9 +42,6 @@ validate_params = check_inflate_params
 
 #: The fairing energy's length unit is the shape's size (2·area/perimeter) divided by this.
 SMOOTHING_UNITS_PER_SIZE = 32.0
-
-#: Minimum angle of the triangulation, degrees.
-MIN_ANGLE = 25.0
 
 
 def inflate_stroke(points, closed: bool = False, params: Mapping | None = None, *, max_vertices: int = MAX_VERTICES) -> Mesh:
@@ -81,13 +78,13 @@ def inflate_stroke(points, closed: bool = False, params: Mapping | None = None, 
     contour = resample_outline(outline)
     tri = triangulate_polygon(contour.points, contour.edge_length, MIN_ANGLE)
     L, M = laplacian_and_mass(tri.V2, tri.F)
-    z = p["inflation"] * np.sqrt(np.maximum(inflation_potential(L, M, tri.boundary), 0.0))
+    z = inflate_heights(tri.V2, tri.F, tri.boundary, p["inflation"], L, M)
     if p["smoothing"] > 0.0 and p["inflation"] > 0.0:
         size = 2.0 * outline.area / outline.perimeter
         z = FairingSolver(L, M, tri.boundary, p["smoothing"], size / SMOOTHING_UNITS_PER_SIZE).solve(z)
         # The biharmonic fairing has no maximum principle: it can undershoot by a hair next to
-        # the rim. Heights are >= 0 by contract.
+        # the rim. Heights are >= 0 by contract (the boundary stays exactly 0: DirichletSolver
+        # copies fixed values).
         z = np.maximum(z, 0.0)
-        z[tri.boundary] = 0.0
     V = np.column_stack([tri.V2, z])
     return Mesh(V, tri.F, tri.boundary, contour.junction)
