@@ -12,7 +12,6 @@ from meshes import (
 from sketchforge.document.layer import Light
 from sketchforge.errors import ParameterError
 from sketchforge.geometry.intensity import face_gradient, vertex_gradient, vertex_intensity
-from sketchforge.geometry.light import light_from_drag
 from sketchforge.geometry.shaders import (
     CEL_SHADER,
     CEL_TONES,
@@ -50,14 +49,14 @@ def test_cel_shader_has_three_tones_at_thresholds():
 
 
 def test_light_from_drag():
-    light = light_from_drag([1.0, 1.0], [1.0, 3.0])
+    light = Light.from_drag([1.0, 1.0], [1.0, 3.0])
     assert isinstance(light, Light)
     np.testing.assert_allclose(light.direction, [0, 1, 0], atol=1e-15)
-    assert light_from_drag((0, 0), (-2, -2)).angle == pytest.approx(-135.0)
+    assert Light.from_drag((0, 0), (-2, -2)).angle == pytest.approx(-135.0)
     with pytest.raises(ParameterError, match="drag away from the centre"):
-        light_from_drag([0.5, 0.5], [0.5, 0.5])
+        Light.from_drag([0.5, 0.5], [0.5, 0.5])
     with pytest.raises(ParameterError):
-        light_from_drag([0, 0], [np.nan, 1])
+        Light.from_drag([0, 0], [np.nan, 1])
 
 
 def test_intensity_on_hemisphere_matches_n_dot_l():

@@ -131,6 +131,23 @@ class Light:
         a = math.radians(float(degrees))
         return cls(math.cos(a), math.sin(a))
 
+    @classmethod
+    def from_drag(cls, center, point) -> "Light":
+        """From a drag in the drawing plane (thesis 4.1): pointing from ``center`` (2,) towards
+        ``point`` (2,). Raises ParameterError for non-finite input or a drag of no length
+        (relative to the coordinates' size, so the test is the same at any zoom)."""
+        c = np.asarray(center, dtype=np.float64).reshape(-1)
+        p = np.asarray(point, dtype=np.float64).reshape(-1)
+        if c.shape != (2,) or p.shape != (2,):
+            raise ParameterError("a light drag needs a 2D centre and a 2D point")
+        if not (np.all(np.isfinite(c)) and np.all(np.isfinite(p))):
+            raise ParameterError("a light drag needs finite coordinates")
+        d = p - c
+        scale = max(1.0, float(np.max(np.abs(c))), float(np.max(np.abs(p))))
+        if math.hypot(d[0], d[1]) <= 1e-12 * scale:
+            raise ParameterError("the light direction is undefined: drag away from the centre of the drawing")
+        return cls(float(d[0]), float(d[1]))
+
     @property
     def direction(self) -> np.ndarray:
         """(3,) float64 unit vector with z = 0."""

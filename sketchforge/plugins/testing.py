@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from sketchforge.errors import ContourError
+from sketchforge.geometry.contour import signed_area
 from sketchforge.geometry.mesh import Mesh
 from sketchforge.plugins.hookspecs import hookimpl
 from sketchforge.plugins.manager import PluginHost
@@ -29,8 +30,7 @@ class FanInflater:
         P = np.asarray(points, dtype=np.float64)
         if len(P) < 3 or not np.all(np.isfinite(P)):
             raise ContourError("a contour needs at least 3 finite points")
-        x, y = P[:, 0], P[:, 1]
-        area = 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(np.roll(x, -1), y))
+        area = signed_area(P)
         if abs(area) < 1e-12:
             raise ContourError("the contour has zero area")
         if area < 0:

@@ -6,11 +6,9 @@ from __future__ import annotations
 import numpy as np
 
 from sketchforge.document.commands import SetLight, new_gesture_id
+from sketchforge.document.layer import Light
+from sketchforge.errors import ParameterError
 from sketchforge.tools.base import Tool
-
-#: Drags shorter than this (document units) do not change the light: the direction of a
-#: near-zero vector is noise.
-MIN_DRAG = 1e-9
 
 
 class LightTool(Tool):
@@ -23,10 +21,11 @@ class LightTool(Tool):
         self._gesture: int | None = None
 
     def _apply(self, pos) -> None:
-        v = self.as_point(pos) - self.center
-        if float(np.hypot(*v)) <= MIN_DRAG:
-            return
-        self.doc.push(SetLight(direction=[float(v[0]), float(v[1]), 0.0], gesture=self._gesture))
+        try:
+            light = Light.from_drag(self.center, self.as_point(pos))
+        except ParameterError:
+            return  # the mouse is on the centre: no direction yet, keep the current light
+        self.doc.push(SetLight(direction=[light.x, light.y, 0.0], gesture=self._gesture))
         self.overlay = {"light_segment": np.array([self.center, self.as_point(pos)])}
 
     def press(self, pos) -> None:
