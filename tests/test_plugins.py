@@ -120,3 +120,20 @@ def test_core_imports_without_qt():
     )
     res = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
     assert res.returncode == 0, res.stderr[-2000:]
+
+
+def test_geometry_core_does_not_import_the_document_or_front_ends():
+    """The geometry core is array-in, array-out: it knows neither documents nor Qt."""
+    import ast
+    from pathlib import Path
+
+    import sketchforge.geometry as g
+
+    offenders = []
+    for path in sorted(Path(g.__path__[0]).glob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text())):
+            names = [a.name for a in node.names] if isinstance(node, ast.Import) else (
+                [node.module or ""] if isinstance(node, ast.ImportFrom) else [])
+            offenders += [f"{path.name}: {n}" for n in names
+                          if n.startswith(("sketchforge.document", "sketchforge.qt", "sketchforge.tools", "PySide6"))]
+    assert offenders == []
