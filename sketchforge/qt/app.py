@@ -18,29 +18,31 @@ WINDOW_SIZE = (1280, 800)
 
 
 def plugin_host():
-    """The host with every installed plugin that loads; a plugin whose import fails is left
-    out (reported on stderr and in ``host.skipped``) so the app still starts without it."""
+    """The host with every installed plugin that loads (``default_host``). If one fails to
+    import, the host is rebuilt without it (reported on stderr) so the app still starts;
+    ``SKETCHFORGE_PLUGINS`` still limits which entry points are tried."""
+    import os
     from importlib.metadata import entry_points
 
-    from sketchforge.plugins.manager import ENTRY_POINT_GROUP, PluginHost, default_host
+    from sketchforge.plugins.manager import ALLOWLIST_ENV, ENTRY_POINT_GROUP, PluginHost, default_host
 
     try:
-        host = default_host()
-        host.skipped = {}
-        return host
+        return default_host()
     except Exception:  # noqa: BLE001 - a broken plugin must not stop the app
         pass
-    ok, skipped = [], {}
+    wanted = None
+    if ALLOWLIST_ENV in os.environ:
+        wanted = {s.strip() for s in os.environ[ALLOWLIST_ENV].split(",") if s.strip()}
+    ok = []
     for ep in sorted(entry_points(group=ENTRY_POINT_GROUP), key=lambda e: e.name):
+        if wanted is not None and ep.name not in wanted:
+            continue
         try:
             ep.load()
             ok.append(ep.name)
         except Exception as exc:  # noqa: BLE001
-            skipped[ep.name] = f"{type(exc).__name__}: {exc}"
-            print(f"sketchforge: plugin {ep.name!r} not loaded ({skipped[ep.name]})", file=sys.stderr)
-    host = PluginHost.create(allowlist=ok)
-    host.skipped = skipped
-    return host
+            print(f"sketchforge: plugin {ep.name!r} not loaded ({type(exc).__name__}: {exc})", file=sys.stderr)
+    return PluginHost.create(allowlist=ok)
 
 
 def ensure_qapp():

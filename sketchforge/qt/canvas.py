@@ -288,8 +288,6 @@ class Canvas(pg.GraphicsView):
     # --- gestures -------------------------------------------------------------------------------
     def handle_left_drag(self, ev) -> bool:
         mode = self.interaction
-        if mode == "pan":
-            return False
         if ev.isStart():
             if self.busy and mode != "light":
                 self.message.emit("a solve is running: wait for it or cancel it")

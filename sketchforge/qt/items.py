@@ -39,7 +39,6 @@ class ShadedLayerItem(pg.GraphicsObject):
         super().__init__()
         self._mesh = None
         self._points = None
-        self._closed = True
         self._colours: list = []
         self._rect = QRectF()
 
@@ -60,9 +59,6 @@ class ShadedLayerItem(pg.GraphicsObject):
         if self._mesh is not None:
             self._colours = face_colours(self._mesh, light, shader)
             self.update()
-
-    def has_mesh(self) -> bool:
-        return self._mesh is not None
 
     def boundingRect(self) -> QRectF:
         return self._rect

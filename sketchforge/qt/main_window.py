@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from PySide6.QtCore import QSettings, Qt, QTimer, Signal
+from PySide6.QtCore import QSettings, Qt, QTimer
 from PySide6.QtGui import QAction, QActionGroup, QKeySequence
 from PySide6.QtWidgets import (
     QFileDialog,
@@ -43,15 +43,13 @@ from sketchforge.qt.panels.sculpt_panel import SculptPanel
 from sketchforge.qt.sculpt import SculptController
 from sketchforge.qt.view3d import View3D
 from sketchforge.qt.workers import JobRunner
+from sketchforge.tools import DrawContourTool
 
 FILE_FILTER = "sketchforge documents (*.json *.sketchforge);;All files (*)"
 MAX_RECENT = 8
 
 
 class MainWindow(QMainWindow):
-    #: the whole document was replaced (new / open)
-    document_reset = Signal()
-
     def __init__(self, doc, host=None, settings: QSettings | None = None, parent=None) -> None:
         super().__init__(parent)
         self.doc = doc
@@ -138,6 +136,12 @@ class MainWindow(QMainWindow):
         top_lay.addStretch(1)
 
         self.layers_panel = LayersPanel(doc, lambda: (self.doc.light, self.canvas._shader()))
+        # Thumbnails follow the light once it rests: re-rendering every layer's thumbnail on each
+        # step of a light drag would cost more than shading the canvas itself.
+        self._thumbnail_timer = QTimer(self)
+        self._thumbnail_timer.setSingleShot(True)
+        self._thumbnail_timer.setInterval(150)
+        self._thumbnail_timer.timeout.connect(self.layers_panel.refresh_thumbnails)
         self.history_panel = HistoryPanel(doc)
         self.history_panel.enabled_edits = lambda: not self.runner.busy
         tabs = QTabWidget()
@@ -277,8 +281,8 @@ class MainWindow(QMainWindow):
     def _sync_all(self) -> None:
         self._sync_undo()
         self._sync_title()
-        self._on_light(self.doc.light)
-        self.layers_panel.rebuild()
+        self.light_panel.show_light(self.doc.light)
+        self.layers_panel.rebuild()  # thumbnails included
         self._sync_current_layer()
         self.sculpt.reset()
 
@@ -299,7 +303,7 @@ class MainWindow(QMainWindow):
 
     def _on_light(self, light) -> None:
         self.light_panel.show_light(light)
-        self.layers_panel.refresh_thumbnails()
+        self._thumbnail_timer.start()
 
     def _current_layer_changed(self, layer_id) -> None:
         self.current_layer = layer_id
@@ -316,7 +320,7 @@ class MainWindow(QMainWindow):
     def _shader_changed(self, name: str) -> None:
         if name:
             self.canvas.set_shader(name)
-            self.layers_panel.refresh_thumbnails()
+            self._thumbnail_timer.start()
 
     def show_message(self, text: str) -> None:
         self.statusBar().showMessage(text, 8000)
@@ -460,16 +464,15 @@ class MainWindow(QMainWindow):
                 "re-inflates it and drops them (Undo brings them back).",
             ):
                 return
-            self.runner.run(C.SetContour(layer=target, points=points, closed=closed), label="Inflating")
-            return
-        add = C.AddLayer()
-        add.id = self.doc.new_layer_id()
+        # The tool builds the commands (a new layer: AddLayer + SetContour, one "Draw layer"
+        # step); the runner inflates off the GUI thread.
+        before, cmd = DrawContourTool(self.doc, target_layer=target, closed=closed).commands_for(points)
         self.runner.run(
-            C.SetContour(layer=add.id, points=points, closed=closed),
+            cmd,
             label="Inflating",
-            macro="Draw layer",
-            before=[add],
-            on_done=lambda cmd: self.layers_panel.select(add.id),
+            macro="Draw layer" if before else None,
+            before=before,
+            on_done=lambda done: self.layers_panel.select(done.layer),
         )
 
     def undo(self) -> None:
@@ -512,7 +515,6 @@ class MainWindow(QMainWindow):
         self._sync_all()
         self.history_panel.rebuild()
         self.canvas.fit()
-        self.document_reset.emit()
 
     def new_document(self) -> None:
         if self._refuse_if_busy() or not self.maybe_save():

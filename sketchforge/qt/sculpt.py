@@ -21,7 +21,7 @@ from PySide6.QtCore import QObject, Signal
 from sketchforge.errors import SketchforgeError
 from sketchforge.qt.render2d import polygon_rings
 
-TOOL_NAME = COMMAND_NAME = "sculpt_isophote"
+TOOL_NAME = "sculpt_isophote"
 PLUGIN_MISSING = "isophote tool plugin not installed: isophotes cannot be picked or redrawn"
 #: Band radius limits, drawing units.
 MIN_RADIUS, MAX_RADIUS = 0.005, 2.0
@@ -66,20 +66,8 @@ class SculptController(QObject):
         return None if self.tool is None else self.tool.pick
 
     @property
-    def isovalue(self) -> float | None:
-        return None if self.tool is None else self.tool.isovalue
-
-    @property
     def _isophote(self) -> np.ndarray | None:
         return None if self.tool is None else self.tool.isophote
-
-    @property
-    def options(self) -> dict:
-        return {} if self.tool is None else dict(self.tool.options)
-
-    @options.setter
-    def options(self, options: dict) -> None:
-        self.set_options(options)
 
     def set_options(self, options: dict) -> None:
         """Extra command fields from the panel (the reflectance model); re-shows the pick."""
@@ -193,10 +181,6 @@ class SculptController(QObject):
             self._fail(exc)
             return
         self.apply(cmd)
-
-    def command_dict(self, stroke) -> dict:
-        """The journal entry of an edit (the tool's)."""
-        return self.tool.command_dict(stroke)
 
     def apply(self, cmd) -> None:
         """Replace the last attempt (if it is still on top of the history) with ``cmd``."""

@@ -75,7 +75,9 @@ class View3D(QWidget):
         self.gl = None
         self._items: list = []
         self._job = None
-        self._pending = False
+        #: (doc.geometry_revision, mesh) of the last assembly, so that switching modes or the
+        #: source back does not assemble an unchanged document again
+        self._assembled: tuple[int, object] | None = None
         self._layout = QStackedLayout(self)
         self.info = QLabel("")
         self.info.setAlignment(Qt.AlignmentFlag.AlignCenter)
@@ -135,23 +137,34 @@ class View3D(QWidget):
         if not self.doc.host.has_assembler():
             self._show([(l.mesh, CLAY) for l in parts], "assemble plugin not installed: showing the layers' own meshes")
             return
-        if self._job is not None and not self._job.done:
+        revision = self.doc.geometry_revision
+        if self._assembled is not None and self._assembled[0] == revision:
+            self._show_assembled(self._assembled[1], parts)
+            return
+        if self._job is not None and not self._job.done and not self._job.cancelled:
+            if self._job.revision == revision:
+                return  # this very assembly is under way
             self._job.cancel()
         host = self.doc.host
         layers = list(parts)  # immutable values: safe to read on the pool thread
 
         def done(mesh):
             self._job = None
-            if mesh is None:
-                self._show([(l.mesh, CLAY) for l in layers], "the assembler returned nothing; showing the layers")
-            else:
-                self._show([(mesh, CLAY)], "")
+            self._assembled = (revision, mesh)
+            self._show_assembled(mesh, layers)
 
         def failed(exc, tb):
             self._job = None
             self._show([(l.mesh, CLAY) for l in layers], f"assembly failed: {error_text(exc)}")
 
         self._job = self.jobs.start(lambda: host.assemble(layers, {}), done, failed, label="Assembling")
+        self._job.revision = revision
+
+    def _show_assembled(self, mesh, layers) -> None:
+        if mesh is None:
+            self._show([(l.mesh, CLAY) for l in layers], "the assembler returned nothing; showing the layers")
+        else:
+            self._show([(mesh, CLAY)], "")
 
     def _show(self, meshes, note: str) -> None:
         import pyqtgraph.opengl as gl

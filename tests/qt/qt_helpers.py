@@ -54,20 +54,10 @@ class Mouse:
 
     def drag(self, points, button=Qt.MouseButton.LeftButton):
         """Press at the first point, move through the others, release at the last."""
-        pts = [self.px(p) for p in points]
-        self._send(QEvent.Type.MouseMove, pts[0], Qt.MouseButton.NoButton, Qt.MouseButton.NoButton)
-        self._send(QEvent.Type.MouseButtonPress, pts[0], button, button)
-        for p in pts[1:]:
-            self._send(QEvent.Type.MouseMove, p, Qt.MouseButton.NoButton, button)
-        self._send(QEvent.Type.MouseButtonRelease, pts[-1], button, Qt.MouseButton.NoButton)
-        QApplication.processEvents()
+        self.drag_pixels([self.px(p) for p in points], button)
 
     def click(self, xy, button=Qt.MouseButton.LeftButton):
-        p = self.px(xy)
-        self._send(QEvent.Type.MouseMove, p, Qt.MouseButton.NoButton, Qt.MouseButton.NoButton)
-        self._send(QEvent.Type.MouseButtonPress, p, button, button)
-        self._send(QEvent.Type.MouseButtonRelease, p, button, Qt.MouseButton.NoButton)
-        QApplication.processEvents()
+        self.click_pixel(self.px(xy), button)
 
     def wheel(self, xy, steps: int, modifiers=Qt.KeyboardModifier.NoModifier):
         p = self.px(xy)

@@ -116,3 +116,63 @@ def test_autosave_is_offered_back_after_a_crash(tmp_path, monkeypatch, qtbot):
     second.close_now()
     first.close_now()
     assert find_recoverable() == []
+
+
+def test_plugin_host_fallback_leaves_out_a_broken_plugin_and_keeps_the_allowlist(monkeypatch):
+    """When a plugin fails to load the app starts without it; SKETCHFORGE_PLUGINS still
+    decides which entry points are tried."""
+    from sketchforge.plugins import manager
+    from sketchforge.qt.app import plugin_host
+
+    def broken():
+        raise ImportError("a plugin is broken")
+
+    monkeypatch.setattr(manager, "default_host", broken)
+    monkeypatch.setenv(manager.ALLOWLIST_ENV, "")
+    assert plugin_host().plugin_names() == ["sketchforge-core"]
+
+
+def test_observation_assembles_an_unchanged_document_once(qtbot):
+    """Switching to OBSERVATION again (or back to the assembled source) reuses the last
+    assembly until a layer changes."""
+    from sketchforge.document import Document
+    from sketchforge.plugins.hookspecs import hookimpl
+    from sketchforge.plugins.testing import FanInflater, make_test_host
+    from sketchforge.qt.view3d import View3D
+    from sketchforge.qt.workers import JobRunner
+
+    calls = []
+
+    class CountingAssembler:
+        @hookimpl
+        def sketchforge_assemble(self, layers, params):
+            calls.append(len(layers))
+            return layers[0].mesh
+
+    host = make_test_host(FanInflater(), CountingAssembler())
+    doc = Document(host=host)
+    doc.execute({"command": "add_layer", "id": "a"})
+    doc.execute({"command": "set_contour", "layer": "a", "points": [[0, 0], [2, 0], [1, 1]]})
+    jobs = JobRunner()
+    view = View3D(doc, jobs)
+    qtbot.addWidget(view)
+    view.gl = object()  # no OpenGL here: record what would be shown
+    shown = []
+    view._show = lambda meshes, note: shown.append([m for m, _ in meshes])
+
+    def settle():
+        qtbot.waitUntil(lambda: not jobs.running())
+        qtbot.wait(10)  # the result is a queued signal
+
+    view.activate()
+    settle()
+    view.deactivate()
+    view.activate()  # OBSERVATION again
+    view.set_source("layers")
+    view.set_source("assembled")
+    settle()
+    assert calls == [1]
+    assert len(shown) == 4 and all(s == [doc.layers[0].mesh] for s in shown)
+    doc.execute({"command": "set_contour", "layer": "a", "points": [[0, 0], [3, 0], [1, 1]]})
+    settle()
+    assert calls == [1, 1]  # a changed layer is assembled again

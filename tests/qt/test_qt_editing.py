@@ -111,6 +111,9 @@ def test_light_drag_sets_the_direction_in_one_undo_step(make_window, mouse, qtbo
     assert w.act_undo.text() == "Undo Set light"
     assert len(w.doc.layers) == 1  # a light drag never draws
     assert [c.name() for c in item._colours] != colours_before  # shading followed
+    # the layer's thumbnail follows once the light rests (not on every step of the drag)
+    thumb = w.layers_panel.list.item(0).icon().pixmap(48, 48).toImage()
+    qtbot.waitUntil(lambda: w.layers_panel.list.item(0).icon().pixmap(48, 48).toImage() != thumb, timeout=2000)
     assert abs(w.light_panel.angle.value() - round(got, 1)) < 0.051
     w.undo()
     assert w.doc.undo_stack.count() == count + 1 and w.doc.undo_stack.index == count
@@ -274,16 +277,28 @@ def test_new_document_after_discarding(make_window, dialogs):
     assert w.layers_panel.list.count() == 0 and w.history_panel.count() == 1
 
 
-def test_sculpture_state_without_the_plugin_says_so(make_window, host):
+def test_sculpture_state_without_the_plugin_says_so(qtbot, tmp_path, mouse, dialogs):
+    from PySide6.QtCore import QSettings
+
+    from sketchforge.document.document import Document
+    from sketchforge.plugins.testing import make_test_host
+    from sketchforge.qt.main_window import MainWindow
     from sketchforge.qt.sculpt import PLUGIN_MISSING
 
-    w = make_window()
-    qtbot_click = w.modes.sculpture
-    qtbot_click.setChecked(True)
+    bare = make_test_host()  # the core plugin only: no isophote tool
+    w = MainWindow(Document(host=bare), host=bare, settings=QSettings(str(tmp_path / "s.ini"), QSettings.Format.IniFormat))
+    qtbot.addWidget(w)
+    w.resize(900, 600)
+    w.show()
+    qtbot.mouseClick(w.modes.sculpture, Qt.MouseButton.LeftButton)
     assert w.canvas.interaction == "sculpt"
     assert w.controls.currentWidget() is w.sculpt_panel
-    if not w.sculpt.available():
-        assert w.sculpt_panel.status.text() == PLUGIN_MISSING
+    assert not w.sculpt.available()
+    assert w.sculpt_panel.status.text() == PLUGIN_MISSING
+    mouse(w.canvas).click((0.0, 0.0))  # a pick says so too, and edits nothing
+    assert w.statusBar().currentMessage() == PLUGIN_MISSING
+    assert w.doc.undo_stack.count() == 0
+    w.close_now()
 
 
 def test_observation_without_opengl_explains(make_window):

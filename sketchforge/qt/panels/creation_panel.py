@@ -17,7 +17,6 @@ PARAMS = (
 class CreationPanel(QGroupBox):
     #: {key: value} for the current layer
     params_edited = Signal(dict)
-    closed_changed = Signal(bool)
     shader_changed = Signal(str)
     isolines_changed = Signal(int)
 
@@ -39,7 +38,6 @@ class CreationPanel(QGroupBox):
             form.addRow(label, s)
         self.closed = QCheckBox("closed outline (free part)")
         self.closed.setToolTip("Unchecked: an open stroke's closing segment attaches to the layer below")
-        self.closed.toggled.connect(self.closed_changed.emit)
         form.addRow(self.closed)
         self.shader = QComboBox()
         self.shader.currentTextChanged.connect(self.shader_changed.emit)

@@ -88,9 +88,3 @@ class ModePanel(QFrame):
             w.setEnabled(editing)
         for w in (self.assembled, self.per_layer):
             w.setEnabled(not editing)
-
-    def mode(self) -> str:
-        return "editing" if self.editing.isChecked() else "observation"
-
-    def state(self) -> str:
-        return "creation" if self.creation.isChecked() else "sculpture"
