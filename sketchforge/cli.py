@@ -14,15 +14,6 @@ from sketchforge.errors import SketchforgeError
 SUBCOMMANDS = ("replay", "info", "render")
 
 
-def _merge_visible(doc):
-    from sketchforge.geometry.merge import merge_meshes
-
-    meshes = [l.mesh for l in doc.layers if l.visible and l.mesh is not None]
-    if not meshes:
-        raise SketchforgeError("the document has no visible layer with a mesh to export")
-    return merge_meshes(meshes)
-
-
 def cmd_replay(args) -> int:
     from sketchforge.document import fileformat as ff
 
@@ -43,16 +34,7 @@ def cmd_replay(args) -> int:
     if args.export:
         out = Path(args.export)
         exporter = doc.host.exporter_for(out)
-        if args.layer:
-            mesh = doc.layer(args.layer).mesh
-            if mesh is None:
-                raise SketchforgeError(f"layer {args.layer!r} has no mesh (no contour was drawn)")
-        elif doc.host.has_assembler():
-            mesh = doc.assembled()
-            if mesh is None:
-                raise SketchforgeError("the document has no visible layer with a mesh to export")
-        else:
-            mesh = _merge_visible(doc)
+        mesh = doc.export_mesh(args.layer)
         exporter.write(out, mesh)
         print(f"wrote {out} ({mesh.n_vertices} vertices, {mesh.n_faces} triangles)", file=sys.stderr)
     if args.save:

@@ -73,3 +73,24 @@ def test_gltf_embeds_the_same_buffer_as_glb():
     V_glb, F_glb, meta = read_glb(ex.glb_bytes(MESH))
     assert blob[: V_glb.nbytes] == V_glb.tobytes()
     assert meta["accessors"][0]["max"] == pytest.approx(MESH.V.max(axis=0).tolist())
+
+
+def test_export_mesh_without_assembler_merges_the_visible_layers(fan_host):
+    from sketchforge.document import Document
+    from sketchforge.errors import SketchforgeError
+
+    doc = Document(host=fan_host)
+    with pytest.raises(SketchforgeError, match="nothing to export"):
+        doc.export_mesh()
+    for lid, dx in (("a", 0.0), ("b", 3.0), ("c", 6.0)):
+        doc.execute({"command": "add_layer", "id": lid})
+        doc.execute({"command": "set_contour", "layer": lid, "points": [[dx, 0], [dx + 1, 0], [dx, 1]]})
+    doc.execute({"command": "set_layer_visible", "layer": "b", "visible": False})
+    merged = doc.export_mesh()
+    a, c = doc.layer("a").mesh, doc.layer("c").mesh
+    assert merged.n_vertices == a.n_vertices + c.n_vertices and merged.n_faces == a.n_faces + c.n_faces
+    np.testing.assert_array_equal(merged.V[a.n_vertices:], c.V)
+    assert doc.export_mesh("b") is doc.layer("b").mesh  # a layer's own mesh, hidden or not
+    doc.execute({"command": "add_layer", "id": "empty"})
+    with pytest.raises(SketchforgeError, match="has no mesh"):
+        doc.export_mesh("empty")

@@ -20,7 +20,8 @@ from sketchforge.document.commands import Command
 from sketchforge.document.events import Signal
 from sketchforge.document.layer import Layer, Light
 from sketchforge.document.undo import UndoStack
-from sketchforge.errors import LayerNotFoundError
+from sketchforge.errors import LayerNotFoundError, SketchforgeError
+from sketchforge.geometry.merge import merge_meshes
 
 
 class Document:
@@ -159,9 +160,30 @@ class Document:
     def same_state(self, other: "Document") -> bool:
         return not self.differences(other)
 
-    def restore_state(self, layers: list[Layer], light: Light) -> None:
-        """Set the whole state at once (opening a file). Not undoable: clears history."""
+    def restore_state(self, layers, light: Light, initial_light: Light | None = None, base_journal=()) -> None:
+        """Set the whole state at once (opening a file): layers, current light, and the light
+        and journal that led to them. Not undoable: clears history; the result is clean."""
         self._layers = list(layers)
         self._light = light
+        self.initial_light = light if initial_light is None else initial_light
+        self.base_journal = [dict(e) for e in base_journal]
         self._touch()
         self.undo_stack.clear()
+
+    def adopt(self, other: "Document") -> None:
+        """Take over another document's state (the app opening a file into its window)."""
+        self.restore_state(other.layers, other.light, other.initial_light, other.base_journal)
+
+    def export_mesh(self, layer_id: str | None = None):
+        """The mesh to export: one layer's own front surface, else the assembled model, else
+        (no assembler installed) the visible layers merged. Raises SketchforgeError when there
+        is nothing to export."""
+        if layer_id is not None:
+            mesh = self.layer(layer_id).mesh
+            if mesh is None:
+                raise SketchforgeError(f"layer {layer_id!r} has no mesh (no contour was drawn)")
+            return mesh
+        parts = [layer.mesh for layer in self._layers if layer.visible and layer.mesh is not None]
+        if not parts:
+            raise SketchforgeError("there is nothing to export: no visible layer has a mesh")
+        return self.assembled() if self.host.has_assembler() else merge_meshes(parts)

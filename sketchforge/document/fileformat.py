@@ -209,9 +209,7 @@ def document_from_dict(data: Any, source: str = "document", host=None, use_snaps
     if len(set(ids)) != len(ids):
         raise DocumentFormatError(f"{source}: snapshot.layers has duplicate ids")
     cur_light = _parse_light(snap.get("light", data.get("light", [1.0, 0.0, 0.0])), f"{source}: snapshot.light")
-    doc.restore_state(layers, cur_light)
-    doc.initial_light = light
-    doc.base_journal = [dict(e) for e in journal]
+    doc.restore_state(layers, cur_light, light, journal)
     return doc
 
 

@@ -26,14 +26,21 @@ ENTRY_POINT_GROUP = "sketchforge"
 ALLOWLIST_ENV = "SKETCHFORGE_PLUGINS"
 
 
-def make_plugin_manager(plugins: Iterable = (), load_entry_points: bool = True, allowlist=None) -> pluggy.PluginManager:
+def make_plugin_manager(
+    plugins: Iterable = (), load_entry_points: bool = True, allowlist=None, skip_broken: bool = False
+) -> pluggy.PluginManager:
     """Build a manager: core plugin, then ``plugins`` (objects or modules, in order), then
-    installed entry points (filtered by ``allowlist`` or the environment variable)."""
+    installed entry points (filtered by ``allowlist`` or the environment variable).
+
+    With ``skip_broken`` an entry point that fails to import is left out instead of failing
+    the whole host (the app must start even if one plugin is broken); the failures are in
+    ``pm.skipped`` ({name: "ExceptionType: message"})."""
     from sketchforge.plugins import builtin
 
     pm = pluggy.PluginManager("sketchforge")
     pm.add_hookspecs(hookspecs)
     pm.register(builtin, name="sketchforge-core")
+    pm.skipped = {}
     for i, plugin in enumerate(plugins):
         pm.register(plugin, name=getattr(plugin, "__name__", None) or f"plugin-{i}-{type(plugin).__name__}")
     if load_entry_points:
@@ -43,7 +50,14 @@ def make_plugin_manager(plugins: Iterable = (), load_entry_points: bool = True, 
             if allowlist is not None and ep.name not in allowlist:
                 continue
             if pm.get_plugin(ep.name) is None:
-                pm.register(ep.load(), name=ep.name)
+                try:
+                    plugin = ep.load()
+                except Exception as exc:  # noqa: BLE001 - any import error of foreign code
+                    if not skip_broken:
+                        raise
+                    pm.skipped[ep.name] = f"{type(exc).__name__}: {exc}"
+                    continue
+                pm.register(plugin, name=ep.name)
     pm.check_pending()
     return pm
 
@@ -55,8 +69,13 @@ class PluginHost:
         self.pm = pm
 
     @classmethod
-    def create(cls, plugins: Iterable = (), load_entry_points: bool = True, allowlist=None) -> "PluginHost":
-        return cls(make_plugin_manager(plugins, load_entry_points, allowlist))
+    def create(cls, plugins: Iterable = (), load_entry_points: bool = True, allowlist=None, skip_broken: bool = False) -> "PluginHost":
+        return cls(make_plugin_manager(plugins, load_entry_points, allowlist, skip_broken))
+
+    @property
+    def skipped(self) -> dict:
+        """Entry points left out because they failed to import ({name: reason})."""
+        return dict(self.pm.skipped)
 
     def plugin_names(self) -> list[str]:
         return [name for name, _ in self.pm.list_name_plugin()]

@@ -18,31 +18,14 @@ WINDOW_SIZE = (1280, 800)
 
 
 def plugin_host():
-    """The host with every installed plugin that loads (``default_host``). If one fails to
-    import, the host is rebuilt without it (reported on stderr) so the app still starts;
-    ``SKETCHFORGE_PLUGINS`` still limits which entry points are tried."""
-    import os
-    from importlib.metadata import entry_points
+    """Every installed plugin that imports; a broken one is left out (reported on stderr) so
+    the app still starts. ``SKETCHFORGE_PLUGINS`` limits which entry points are tried."""
+    from sketchforge.plugins.manager import PluginHost
 
-    from sketchforge.plugins.manager import ALLOWLIST_ENV, ENTRY_POINT_GROUP, PluginHost, default_host
-
-    try:
-        return default_host()
-    except Exception:  # noqa: BLE001 - a broken plugin must not stop the app
-        pass
-    wanted = None
-    if ALLOWLIST_ENV in os.environ:
-        wanted = {s.strip() for s in os.environ[ALLOWLIST_ENV].split(",") if s.strip()}
-    ok = []
-    for ep in sorted(entry_points(group=ENTRY_POINT_GROUP), key=lambda e: e.name):
-        if wanted is not None and ep.name not in wanted:
-            continue
-        try:
-            ep.load()
-            ok.append(ep.name)
-        except Exception as exc:  # noqa: BLE001
-            print(f"sketchforge: plugin {ep.name!r} not loaded ({type(exc).__name__}: {exc})", file=sys.stderr)
-    return PluginHost.create(allowlist=ok)
+    host = PluginHost.create(skip_broken=True)
+    for name, reason in host.skipped.items():
+        print(f"sketchforge: plugin {name!r} not loaded ({reason})", file=sys.stderr)
+    return host
 
 
 def ensure_qapp():

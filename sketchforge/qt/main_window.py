@@ -502,11 +502,7 @@ class MainWindow(QMainWindow):
     def adopt(self, loaded, path: Path | None) -> None:
         """Take over the state of a freshly loaded document (history starts here)."""
         self.runner.cancel()
-        doc = self.doc
-        doc.restore_state(list(loaded.layers), loaded.light)
-        doc.initial_light = loaded.initial_light
-        doc.base_journal = list(loaded.base_journal)
-        doc.undo_stack.set_clean()
+        self.doc.adopt(loaded)
         self.path = path
         self.autosaver.discard()
         self.autosaver = Autosaver(self.doc, original_path=path, interval_s=self.autosaver.interval_s)
@@ -587,15 +583,7 @@ class MainWindow(QMainWindow):
         """Export the assembled model (the visible layers merged without an assembler)."""
         try:
             exporter = self.host.exporter_for(path)
-            parts = [l for l in self.doc.layers if l.visible and l.mesh is not None]
-            if not parts:
-                raise SketchforgeError("there is nothing to export: no visible layer has a mesh")
-            if self.host.has_assembler():
-                mesh = self.doc.assembled()
-            else:
-                from sketchforge.geometry.merge import merge_meshes
-
-                mesh = merge_meshes([l.mesh for l in parts])
+            mesh = self.doc.export_mesh()
             exporter.write(path, mesh)
         except SketchforgeError as exc:
             show_error(self, "Cannot export", exc)

@@ -118,18 +118,24 @@ def test_autosave_is_offered_back_after_a_crash(tmp_path, monkeypatch, qtbot):
     assert find_recoverable() == []
 
 
-def test_plugin_host_fallback_leaves_out_a_broken_plugin_and_keeps_the_allowlist(monkeypatch):
-    """When a plugin fails to load the app starts without it; SKETCHFORGE_PLUGINS still
-    decides which entry points are tried."""
+def test_app_host_leaves_out_a_broken_plugin_and_keeps_the_allowlist(monkeypatch, capsys):
+    """A plugin that fails to import does not stop the app: it is left out and reported;
+    SKETCHFORGE_PLUGINS still decides which entry points are tried."""
+    from importlib.metadata import EntryPoint, entry_points
+
     from sketchforge.plugins import manager
     from sketchforge.qt.app import plugin_host
 
-    def broken():
-        raise ImportError("a plugin is broken")
-
-    monkeypatch.setattr(manager, "default_host", broken)
-    monkeypatch.setenv(manager.ALLOWLIST_ENV, "")
-    assert plugin_host().plugin_names() == ["sketchforge-core"]
+    real = list(entry_points(group=manager.ENTRY_POINT_GROUP))
+    broken = EntryPoint("broken", "sketchforge_no_such_module.plugin", manager.ENTRY_POINT_GROUP)
+    monkeypatch.setattr(manager, "entry_points", lambda group: real + [broken])
+    monkeypatch.delenv(manager.ALLOWLIST_ENV, raising=False)
+    host = plugin_host()
+    assert {"inflate", "isophote_tool", "assemble"} <= set(host.plugin_names())
+    assert "broken" not in host.plugin_names() and "ModuleNotFoundError" in host.skipped["broken"]
+    assert "plugin 'broken' not loaded" in capsys.readouterr().err
+    monkeypatch.setenv(manager.ALLOWLIST_ENV, "inflate")
+    assert plugin_host().plugin_names() == ["sketchforge-core", "inflate"]
 
 
 def test_observation_assembles_an_unchanged_document_once(qtbot):
