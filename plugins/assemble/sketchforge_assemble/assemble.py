@@ -125,13 +125,12 @@ def assemble_detailed(meshes: Sequence[Mesh | None], closed: Sequence[bool] | No
     knames = [names[i] for i in keep]
     sheets = [sheet_from_mesh(k, meshes[i], bool(closed[i])) for k, i in enumerate(keep)]
 
-    attachments, warnings, free = find_attachments(sheets, knames, p["on_bad_junction"])
-    for u in free:
-        sheets[u] = sheets[u].evolve(junction=np.zeros(0, np.int64))
+    attachments, warnings = find_attachments(sheets, knames, p["on_bad_junction"])
     attached = {a.upper for a in attachments}
     for u in range(len(sheets)):
         if u not in attached and len(sheets[u].junction):
-            # junction over empty space: a free part whose whole outline is a rim
+            # junction over empty space, or a bad one with on_bad_junction="free": a free part
+            # whose whole outline is a rim
             sheets[u] = sheets[u].evolve(junction=np.zeros(0, np.int64))
     timings["attach"] = time.perf_counter() - t0
 

@@ -37,6 +37,13 @@ class Attachment:
     side: int
 
 
+def lo_chain_index(attachments: list[Attachment], a_i: int) -> int:
+    """Position of attachment a_i's junction among the chains inserted into its lower layer
+    (chains are inserted in attachment order, see :func:`.remesh.insert_chains`)."""
+    lower = attachments[a_i].lower
+    return sum(1 for at in attachments[:a_i] if at.lower == lower)
+
+
 def find_attachments(sheets: list[Sheet], names: list[str], on_bad_junction: str = "raise"):
     """Decide every attachment.
 
@@ -55,13 +62,12 @@ def find_attachments(sheets: list[Sheet], names: list[str], on_bad_junction: str
     -------
     attachments : list of Attachment
     warnings : list of str
-    free : set of int
-        Layers whose junction was dropped (free parts).
+        One per junction made free (``on_bad_junction="free"``); a part not in
+        ``attachments`` is free.
     """
     polys = [s.polygon() for s in sheets]
     attachments: list[Attachment] = []
     warnings: list[str] = []
-    free: set[int] = set()
     for u, s in enumerate(sheets):
         if len(s.junction) == 0:
             continue
@@ -105,5 +111,4 @@ def find_attachments(sheets: list[Sheet], names: list[str], on_bad_junction: str
             if on_bad_junction == "raise":
                 raise AttachmentError(problem[0].upper() + problem[1:] + ".")
             warnings.append(problem + " (assembled as a free part)")
-            free.add(u)
-    return attachments, warnings, free
+    return attachments, warnings

@@ -45,9 +45,11 @@ import scipy.sparse.linalg as sla
 import shapely
 import igl
 
-from .attach import FRONT, Attachment
+from sketchforge.geometry.laplacian import laplacian_and_mass
+
+from .attach import FRONT, Attachment, lo_chain_index
 from .errors import DepthOrderError
-from .sheet import Sheet
+from .sheet import Sheet, unique_edges
 
 
 def locate(sheet: Sheet, pts: np.ndarray):
@@ -143,9 +145,7 @@ def build_problem(sheets, offsets, front_off, back_off, attachments: list[Attach
     w = reg / diag**2
     blocks, blocks_m = [], []
     for s in sheets:
-        V3 = np.c_[s.xy, np.zeros(s.n)]
-        L = igl.cotmatrix(V3, s.F)
-        M = igl.massmatrix(V3, s.F, igl.MASSMATRIX_TYPE_VORONOI)
+        L, M = laplacian_and_mass(s.xy, s.F)
         k = 1.0 + (stiffness if s.chains else 0.0)
         blocks.append((k * (-L) + w * M).tocsc())
         blocks_m.append(M)
@@ -170,10 +170,14 @@ def build_problem(sheets, offsets, front_off, back_off, attachments: list[Attach
         glued[key].append(("l", at.lower, c))
 
     polys = [s.polygon() for s in sheets]
+    edges = [unique_edges(s.F) for s in sheets]  # once per sheet, not once per overlapping pair
     n_pairs = 0
     for i in range(len(sheets)):
         for k in range(i + 1, len(sheets)):
-            if not polys[i].intersects(polys[k]) or polys[i].intersection(polys[k]).area <= 0:
+            if not polys[i].intersects(polys[k]):
+                continue
+            overlap = polys[i].intersection(polys[k])
+            if overlap.area <= 0:
                 continue
             n_pairs += 1
             skip = {i: np.zeros(sheets[i].n), k: np.zeros(sheets[k].n)}
@@ -184,7 +188,7 @@ def build_problem(sheets, offsets, front_off, back_off, attachments: list[Attach
             # C<=: vertices of layer i under layer k: back_k(p) - front_i(v) >= gap.
             _pair_rows(ineq, sheets, offsets, i, k, polys[k], skip[i], skip[k], front_off[i], back_off[k], gap, -1)
             # and where their edges cross
-            _crossing_rows(ineq, sheets, offsets, k, i, polys[i].intersection(polys[k]), skip[k], skip[i],
+            _crossing_rows(ineq, sheets, offsets, k, i, edges[k], edges[i], overlap, skip[k], skip[i],
                            back_off[k], front_off[i], gap)
     Aeq, beq = eq.matrix(N)
     Ain, bin_ = ineq.matrix(N)
@@ -203,12 +207,6 @@ def build_problem(sheets, offsets, front_off, back_off, attachments: list[Attach
             rest[f] = max(0.0, float(np.max(rest[pairs[mine, 1]] + bin_[mine])))
     q = np.concatenate([-w * blocks_m[i] @ np.full(s.n, rest[i]) for i, s in enumerate(sheets)])
     return P, q, Aeq, beq, Ain, bin_, {"overlapping_pairs": n_pairs, "reg_weight": w, "rest_depth": rest.tolist()}
-
-
-def lo_chain_index(attachments: list[Attachment], a_i: int) -> int:
-    """Position of attachment a_i's junction among the chains inserted into its lower layer."""
-    lower = attachments[a_i].lower
-    return sum(1 for at in attachments[:a_i] if at.lower == lower)
 
 
 def _pair_rows(rows, sheets, offsets, q, o, poly_o, skip_q, skip_o, off_q, off_o, gap, sign):
@@ -234,11 +232,7 @@ def _pair_rows(rows, sheets, offsets, q, o, poly_o, skip_q, skip_o, off_q, off_o
     rows.add(cols, coefs, rhs, (q, o) if sign > 0 else (o, q))
 
 
-def _unique_edges(F: np.ndarray) -> np.ndarray:
-    return np.unique(np.sort(F[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1), axis=0)
-
-
-def _crossing_rows(rows, sheets, offsets, k, i, region, skip_k, skip_i, back_k, front_i, gap):
+def _crossing_rows(rows, sheets, offsets, k, i, ek, ei, region, skip_k, skip_i, back_k, front_i, gap):
     """Rows where an edge of the nearer sheet k crosses an edge of sheet i in the plane.
 
     Vertex rows alone leave the two piecewise-linear faces free to cross inside a cell of their
@@ -246,12 +240,12 @@ def _crossing_rows(rows, sheets, offsets, k, i, region, skip_k, skip_i, back_k, 
     rows at both, back_k - front_i >= gap holds on every overlay corner, so (being linear on
     each cell) everywhere: no intersection is left between vertices, even where both faces
     are steep (a junction near the outline of the layer below).
-    Row: back_k(p) - front_i(p) >= gap' at the crossing p.
+    Row: back_k(p) - front_i(p) >= gap' at the crossing p. ``ek``, ``ei``: the sheets'
+    undirected edges (:func:`.sheet.unique_edges`).
     """
     from scipy.spatial import cKDTree
 
     sk, si = sheets[k], sheets[i]
-    ek, ei = _unique_edges(sk.F), _unique_edges(si.F)
     x0, x1, y0, y1 = region.bounds[0], region.bounds[2], region.bounds[1], region.bounds[3]
 
     def in_box(xy, e):

@@ -1,6 +1,5 @@
 """Checks of an assembled mesh: manifoldness, orientation, volume, components, Euler
-characteristic, degenerate and intersecting triangles. Used by the tests, the benchmark and
-:class:`~sketchforge_assemble.assemble.AssemblyResult`."""
+characteristic, degenerate and intersecting triangles. Used by the tests and the benchmark."""
 
 from __future__ import annotations
 
@@ -8,6 +7,8 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
+
+from .sheet import directed_edges, unique_edges
 
 
 def edge_counts(F: np.ndarray):
@@ -18,14 +19,12 @@ def edge_counts(F: np.ndarray):
     edges : (e, 2) int64, sorted per row
     count : (e,) int64
     """
-    E = np.sort(F[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
-    edges, count = np.unique(E, axis=0, return_counts=True)
-    return edges, count
+    return np.unique(np.sort(directed_edges(F), axis=1), axis=0, return_counts=True)
 
 
 def is_consistently_oriented(F: np.ndarray) -> bool:
     """Every directed edge appears once and its reverse appears once."""
-    D = F[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+    D = directed_edges(F)
     n = int(F.max()) + 1
     key = D[:, 0] * n + D[:, 1]
     rkey = D[:, 1] * n + D[:, 0]
@@ -55,14 +54,8 @@ def euler_characteristics(F: np.ndarray) -> list[int]:
     out = []
     for c in np.unique(labels[F[:, 0]]):
         Fc = F[labels[F[:, 0]] == c]
-        edges, _ = edge_counts(Fc)
-        out.append(int(len(np.unique(Fc)) - len(edges) + len(Fc)))
+        out.append(int(len(np.unique(Fc)) - len(unique_edges(Fc)) + len(Fc)))
     return out
-
-
-def triangle_areas(V: np.ndarray, F: np.ndarray) -> np.ndarray:
-    """(m,) float64 areas."""
-    return 0.5 * np.linalg.norm(np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]]), axis=1)
 
 
 def _orient(a, b, c, d):
@@ -131,21 +124,3 @@ def intersecting_pairs(V: np.ndarray, F: np.ndarray, face_group: np.ndarray | No
                 hit |= _edge_crosses_triangle(X[:, e0], X[:, e1], a, b, c)
         hits.append(P[hit])
     return np.vstack(hits) if hits else np.zeros((0, 2), np.int64)
-
-
-def mesh_report(V: np.ndarray, F: np.ndarray, face_layer: np.ndarray | None = None) -> dict:
-    """All checks in one dict (see the keys)."""
-    edges, count = edge_counts(F)
-    areas = triangle_areas(V, F)
-    inter = intersecting_pairs(V, F, face_layer)
-    return {
-        "vertices": int(len(V)),
-        "faces": int(len(F)),
-        "edges_not_two_faces": int(np.sum(count != 2)),
-        "consistently_oriented": is_consistently_oriented(F),
-        "volume": signed_volume(V, F),
-        "components": int(len(euler_characteristics(F))),
-        "euler": euler_characteristics(F),
-        "min_area": float(areas.min()) if len(areas) else 0.0,
-        "intersecting_pairs_between_layers": int(len(inter)),
-    }

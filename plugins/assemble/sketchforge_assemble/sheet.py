@@ -69,6 +69,11 @@ def directed_edges(F: np.ndarray) -> np.ndarray:
     return F[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
 
 
+def unique_edges(F: np.ndarray) -> np.ndarray:
+    """(e, 2) int64 undirected edges of the triangles F (m, 3), each sorted, no repeats."""
+    return np.unique(np.sort(directed_edges(F), axis=1), axis=0)
+
+
 def has_directed_edge(F: np.ndarray, a: int, b: int) -> bool:
     """Whether some triangle of F (m, 3) walks the edge a -> b."""
     E = directed_edges(F)

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .attach import FRONT, Attachment
+from .attach import FRONT, Attachment, lo_chain_index
 from .sheet import Sheet, interior_on_left
 
 
@@ -101,12 +101,9 @@ def build_mesh(sheets: list[Sheet], attachments: list[Attachment], delta: list[n
     faces_back = [back[i][s.F[:, ::-1]] for i, s in enumerate(sheets)]
 
     # Slits: re-point the lower face's triangles at the part's junction chains.
-    chain_no = {}
-    for at in attachments:
+    for a_i, at in enumerate(attachments):
         lo = sheets[at.lower]
-        k = chain_no.get(at.lower, 0)
-        chain_no[at.lower] = k + 1
-        chain = lo.chains[k]
+        chain = lo.chains[lo_chain_index(attachments, a_i)]
         up = sheets[at.upper]
         j = up.junction
         faces = faces_front[at.lower] if at.side == FRONT else faces_back[at.lower]

@@ -12,11 +12,10 @@ def document_from(doc):
     from sketchforge.document import fileformat as ff
     from sketchforge.plugins.testing import make_test_host
 
-    source = "document" if isinstance(doc, dict) else str(doc)
-    data = doc if isinstance(doc, dict) else ff.read_json(Path(doc))
-    light, journal = ff.validate_header(data, source)
     host = make_test_host(entry_points=True, allowlist=["inflate"])
-    return ff.replay_journal(light, journal, source, host)
+    if isinstance(doc, dict):
+        return ff.document_from_dict(doc, host=host, use_snapshot=False)
+    return ff.load(Path(doc), host=host, use_snapshot=False)
 
 
 def layers_from_journal(doc) -> list:
