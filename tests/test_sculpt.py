@@ -45,6 +45,7 @@ def issue_edit(ellipse):
         ({"pick": [5.0, 5.0]}, "outside the layer"),
         ({"stroke": [[-0.9, -0.1], [-0.8, -0.2]]}, "no part inside the band"),
         ({"stroke": [[0.1, np.nan], [0.2, 0.2]]}, "non-finite"),
+        ({"stroke": ISSUE_STROKE + [[1e9, 0.3]]}, "too long"),  # was a MemoryError (600 GiB)
         ({"options": {"solver": "euler"}}, "solver"),
     ],
 )

@@ -34,7 +34,7 @@ from sketchforge.geometry.field_jax import bilinear_eval, bspline_eval
 from sketchforge.geometry.reflectance import reflectance_pq_grad
 from sketchforge.plugins.registry import ReflectanceModel
 
-from .jaxcache import BATCH_BUCKETS, TRACES, bucket, pad_rows
+from .jaxcache import TRACES, run_padded
 
 #: Fixed steps of the "rk4" solver and saved samples of the diffrax solvers (static sizes).
 CHAR_STEPS = 256
@@ -190,12 +190,4 @@ def integrate_characteristics(
         jnp.asarray(length, jnp.float64),
         jnp.asarray(margin, jnp.float64),
     )
-    out = []
-    big = BATCH_BUCKETS[-1]
-    for s in range(0, len(y0), big):
-        chunk = np.asarray(y0[s : s + big], np.float64)
-        ys, alive = fn(jnp.asarray(pad_rows(chunk, bucket(len(chunk)))), *args)
-        ys, alive = np.asarray(ys), np.asarray(alive)
-        for i in range(len(chunk)):
-            out.append(ys[i][alive[i]])
-    return out
+    return run_padded(fn, np.asarray(y0, np.float64), *args)

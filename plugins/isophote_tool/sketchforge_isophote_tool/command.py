@@ -53,9 +53,6 @@ class SculptIsophote(ReplaceLayerCommand):
     def text(self) -> str:
         return "Sculpt isophote"
 
-    def entry(self) -> dict:
-        return self.to_dict()
-
     def compute(self, doc, old: Layer) -> Layer:
         self.result = _apply(doc, old, self.pick, self.band, self.stroke, self.model)
         # The layer remembers the light this edit used, so re-applying it after a parameter

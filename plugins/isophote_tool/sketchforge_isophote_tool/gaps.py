@@ -1,7 +1,8 @@
 """Distances between neighbouring strips inside a zone, batched and memoised.
 
 Both seeding loops (region strips near the stroke, 4.3.3; characteristic strips covering M•,
-4.5) insert a strip wherever two neighbours are too far apart, then measure again. Measuring
+4.5) insert a strip wherever two neighbours are too far apart (:func:`insert_strips`), then
+measure again. Measuring
 pair by pair cost one GEOS call per strip pair and round (~30 ms per edit at 5k vertices); here
 every pair still unmeasured goes into one vectorised ``shapely.distance`` call, and a pair
 measured in an earlier round is not measured again.
@@ -78,3 +79,12 @@ class StripGaps:
             a, b = pairs[k]
             self._memo[(id(a), id(b))] = (float(out[k]), a, b)
         return out
+
+
+def insert_strips(t: np.ndarray, strips: list, new_t: np.ndarray, new_strips: list) -> tuple[np.ndarray, list]:
+    """Merge strips seeded at parameters ``new_t`` into strips seeded at ``t``, sorted by seed
+    parameter (both seeding loops refine by inserting strips between too-distant neighbours)."""
+    t2 = np.concatenate([t, new_t])
+    order = np.argsort(t2, kind="stable")
+    s2 = list(strips) + list(new_strips)
+    return t2[order], [s2[i] for i in order]

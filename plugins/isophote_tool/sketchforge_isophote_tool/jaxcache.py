@@ -33,3 +33,19 @@ def pad_rows(a: np.ndarray, size: int) -> np.ndarray:
     out[: len(a)] = a
     out[len(a) :] = a[0]
     return out
+
+
+def run_padded(fn, rows: np.ndarray, *args) -> list[np.ndarray]:
+    """Run a batched strip solver on ``rows`` (k, d) in padded batches of ``BATCH_BUCKETS`` sizes.
+
+    ``fn(batch, *args)`` returns samples (b, j, ...) and an alive mask (b, j); the result is
+    one array per row, its alive samples only.
+    """
+    out = []
+    big = BATCH_BUCKETS[-1]
+    for s in range(0, len(rows), big):
+        chunk = rows[s : s + big]
+        xs, alive = fn(pad_rows(chunk, bucket(len(chunk))), *args)
+        xs, alive = np.asarray(xs), np.asarray(alive)
+        out.extend(xs[i][alive[i]] for i in range(len(chunk)))
+    return out

@@ -1,6 +1,6 @@
 """Per-layer data every step of an edit needs, computed once per (mesh, light, model).
 
-Normals, p and q, the signed shading E per vertex, the outline polygon, the rim-margin region
+p and q (from the vertex normals), the signed shading E per vertex, the outline polygon, the rim-margin region
 Ω*, a point locator, and the smooth JAX grid fields (p, q and E). Cached on the mesh's bytes so
 that a second edit on an unchanged layer (or undo/redo back to it) skips this work.
 """
@@ -40,10 +40,8 @@ class LayerData:
     z : (n,) float64
     h : float
         Mean edge length (the mesh resolution).
-    normals : (n, 3) float64
-        Area-weighted vertex normals.
     pq : (n, 2) float64
-        Surface gradient from the normals.
+        Surface gradient from the area-weighted vertex normals.
     E : (n,) float64
         Signed shading R(n, l) per vertex.
     outline : shapely.Polygon
@@ -65,7 +63,6 @@ class LayerData:
     V2: np.ndarray
     z: np.ndarray
     h: float
-    normals: np.ndarray
     pq: np.ndarray
     E: np.ndarray
     outline: object
@@ -141,7 +138,6 @@ def _compute(mesh: Mesh, light: np.ndarray, model: ReflectanceModel) -> LayerDat
         V2=V2,
         z=np.array(V[:, 2]),
         h=h,
-        normals=N,
         pq=pq,
         E=E,
         outline=outline_polygon(mesh),

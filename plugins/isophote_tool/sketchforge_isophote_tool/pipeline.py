@@ -28,10 +28,10 @@ from .characteristics import CHAR_STEPS, SOLVERS, integrate_characteristics
 from .interp import LocalShading, interpolate_shading
 from .isophote import band_around, picked_isophote
 from .layerdata import LayerData, layer_data
-from .gaps import StripGaps
+from .gaps import StripGaps, insert_strips
 from .regions import Regions, compute_regions
 from .reconstruct import reconstruct_heights
-from .stroke import clip_to_band, prepare_stroke
+from .stroke import clip_to_band, even_parameters, polyline_at, prepare_stroke
 
 #: Options of :func:`sculpt` (lengths "in edge lengths" are multiples of the mean edge length h).
 DEFAULT_OPTIONS = {
@@ -118,21 +118,6 @@ def edited_field(ld: LayerData, shading: LocalShading):
     return field_jax.grid_field_from_nodes(nodes, origin, spacing)
 
 
-def _seeds_on(curves: list[np.ndarray], spacing: float) -> list[np.ndarray]:
-    """Arc-length parameters of seeds along each entry polyline."""
-    out = []
-    for P in curves:
-        L = float(np.sum(np.linalg.norm(np.diff(P, axis=0), axis=1)))
-        n = max(int(np.ceil(L / spacing)), 1)
-        out.append(np.linspace(0.0, L, n + 1))
-    return out
-
-
-def _at(P: np.ndarray, t: np.ndarray) -> np.ndarray:
-    s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(P, axis=0), axis=1))])
-    return np.column_stack([np.interp(t, s, P[:, 0]), np.interp(t, s, P[:, 1])])
-
-
 def integrate_from_entry(ld, light, model, M, entry, E_field, opts, margin) -> list[np.ndarray]:
     """Seed characteristic strips on the entry curves and refine until they cover M•."""
     h = ld.h
@@ -152,8 +137,8 @@ def integrate_from_entry(ld, light, model, M, entry, E_field, opts, margin) -> l
             y0, E_field, mask, ld.dist_nodes, light, model, ds, length, 0.5 * margin, opts["solver"], opts["rtol"]
         )
 
-    params = _seeds_on(entry, opts["seed_spacing"] * h)
-    pts = [_at(P, t) for P, t in zip(entry, params)]
+    params = [even_parameters(P, opts["seed_spacing"] * h) for P in entry]
+    pts = [polyline_at(P, t) for P, t in zip(entry, params)]
     flat = run(np.concatenate(pts)) if pts else []
     strips, k = [], 0
     for t in params:
@@ -167,18 +152,15 @@ def integrate_from_entry(ld, light, model, M, entry, E_field, opts, margin) -> l
             bad = np.nonzero((gaps > opts["cover"] * h) & (np.diff(t) > 1e-3 * h))[0]
             if len(bad):
                 nt = 0.5 * (t[bad] + t[bad + 1])
-                new_pts.append(_at(P, nt))
+                new_pts.append(polyline_at(P, nt))
                 where.append((c, nt))
         if not new_pts:
             break
         res = run(np.concatenate(new_pts))
         k = 0
         for c, nt in where:
-            t2 = np.concatenate([params[c], nt])
-            s2 = list(strips[c]) + res[k : k + len(nt)]
+            params[c], strips[c] = insert_strips(params[c], strips[c], nt, res[k : k + len(nt)])
             k += len(nt)
-            order = np.argsort(t2, kind="stable")
-            params[c], strips[c] = t2[order], [s2[i] for i in order]
     return [s for st in strips for s in st]
 
 

@@ -20,12 +20,11 @@ import numpy as np
 import shapely
 
 from sketchforge.errors import NothingToDoError
-from sketchforge.geometry.reflectance import evaluate_pq
 from sketchforge.plugins.registry import ReflectanceModel
 
-from .gaps import StripGaps
+from .gaps import StripGaps, insert_strips
 from .layerdata import LayerData
-from .strips import contour_runs, integrate_region_strips, ring_points
+from .strips import contour_runs, cyclic_runs, flow, integrate_region_strips, ring_points
 
 #: Refinement rounds for the seeding of region strips.
 MAX_REFINE = 5
@@ -187,11 +186,7 @@ def compute_regions(
             if len(bad) == 0 or _ == MAX_REFINE:
                 break
             new_t = 0.5 * (t[bad] + t[bad + 1])
-            new_s = integrate(new_t)
-            t2 = np.concatenate([t, new_t])
-            order = np.argsort(t2, kind="stable")
-            s2 = list(st) + list(new_s)
-            t, st = t2[order], [s2[i] for i in order]
+            t, st = insert_strips(t, st, new_t, integrate(new_t))
             worst = 0.0
         run_t[r], run_s[r] = t, st
         if len(hit):
@@ -205,14 +200,6 @@ def compute_regions(
     M = _impacted(ld, light, model, S, B, stroke, omega_star)
     entry = entry_curves(ld, light, model, M, omega_star)
     return Regions(strips, S, B, B_star, M, omega_star, entry, worst)
-
-
-def _flow(ld: LayerData, light, model, P: np.ndarray) -> np.ndarray:
-    """Unit strip direction -∇R/|∇R| (k, 2) at points P (k, 2), p and q from the mesh."""
-    pq = ld.locator.interpolate(ld.pq, P)
-    _, rp, rq = evaluate_pq(model, pq[:, 0], pq[:, 1], light)
-    d = -np.column_stack([rp, rq])
-    return d / (np.linalg.norm(d, axis=1, keepdims=True) + 1e-300)
 
 
 def _rings(poly):
@@ -237,7 +224,7 @@ def _impacted(ld, light, model, S, B, stroke, omega_star):
             P, n_in = ring_points(coords, (np.arange(n) + 0.5) * (L / n))
             shared = shapely.distance(shapely.points(P), Bb) < 1e-6 * h
             if shared.any():
-                d = _flow(ld, light, model, P[shared])
+                d = flow(ld, light, model, P[shared])
                 flux += float(np.einsum("ij,ij->i", d, n_in[shared]).sum())
         if flux > 0:  # strips go from B• into C: C is downstream, its heights change
             keep.append(C)
@@ -262,7 +249,7 @@ def entry_curves(ld, light, model, M, omega_star, min_cos: float = 0.2) -> list[
         L = float(np.sum(np.linalg.norm(np.diff(coords, axis=0), axis=1)))
         n = max(int(np.ceil(L / (0.25 * h))), 8)
         P, n_in = ring_points(coords, np.arange(n) * (L / n))
-        d = _flow(ld, light, model, P)
+        d = flow(ld, light, model, P)
         # M• lies in Ω*, so this includes the parts of ∂Ω* where strips enter M• from the rim
         # margin (4.5: the part of ∂Ω overlapping ∂S• is an initial curve too).
         ok = np.einsum("ij,ij->i", d, n_in) > min_cos
@@ -270,16 +257,6 @@ def entry_curves(ld, light, model, M, omega_star, min_cos: float = 0.2) -> list[
             out.append(np.concatenate([P, P[:1]]))
             continue
         # Runs of consecutive entering samples, wrapping around the ring.
-        start = int(np.argmin(ok))
-        idx = (np.arange(n) + start) % n
-        cur = []
-        for i in idx:
-            if ok[i]:
-                cur.append(P[i])
-            elif cur:
-                if len(cur) >= 2:
-                    out.append(np.array(cur))
-                cur = []
-        if len(cur) >= 2:
-            out.append(np.array(cur))
+        start, runs = cyclic_runs(ok)
+        out.extend(P[(start + np.arange(k0, k1)) % n] for k0, k1 in runs if k1 - k0 >= 2)
     return out

@@ -24,7 +24,7 @@ from sketchforge.geometry.field_jax import bilinear_eval, bspline_eval
 from sketchforge.geometry.reflectance import evaluate_pq, reflectance_pq
 from sketchforge.plugins.registry import ReflectanceModel
 
-from .jaxcache import BATCH_BUCKETS, TRACES, bucket, pad_rows
+from .jaxcache import TRACES, run_padded
 from .layerdata import LayerData
 
 #: Most RK4 steps per region strip (static: one compiled function per batch size).
@@ -124,19 +124,8 @@ def integrate_region_strips(ld: LayerData, light: np.ndarray, model: Reflectance
     # about 2.5 times (strips curve; they rarely run longer than that).
     lo, hi = ld.V2.min(axis=0), ld.V2.max(axis=0)
     ds = max(0.5 * ld.h, 2.5 * float(np.linalg.norm(hi - lo)) / REGION_STEPS)
-    out = []
-    big = BATCH_BUCKETS[-1]
-    for s in range(0, len(seeds), big):
-        chunk = seeds[s : s + big]
-        b = bucket(len(chunk))
-        xs, alive = fn(
-            jnp.asarray(pad_rows(chunk, b)), f.coeffs, f.origin, f.spacing, dist,
-            jnp.asarray(light, jnp.float64), jnp.asarray(ds), jnp.asarray(margin),
-        )
-        xs, alive = np.asarray(xs), np.asarray(alive)
-        for i in range(len(chunk)):
-            out.append(xs[i][alive[i]])
-    return out
+    args = (f.coeffs, f.origin, f.spacing, dist, jnp.asarray(light, jnp.float64), jnp.asarray(ds), jnp.asarray(margin))
+    return run_padded(fn, np.asarray(seeds, np.float64), *args)
 
 
 def contour_runs(ld: LayerData, light: np.ndarray, model: ReflectanceModel, spacing: float):
@@ -153,24 +142,41 @@ def contour_runs(ld: LayerData, light: np.ndarray, model: ReflectanceModel, spac
     n = max(int(np.ceil(L / spacing)), 16)
     t = np.arange(n) * (L / n)
     pts, n_in = ring_points(coords, t)
-    pq = ld.locator.interpolate(ld.pq, pts)
-    _, rp, rq = evaluate_pq(model, pq[:, 0], pq[:, 1], light)
-    inflow = -(rp * n_in[:, 0] + rq * n_in[:, 1]) > 0
+    inflow = np.einsum("ij,ij->i", flow(ld, light, model, pts), n_in) > 0
     if inflow.all():
         return [(0.0, L)]
     if not inflow.any():
         return []
-    start = int(np.argmin(inflow))  # a sample that is not inflow: no run wraps past it
+    start, runs = cyclic_runs(inflow)
+    # A run ends half-way between its last inflow sample and the first outflow one.
+    return [(t[start] + (k0 - 0.5) * L / n, t[start] + (k1 - 0.5) * L / n) for k0, k1 in runs]
+
+
+def flow(ld: LayerData, light: np.ndarray, model: ReflectanceModel, P: np.ndarray) -> np.ndarray:
+    """Unit strip direction -∇R/|∇R| (k, 2) at points P (k, 2), p and q from the mesh."""
+    pq = ld.locator.interpolate(ld.pq, P)
+    _, rp, rq = evaluate_pq(model, pq[:, 0], pq[:, 1], light)
+    d = -np.column_stack([rp, rq])
+    return d / (np.linalg.norm(d, axis=1, keepdims=True) + 1e-300)
+
+
+def cyclic_runs(ok: np.ndarray) -> tuple[int, list[tuple[int, int]]]:
+    """Runs of True in a cyclic boolean array holding at least one False.
+
+    Returns ``start`` (a False entry, so no run wraps past it) and the runs as ``(k0, k1)``:
+    entries ``(start + k) % len(ok)`` for ``k0 <= k < k1``, in order.
+    """
+    n = len(ok)
+    start = int(np.argmin(ok))
     runs, cur = [], None
     for k in range(n + 1):
-        i = (start + k) % n
-        if inflow[i] and cur is None:
-            cur = k
-        if not inflow[i] and cur is not None:
-            # Run ends half-way between the last inflow sample and the first outflow one.
-            runs.append((t[start] + (cur - 0.5) * L / n, t[start] + (k - 0.5) * L / n))
+        if ok[(start + k) % n]:
+            if cur is None:
+                cur = k
+        elif cur is not None:
+            runs.append((cur, k))
             cur = None
-    return runs
+    return start, runs
 
 
 def ring_points(coords: np.ndarray, t: np.ndarray):
@@ -180,17 +186,17 @@ def ring_points(coords: np.ndarray, t: np.ndarray):
     d = np.linalg.norm(np.diff(coords, axis=0), axis=1)
     s = np.concatenate([[0.0], np.cumsum(d)])
     L = s[-1]
-    t = np.mod(t, L)
-    seg = np.clip(np.searchsorted(s, t, side="right") - 1, 0, len(d) - 1)
-    u = (t - s[seg]) / np.where(d[seg] > 0, d[seg], 1.0)
-    P = coords[seg] + u[:, None] * (coords[seg + 1] - coords[seg])
-    # Normal from a centred difference over about one sample, so corners get an averaged normal.
-    delta = min(1e-3 * L, 0.5 * float(np.median(d)))
+
     def at(tt):
         tt = np.mod(tt, L)
         sg = np.clip(np.searchsorted(s, tt, side="right") - 1, 0, len(d) - 1)
         uu = (tt - s[sg]) / np.where(d[sg] > 0, d[sg], 1.0)
         return coords[sg] + uu[:, None] * (coords[sg + 1] - coords[sg])
+
+    t = np.mod(t, L)
+    P = at(t)
+    # Normal from a centred difference over about one sample, so corners get an averaged normal.
+    delta = min(1e-3 * L, 0.5 * float(np.median(d)))
     tang = at(t + delta) - at(t - delta)
     tang /= np.linalg.norm(tang, axis=1, keepdims=True)
     return P, np.column_stack([-tang[:, 1], tang[:, 0]])
