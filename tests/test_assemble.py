@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import scipy.sparse as sp
 import shapely
 
 from sketchforge.document.layer import Layer
@@ -18,8 +19,9 @@ from sketchforge.errors import SketchforgeError
 from sketchforge.geometry.locate import TriangleLocator
 from sketchforge.geometry.mesh import Mesh
 from sketchforge.geometry.normals import face_normals
-from sketchforge_assemble import BACK, FRONT, AttachmentError, assemble_detailed, assemble_meshes
+from sketchforge_assemble import BACK, FRONT, AttachmentError, DepthOrderError, assemble_detailed, assemble_meshes
 from sketchforge_assemble import diagnostics as dg
+from sketchforge_assemble.depth import _active_set, solve_depth
 from sketchforge_assemble.plugin import sketchforge_assemble
 from sketchforge_assemble.testing import meshes_from_journal
 
@@ -271,9 +273,102 @@ def test_active_set_matches_osqp_on_a_small_document():
     arm = _inflate(_arc(0.35, -0.2, 0.25, 100, 400), False, 0.08)
     r1 = assemble_detailed([body, arm], params={"solver": "osqp"})
     r2 = assemble_detailed([body, arm], params={"solver": "active_set"})
-    assert r1.max_violation <= 0 and r2.max_violation <= 1e-8  # the loop is exact up to round-off
+    assert r1.max_violation <= 0 and r2.max_violation <= 1e-9  # the active set is exact up to round-off
     # OSQP is asked for half a gap of extra clearance, so the two differ by about that much
     assert np.abs(r1.mesh.V - r2.mesh.V).max() < 0.02
+
+
+@lru_cache(maxsize=None)
+def _small_qp():
+    """The depth QP (P, q, Aeq, beq, Ain, bin_) and OSQP's pad of the small body + arm document."""
+    import sketchforge_assemble.assemble as asm
+
+    body = _inflate(_ellipse(0, 0, 0.6, 0.4), True, 0.08)
+    arm = _inflate(_arc(0.35, -0.2, 0.25, 100, 400), False, 0.08)
+    got, solve = {}, asm.solve_depth
+
+    def spy(*args, **kw):
+        got["qp"], got["pad"] = args[:6], kw["pad"]
+        return solve(*args, **kw)
+
+    asm.solve_depth = spy
+    try:
+        assemble_detailed([body, arm])
+    finally:
+        asm.solve_depth = solve
+    return got["qp"], got["pad"]
+
+
+def _osqp_reference(P, q, Aeq, beq, Ain, bin_, pad=0.0, eps=1e-9):
+    import osqp
+
+    s = osqp.OSQP()
+    s.setup(P=sp.triu(P).tocsc(), q=q, A=sp.vstack([Aeq, Ain]).tocsc(), l=np.r_[beq, bin_ + pad],
+            u=np.r_[beq, np.full(len(bin_), np.inf)], verbose=False, eps_abs=eps, eps_rel=eps,
+            polishing=eps < 1e-6, max_iter=200000)
+    return s.solve(raise_error=False)
+
+
+def _qp_variant(variant):
+    """The small QP as built, with its rows perturbed at round-off level, or with every depth row
+    twice (one copy slightly tighter, so the working set must swap twins)."""
+    (P, q, Aeq, beq, Ain, bin_), pad = _small_qp()
+    Ain = sp.csr_matrix(Ain, copy=True)
+    rng = np.random.default_rng(int(variant[-1]) if variant[-1].isdigit() else 0)
+    if variant.startswith("perturbed"):
+        Ain.data *= 1 + 1e-15 * rng.standard_normal(Ain.nnz)
+        bin_ = bin_ * (1 + 1e-15 * rng.standard_normal(len(bin_)))
+        q = q * (1 + 1e-15 * rng.standard_normal(len(q)))
+    elif variant == "duplicated":
+        Ain = sp.vstack([Ain, Ain[::-1]]).tocsr()
+        bin_ = np.r_[bin_, bin_[::-1] + 1e-7]
+    return P, q, Aeq, beq, Ain, bin_, pad
+
+
+@pytest.mark.parametrize("start", ["empty", "osqp"])
+@pytest.mark.parametrize("variant", ["as_built", "perturbed1", "perturbed2", "perturbed3", "duplicated"])
+def test_active_set_is_exact_and_robust_to_round_off(variant, start):
+    # The dual active set adds one row at a time and only rows independent of the working set,
+    # so 1e-15 changes of the rows (or repeated rows) cannot change the working set it ends on.
+    P, q, Aeq, beq, Ain, bin_, pad = _qp_variant(variant)
+    if start == "empty":
+        x, info = solve_depth(P, q, Aeq, beq, Ain, bin_, method="active_set")
+        assert info["iterations"] > 0
+    else:  # the fallback path: from the active set of OSQP's padded solve
+        y = _osqp_reference(P, q, Aeq, beq, Ain, bin_, pad, eps=1e-4).y[len(beq):]
+        warm = np.flatnonzero(y < -1e-9 * np.abs(y).max())
+        x, _, _ = _active_set(P, q, Aeq, beq, Ain, bin_, warm[np.argsort(y[warm])], 1e-10, 1000)
+    xr = _osqp_reference(P, q, Aeq, beq, Ain, bin_).x
+    f, fr = 0.5 * x @ (P @ x) + q @ x, 0.5 * xr @ (P @ xr) + q @ xr
+    assert abs(f - fr) <= 1e-5 * abs(fr), (f, fr)
+    assert np.max(bin_ - Ain @ x) <= 1e-9
+    assert np.max(np.abs(Aeq @ x - beq)) <= 1e-9
+    assert np.abs(x - xr).max() < 1e-5
+
+
+def test_active_set_swaps_a_row_for_a_dependent_tighter_copy():
+    # Started from the optimal working set, every row gets a copy 1e-6 tighter: each copy is
+    # violated and linearly dependent on its twin, so it may not join next to it; a pure dual
+    # step moves the multiplier over and the twin leaves.
+    P, q, Aeq, beq, Ain, bin_, _ = _qp_variant("as_built")
+    n = len(bin_)
+    _, _, act = _active_set(P, q, Aeq, beq, Ain, bin_, np.zeros(0, np.int64), 1e-10, 1000)
+    A2, b2 = sp.vstack([Ain, Ain]).tocsr(), np.r_[bin_, bin_ + 1e-6]
+    x2, _, act2 = _active_set(P, q, Aeq, beq, A2, b2, act, 1e-10, 1000)
+    assert sorted(act2.tolist()) == sorted((act + n).tolist())
+    xr, _, _ = _active_set(P, q, Aeq, beq, Ain, bin_ + 1e-6, np.zeros(0, np.int64), 1e-10, 1000)
+    assert np.abs(x2 - xr).max() < 1e-12
+    assert np.max(b2 - A2 @ x2) <= 1e-9
+
+
+def test_active_set_reports_infeasible_rows():
+    P, q, Aeq, beq, Ain, bin_, _ = _qp_variant("as_built")
+    Ain = sp.vstack([Ain, -Ain[:1]]).tocsr()  # row 0 >= b0 and row 0 <= b0 - gap
+    bin_ = np.r_[bin_, -bin_[0] + 0.01]
+    with pytest.raises(DepthOrderError, match="could not be satisfied"):
+        solve_depth(P, q, Aeq, beq, Ain, bin_, method="active_set")
+    with pytest.raises(DepthOrderError, match="could not be satisfied"):
+        solve_depth(P, q, Aeq, beq, Ain, bin_, method="osqp")
 
 
 # --- the intersection counter itself ---------------------------------------------------------

@@ -26,7 +26,9 @@ from .stitch import build_mesh
 #: layer (thesis 4.7's "small margin"); ``gap``: clearance between overlapping layers, in
 #: median edge lengths; ``reg``: pull of the parts towards the drawing plane (relative, see
 #: :mod:`.depth`); ``stiffness``: how much stiffer a layer with parts glued to it is than
-#: the parts (see :func:`.depth.build_problem`); ``solver``: "osqp" or "active_set"; ``on_bad_junction``: "raise" or "free".
+#: the parts (see :func:`.depth.build_problem`); ``solver``: "osqp" (a dual active set finishes
+#: if a row is left violated) or "active_set" (the active set alone, see
+#: :func:`.depth.solve_depth`); ``on_bad_junction``: "raise" or "free".
 DEFAULT_PARAMS: Mapping[str, object] = {
     "margin": 0.1,
     "gap": 0.1,
