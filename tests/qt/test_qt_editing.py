@@ -341,3 +341,20 @@ def test_reference_image_shows_under_the_drawing_upright(make_window, tmp_path):
         assert w.canvas._reference is item  # the previous image stays
     else:
         raise AssertionError("an unreadable image must be an error")
+
+
+def test_closed_checkbox_shows_the_selected_layers_kind(make_window, host):
+    """Selecting a closed (free) layer shows 'closed outline' checked, an open one unchecked,
+    so redrawing keeps the layer's kind by default."""
+    import json
+    from pathlib import Path
+
+    from sketchforge.document import fileformat as ff
+
+    data = json.loads((Path(__file__).resolve().parents[2] / "examples" / "toucan.json").read_text())
+    doc = ff.document_from_dict(data, "toucan", host=host)
+    w = make_window(doc)
+    for lid, closed in (("eye", True), ("beak", False), ("body", True)):
+        w.layers_panel.select(lid)
+        assert w.current_layer == lid
+        assert w.creation_panel.closed.isChecked() is closed

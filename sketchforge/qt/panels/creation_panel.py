@@ -37,7 +37,10 @@ class CreationPanel(QGroupBox):
             self.spins[key] = s
             form.addRow(label, s)
         self.closed = QCheckBox("closed outline (free part)")
-        self.closed.setToolTip("Unchecked: an open stroke's closing segment attaches to the layer below")
+        self.closed.setToolTip(
+            "For the next stroke (shows the selected layer's kind). Unchecked: an open stroke's "
+            "closing segment attaches to the layer below"
+        )
         form.addRow(self.closed)
         self.shader = QComboBox()
         self.shader.currentTextChanged.connect(self.shader_changed.emit)
@@ -67,6 +70,9 @@ class CreationPanel(QGroupBox):
                 return
             kind = "no contour yet: draw it" if layer.points is None else f"{len(layer.edits)} sculpt edits"
             self.layer_label.setText(f"<b>{layer.name}</b> ({kind})")
+            if layer.points is not None:
+                # A redraw keeps the layer's kind unless the person changes it here.
+                self.closed.setChecked(bool(layer.closed))
             for key, s in self.spins.items():
                 s.setValue(float(layer.params.get(key, s.value())))
         finally:
