@@ -50,3 +50,9 @@ class LimitError(SketchforgeError, ValueError):
 
 class NothingToDoError(SketchforgeError):
     """An edit would change nothing; the message says why (e.g. an empty impacted region)."""
+
+
+class GeometryError(SketchforgeError, ValueError):
+    """Geometry cannot safely reach a native library (Triangle, libigl, OSQP, GEOS): non-finite
+    or huge coordinates, crossing constrained segments, degenerate triangles, inconsistent
+    shapes... Raised by :mod:`sketchforge.geometry.guard` before the native call."""

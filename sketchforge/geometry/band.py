@@ -6,9 +6,10 @@ import math
 
 import numpy as np
 import shapely
-from shapely.geometry import LineString, Polygon
+from shapely.geometry import LineString
 
 from sketchforge.errors import SculptError
+from sketchforge.geometry import guard
 
 
 def band(polyline: np.ndarray, radius: float, outline: np.ndarray):
@@ -35,6 +36,9 @@ def band(polyline: np.ndarray, radius: float, outline: np.ndarray):
     SculptError
         For a radius that is not a positive number, an isophote with fewer than two distinct
         points, or a band that misses the outline.
+    GeometryError
+        Non-finite or huge coordinates in the isophote, the outline or the band (checked by
+        :mod:`guard` before GEOS sees them).
     """
     try:
         r = float(radius)
@@ -42,16 +46,17 @@ def band(polyline: np.ndarray, radius: float, outline: np.ndarray):
         raise SculptError(f"the band radius must be a number, got {radius!r}") from None
     if not math.isfinite(r) or r <= 0.0:
         raise SculptError(f"the band radius must be positive, got {radius!r}")
-    line = np.asarray(polyline, dtype=np.float64)[:, :2]
+    line = guard.points(np.asarray(polyline, dtype=np.float64)[:, :2], "the selected isophote")
     if len(line) < 2 or not np.any(line != line[0]):
         raise SculptError("the selected isophote is a single point; pick another isophote")
-    out = np.asarray(outline, dtype=np.float64)[:, :2]
-    if len(out) < 3:
+    out = guard.points(np.asarray(outline, dtype=np.float64)[:, :2], "the layer's outline")
+    if len(np.unique(out, axis=0)) < 3:
         raise SculptError("the layer has no outline to clip the band to")
-    region = shapely.make_valid(Polygon(out))
+    region = guard.polygon(out, "the layer's outline")
     # Round joins and caps make the buffer the exact Minkowski sum with a disk (up to the
-    # polygonal approximation of the arcs, 16 segments per quarter circle).
-    swept = LineString(line).buffer(r, quad_segs=16)
+    # polygonal approximation of the arcs, 16 segments per quarter circle). A radius near
+    # MAX_COORDINATE would put the disk's arcs beyond what GEOS computes reliably.
+    swept = guard.geometry(LineString(line).buffer(r, quad_segs=16), "the band")
     result = swept.intersection(region)
     result = shapely.make_valid(result)
     parts = getattr(result, "geoms", [result])

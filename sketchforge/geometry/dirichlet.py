@@ -12,6 +12,9 @@ import igl
 import numpy as np
 import scipy.sparse as sp
 
+from sketchforge.errors import SolverError
+from sketchforge.geometry import guard
+
 
 class DirichletSolver:
     """Solve ``A x = b`` on the free vertices with ``x = x_fixed`` on the fixed ones.
@@ -22,6 +25,16 @@ class DirichletSolver:
         Symmetric; positive definite once the fixed rows and columns are removed.
     fixed : (k,) int64
         Indices of the vertices whose values are prescribed.
+    what : str
+        Names the system in error messages.
+
+    Raises
+    ------
+    GeometryError
+        From :func:`guard.sparse_system`: A not square or not finite, a fixed index out of
+        range, a free row of zeros (igl would read out of bounds or factor a singular matrix).
+    SolverError
+        The free block is not positive definite (the factorisation failed).
 
     Notes
     -----
@@ -29,19 +42,22 @@ class DirichletSolver:
     are ignored.
     """
 
-    def __init__(self, A, fixed) -> None:
-        A = sp.csc_matrix(A, dtype=np.float64)
+    def __init__(self, A, fixed, what: str = "the linear system") -> None:
+        A, _, self.fixed = guard.sparse_system(A, None, what, fixed=fixed)
         n = A.shape[0]
-        if A.shape != (n, n):
-            raise ValueError(f"A must be square, got {A.shape}")
         self.n = n
-        self.fixed = np.unique(np.asarray(fixed, dtype=np.int64))
+        self.what = what
         self.n_free = n - len(self.fixed)
         self._data = None
         if self.n_free > 0:
             self._data = igl.min_quad_with_fixed_data()
             # igl minimises ½ xᵀ A x + xᵀ B, hence the sign flip of b in solve().
-            igl.min_quad_with_fixed_precompute(A, self.fixed, sp.csc_matrix((0, n)), True, self._data)
+            try:
+                igl.min_quad_with_fixed_precompute(A, self.fixed, sp.csc_matrix((0, n)), True, self._data)
+            except RuntimeError:
+                raise SolverError(
+                    f"{what} could not be factorised (it is not positive definite on the free vertices)"
+                ) from None
 
     def solve(self, b, x_fixed=None) -> np.ndarray:
         """
@@ -56,8 +72,9 @@ class DirichletSolver:
         -------
         x : (n,) float64, with the fixed values copied exactly.
         """
-        b = np.asarray(b, dtype=np.float64).reshape(self.n)
-        Y = np.zeros((len(self.fixed), 1)) if x_fixed is None else np.asarray(x_fixed, np.float64).reshape(-1, 1)
+        b = guard.finite(b, (self.n,), f"the right-hand side of {self.what}")
+        k = len(self.fixed)
+        Y = np.zeros((k, 1)) if x_fixed is None else guard.finite(x_fixed, (k, 1), f"the fixed values of {self.what}")
         if self._data is None:
             x = np.zeros(self.n)
             x[self.fixed] = Y[:, 0]

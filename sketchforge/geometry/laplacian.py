@@ -1,8 +1,9 @@
 """Cotangent Laplacian and lumped mass matrix of a triangle mesh (libigl), with F coerced once.
 
 libigl's bindings reject index arrays of another dtype and silently copy non-contiguous ones,
-so every caller goes through :func:`as_faces` / :func:`as_vertices` here instead of casting
-at each call site.
+and read out of bounds (a segfault) on a face index out of range, so every call goes through
+:func:`sketchforge.geometry.guard.mesh` here (finite V, int64 C-contiguous F in range, no
+zero-area triangle) instead of casting at each call site.
 """
 
 from __future__ import annotations
@@ -10,6 +11,8 @@ from __future__ import annotations
 import igl
 import numpy as np
 import scipy.sparse as sp
+
+from sketchforge.geometry import guard
 
 
 def as_faces(F) -> np.ndarray:
@@ -30,13 +33,21 @@ def as_vertices(V) -> np.ndarray:
     return np.ascontiguousarray(V)
 
 
-def cotangent_laplacian(V, F) -> sp.csc_matrix:
+def _checked(V, F, what: str) -> tuple[np.ndarray, np.ndarray]:
+    V, F = guard.mesh(V, F, what)
+    return as_vertices(V), F
+
+
+def cotangent_laplacian(V, F, what: str = "the mesh") -> sp.csc_matrix:
     """Cotangent Laplacian.
 
     Parameters
     ----------
     V : (n, 2) or (n, 3) float64
     F : (m, 3) int64
+    what : str
+        Names the mesh in a :class:`~sketchforge.errors.GeometryError` (see
+        :func:`guard.mesh`).
 
     Returns
     -------
@@ -45,26 +56,28 @@ def cotangent_laplacian(V, F) -> sp.csc_matrix:
         diagonal, rows sum to 0). Not divided by the mass: it is the stiffness matrix of
         piecewise-linear finite elements.
     """
-    return sp.csc_matrix(igl.cotmatrix(as_vertices(V), as_faces(F)))
+    return sp.csc_matrix(igl.cotmatrix(*_checked(V, F, what)))
 
 
-def mass_matrix(V, F) -> sp.csc_matrix:
+def mass_matrix(V, F, what: str = "the mesh") -> sp.csc_matrix:
     """Lumped (Voronoi-hybrid) mass matrix.
 
     Parameters
     ----------
     V : (n, 2) or (n, 3) float64
     F : (m, 3) int64
+    what : str
 
     Returns
     -------
     M : (n, n) scipy.sparse.csc_matrix float64
         Diagonal, positive for every vertex used by a face; the diagonal sums to the mesh area.
     """
-    return sp.csc_matrix(igl.massmatrix(as_vertices(V), as_faces(F), igl.MASSMATRIX_TYPE_VORONOI))
+    return sp.csc_matrix(igl.massmatrix(*_checked(V, F, what), igl.MASSMATRIX_TYPE_VORONOI))
 
 
-def laplacian_and_mass(V, F) -> tuple[sp.csc_matrix, sp.csc_matrix]:
-    """``(cotangent_laplacian(V, F), mass_matrix(V, F))`` with a single coercion of V and F."""
-    V3, F = as_vertices(V), as_faces(F)
-    return cotangent_laplacian(V3, F), mass_matrix(V3, F)
+def laplacian_and_mass(V, F, what: str = "the mesh") -> tuple[sp.csc_matrix, sp.csc_matrix]:
+    """``(cotangent_laplacian(V, F), mass_matrix(V, F))`` with a single check and coercion."""
+    V3, F = _checked(V, F, what)
+    return (sp.csc_matrix(igl.cotmatrix(V3, F)),
+            sp.csc_matrix(igl.massmatrix(V3, F, igl.MASSMATRIX_TYPE_VORONOI)))

@@ -2,7 +2,9 @@
 
 The polygon's vertices are kept as the mesh boundary, unsplit (switch ``Y``): the inflate
 plugin has already resampled the contour at the target edge length, and the junction Γ_conn
-must keep exactly the vertices it was given.
+must keep exactly the vertices it was given. The polygon goes through :func:`guard.pslg`
+first: Triangle's behaviour on duplicate vertices or crossing segments is undefined (it
+segfaults).
 """
 
 from __future__ import annotations
@@ -13,7 +15,8 @@ from typing import NamedTuple
 import numpy as np
 import triangle
 
-from sketchforge.errors import LimitError
+from sketchforge.errors import GeometryError, LimitError
+from sketchforge.geometry import guard
 
 #: Largest mesh the inflate pipeline will build. A 200k-vertex blob takes about 4 s and
 #: ~1 GB (the fairing factorisation dominates); anything larger is almost surely a typo in
@@ -66,7 +69,17 @@ def check_vertex_budget(area: float, perimeter: float, edge_length: float, max_v
 def _format_area(a: float) -> str:
     # Triangle parses its switches character by character: "a3.6e-05" would read "e" as a
     # switch. Positional notation avoids the exponent.
-    return np.format_float_positional(a, precision=17, unique=True, trim="-")
+    a = float(a)
+    if not (math.isfinite(a) and a > 0.0):
+        raise GeometryError(f"the maximum triangle area {a:.3g} is not a positive number; the resolution is too fine")
+    s = np.format_float_positional(a, precision=17, unique=True, trim="-")
+    # 17 digits after the point print areas below ~1e-8 with few significant digits, and
+    # below 1e-17 as "0", which Triangle rejects (a drawing 1e-9 units across): those get the
+    # shortest exact positional form instead. Larger areas keep the string they always had,
+    # so existing documents replay to the same meshes.
+    if abs(float(s) - a) > 1e-9 * a:
+        s = np.format_float_positional(a, unique=True, trim="-")
+    return s
 
 
 def triangulate_polygon(P, max_edge: float, min_angle: float = MIN_ANGLE) -> Triangulation:
@@ -86,14 +99,29 @@ def triangulate_polygon(P, max_edge: float, min_angle: float = MIN_ANGLE) -> Tri
     Returns
     -------
     Triangulation
+
+    Raises
+    ------
+    GeometryError
+        The polygon is not one Triangle can take (see :func:`guard.pslg`): non-finite or huge
+        coordinates, crossing or touching edges, or two vertices closer than 1e-9 of its
+        extent (merging them would renumber the boundary the caller relies on).
     """
-    P = np.ascontiguousarray(P, dtype=np.float64)
+    P = guard.points(P, "the outline")
     k = len(P)
-    seg = np.column_stack([np.arange(k), (np.arange(k) + 1) % k]).astype(np.int32)
+    seg = np.column_stack([np.arange(k), (np.arange(k) + 1) % k])
+    data = guard.pslg(P, seg, None, what="the outline")
+    if len(data["vertices"]) != k:
+        raise GeometryError(
+            f"the outline has two points closer than {guard.tolerance(P):.3g} drawing units; "
+            "they cannot both be mesh vertices"
+        )
     # p: planar straight-line graph; q: quality; a: max area; Y: no Steiner points on the
     # boundary; Q: quiet. Triangle keeps the input vertices first and in order.
     opts = f"pq{min_angle:g}a{_format_area(max_triangle_area(max_edge))}YQ"
-    out = triangle.triangulate({"vertices": P, "segments": seg}, opts)
+    out = triangle.triangulate(data, opts)
+    if "triangles" not in out:  # unreachable for a validated simple polygon; never a KeyError
+        raise GeometryError("the outline encloses no area that Triangle could mesh")
     V2 = np.ascontiguousarray(out["vertices"], dtype=np.float64)
     F = np.ascontiguousarray(out["triangles"], dtype=np.int64)
     if len(V2) < k or not np.array_equal(V2[:k], P):

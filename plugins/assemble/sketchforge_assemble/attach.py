@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-import shapely
+from sketchforge.geometry import guard
 
 from .errors import AttachmentError
 from .sheet import Sheet
@@ -65,13 +65,13 @@ def find_attachments(sheets: list[Sheet], names: list[str], on_bad_junction: str
         One per junction made free (``on_bad_junction="free"``); a part not in
         ``attachments`` is free.
     """
-    polys = [s.polygon() for s in sheets]
+    polys = [s.polygon(f"the outline of layer '{names[i]}'") for i, s in enumerate(sheets)]
     attachments: list[Attachment] = []
     warnings: list[str] = []
     for u, s in enumerate(sheets):
         if len(s.junction) == 0:
             continue
-        line = shapely.LineString(s.xy[s.junction])
+        line = guard.linestring(s.xy[s.junction], f"the junction of layer '{names[u]}'")
         tol = 1e-6 * max(line.length, s.h)
         problem = None
         attached = False

@@ -50,6 +50,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as sla
 from scipy.linalg import cho_solve, cholesky, solve_triangular
 
+from sketchforge.geometry import guard
 from sketchforge.geometry.laplacian import laplacian_and_mass
 from sketchforge.geometry.locate import TriangleLocator
 
@@ -119,7 +120,7 @@ def build_problem(sheets, offsets, front_off, back_off, attachments: list[Attach
     w = reg / diag**2
     blocks, blocks_m = [], []
     for s in sheets:
-        L, M = laplacian_and_mass(s.xy, s.F)
+        L, M = laplacian_and_mass(s.xy, s.F, f"the mesh of layer {s.layer}")
         k = 1.0 + (stiffness if s.chains else 0.0)
         blocks.append((k * (-L) + w * M).tocsc())
         blocks_m.append(M)
@@ -303,17 +304,23 @@ def solve_depth(P, q, Aeq, beq, Ain, bin_, method: str = "osqp", pad: float = 0.
     ------
     DepthOrderError
         The rows cannot all be satisfied (or the active-set method did not finish).
+    GeometryError
+        The problem has a NaN, an infinity outside the bounds or inconsistent shapes
+        (:func:`sketchforge.geometry.guard.qp`); checked before either solver runs.
     """
     Ain = sp.csr_matrix(Ain)
     Aeq = sp.csr_matrix(Aeq)
+    # One check of the whole problem, in the form OSQP takes it; the active-set method reads
+    # the same P, q, rows and bounds.
+    P, q, A, lo, hi = guard.qp(P, q, sp.vstack([Aeq, Ain]).tocsc(), np.r_[beq, bin_ + pad],
+                               np.r_[beq, np.full(len(bin_), np.inf)], "the depth-order problem")
     info = {"method": method, "osqp_iterations": 0, "iterations": 0}
     warm = np.zeros(0, np.int64)
     if method == "osqp":
         import osqp
 
         solver = osqp.OSQP()
-        solver.setup(P=sp.triu(P).tocsc(), q=q, A=sp.vstack([Aeq, Ain]).tocsc(),
-                     l=np.r_[beq, bin_ + pad], u=np.r_[beq, np.full(len(bin_), np.inf)], verbose=False,
+        solver.setup(P=sp.triu(P).tocsc(), q=q, A=A, l=lo, u=hi, verbose=False,
                      eps_abs=1e-4, eps_rel=1e-4, polishing=False, max_iter=20000,
                      adaptive_rho_interval=25)
         # a status other than "solved" is handled below (feasibility check, then the active set)
@@ -449,8 +456,13 @@ class _WorkingSet:
         if self.m == 0:
             return self.x0.copy(), np.zeros(0)
         k = np.asarray(self.keys)
-        i, e = np.maximum(k, 0), np.maximum(-1 - k, 0)
-        rhs = np.where(k >= 0, self.bin_[i] - self.in_cx0[i], self.beq[e] - self.eq_cx0[e])
+        # Each kind of row indexes only its own arrays: with no glue rows (or no depth rows)
+        # the other array is empty, and np.where would index it anyway (IndexError).
+        ins = k >= 0
+        i, e = k[ins], -1 - k[~ins]
+        rhs = np.empty(len(k))
+        rhs[ins] = self.bin_[i] - self.in_cx0[i]
+        rhs[~ins] = self.beq[e] - self.eq_cx0[e]
         lam = cho_solve((self.L, True), rhs, check_finite=False)
         return self.x0 + self.Z[:, :self.used] @ self.spread(lam), lam
 

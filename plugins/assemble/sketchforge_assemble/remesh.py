@@ -14,6 +14,9 @@ import shapely
 import triangle
 from scipy.interpolate import RBFInterpolator
 
+from sketchforge.errors import GeometryError
+from sketchforge.geometry import guard
+
 from .errors import AttachmentError
 from .sheet import Sheet, ccw_triangles, has_directed_edge
 
@@ -54,12 +57,15 @@ def insert_chains(sheet: Sheet, chains_xy: list[np.ndarray], names: list[str], o
     Raises
     ------
     AttachmentError
-        If two junctions on this layer cross or touch.
+        If two junctions on this layer cross or touch, or a junction crosses or touches the
+        layer's outline.
+    GeometryError
+        A junction with non-finite or huge coordinates or fewer than 2 distinct points.
     """
     if not chains_xy:
         return sheet
     h = sheet.h
-    lines = [shapely.LineString(c) for c in chains_xy]
+    lines = [guard.linestring(c, f"the junction of layer '{names[o]}'") for c, o in zip(chains_xy, owners)]
     for a in range(len(lines)):
         for b in range(a + 1, len(lines)):
             if lines[a].distance(lines[b]) < 0.5 * h:
@@ -87,12 +93,28 @@ def insert_chains(sheet: Sheet, chains_xy: list[np.ndarray], names: list[str], o
         chains.append(idx)
         start += len(c)
     P = np.vstack(pts)
-    # 'p': constrained Delaunay of the given points and segments, no quality refinement, so no
-    # vertex is added unless segments cross (checked below).
-    out = triangle.triangulate({"vertices": P, "segments": np.vstack(segs)}, "pQ")
-    if len(out["vertices"]) != len(P) or not np.allclose(out["vertices"], P):
+    lower = names[sheet.layer]
+    # Triangle's behaviour on crossing segments or duplicate vertices is undefined (it
+    # segfaults), so the graph is checked first: a junction that crosses or touches the
+    # outline is the person's to fix, and is reported as such.
+    try:
+        data = guard.pslg(P, np.vstack(segs), None, what=f"layer '{lower}' with its junctions cut in")
+    except GeometryError as exc:
         raise AttachmentError(
-            f"A junction crosses the outline of layer '{names[sheet.layer]}'; redraw the part "
+            f"A junction crosses or touches the outline of layer '{lower}' ({exc}); redraw the part "
+            "so its ends lie inside the layer."
+        ) from None
+    if len(data["vertices"]) != len(P):
+        raise AttachmentError(
+            f"A junction touches the outline of layer '{lower}' (two of their points coincide); redraw the "
+            "part so its ends lie inside the layer."
+        )
+    # 'p': constrained Delaunay of the given points and segments, no quality refinement, so no
+    # vertex is added (the segments were checked not to cross).
+    out = triangle.triangulate(data, "pQ")
+    if "triangles" not in out or len(out["vertices"]) != len(P) or not np.allclose(out["vertices"], P):
+        raise AttachmentError(
+            f"A junction crosses the outline of layer '{lower}'; redraw the part "
             "so its ends lie inside the layer."
         )
     F = ccw_triangles(P, out["triangles"].astype(np.int64))

@@ -12,6 +12,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import shapely
 
+from sketchforge.geometry import guard
 from sketchforge.geometry.mesh import Mesh
 
 
@@ -55,10 +56,10 @@ class Sheet:
     def n(self) -> int:
         return int(len(self.xy))
 
-    def polygon(self) -> shapely.Polygon:
-        """The layer's region Ω in the drawing plane."""
-        poly = shapely.Polygon(self.xy[self.boundary])
-        return poly if poly.is_valid else shapely.make_valid(poly).buffer(0)
+    def polygon(self, what: str | None = None) -> shapely.Polygon:
+        """The layer's region Ω in the drawing plane (made valid by :func:`guard.polygon` if
+        its outline touches itself). ``what`` names it in a GeometryError."""
+        return guard.polygon(self.xy[self.boundary], what or f"the outline of layer {self.layer}")
 
     def evolve(self, **changes) -> "Sheet":
         return replace(self, **changes)
@@ -101,9 +102,17 @@ def sheet_from_mesh(layer: int, mesh: Mesh, free: bool) -> Sheet:
         The layer's front surface (``V`` (n,3), ``F`` (m,3), ``boundary``, ``junction``).
     free : bool
         Treat the part as free (ignore its junction).
+
+    Raises
+    ------
+    GeometryError
+        A vertex with a non-finite or huge coordinate or a zero-area triangle (a hand-edited
+        snapshot, see :func:`guard.mesh`): the sheet's coordinates go to GEOS, Triangle, libigl
+        and OSQP, so they are checked once, here.
     """
-    xy = np.array(mesh.V[:, :2], dtype=np.float64)
-    z = np.maximum(np.array(mesh.V[:, 2], dtype=np.float64), 0.0)
+    V, _ = guard.mesh(mesh.V, mesh.F, f"the mesh of layer {layer}")
+    xy = np.array(V[:, :2])
+    z = np.maximum(np.array(V[:, 2]), 0.0)
     F = ccw_triangles(xy, mesh.F)
     boundary = np.array(mesh.boundary, dtype=np.int64)
     if len(boundary) >= 2 and not has_directed_edge(F, boundary[0], boundary[1]):
