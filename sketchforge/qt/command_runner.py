@@ -9,10 +9,19 @@ is reported; a cancelled job's result is dropped.
 A macro can wrap the push: ``run(cmd, macro="Draw layer", before=[AddLayer(...)])`` opens the
 macro, pushes the cheap ``before`` commands at once (prepare needs the new layer), prepares
 ``cmd`` off-thread and closes the macro; on error or cancel the macro is aborted (undone).
+
+A native crash in a solver ends the process, so the runner takes an optional ``guard`` (the
+app's autosaver): ``token = guard.before(cmd, macro=..., before=[...])`` is called on the GUI
+thread before anything happens (before the macro opens, so the state it records is the one
+before the user's action) and ``guard.after(token)`` once ``prepare`` has returned on the
+worker, whatever the outcome, a cancelled job included (its native code runs on until it
+returns). :class:`GuardedJobs` does the same for other native work started through a
+JobRunner (the OBSERVATION view's assembly).
 """
 
 from __future__ import annotations
 
+import functools
 from typing import Callable
 
 from PySide6.QtCore import QObject, Signal
@@ -26,14 +35,18 @@ class CommandRunner(QObject):
     failed = Signal(object, str, object)
     #: the command, after it was pushed
     pushed = Signal(object)
+    #: (guard token) emitted on the worker when ``prepare`` returns; queued to the GUI thread
+    _prepare_returned = Signal(object)
 
-    def __init__(self, doc, jobs: JobRunner, parent: QObject | None = None) -> None:
+    def __init__(self, doc, jobs: JobRunner, parent: QObject | None = None, guard=None) -> None:
         super().__init__(parent)
         self.doc = doc
         self.jobs = jobs
+        self.guard = guard
         self._job = None
         self._macro_open = False
         self._on_cancel: Callable | None = None
+        self._prepare_returned.connect(self._guard_after)
 
     @property
     def busy(self) -> bool:
@@ -48,10 +61,21 @@ class CommandRunner(QObject):
         on_done: Callable | None = None,
         on_error: Callable | None = None,
         on_cancel: Callable | None = None,
+        guard_token=None,
     ) -> bool:
-        """Start; returns False (and does nothing) if another command is being prepared."""
+        """Start; returns False (and does nothing) if another command is being prepared.
+
+        ``guard_token``: the caller already called ``guard.before`` (because it changed the
+        document first, e.g. undid an attempt it replaces); the runner ends that record instead
+        of starting its own. If ``run`` returns False the caller ends it."""
         if self.busy:
             return False
+        before = list(before)
+        # The state before the user's action, with the action named, is on disk before any
+        # native code runs: a crash in the solver loses nothing and is not replayed.
+        token = guard_token
+        if token is None and self.guard is not None:
+            token = self.guard.before(cmd, macro=macro, before=before)
         stack = self.doc.undo_stack
         if macro is not None:
             stack.begin_macro(macro)
@@ -61,6 +85,7 @@ class CommandRunner(QObject):
                 self.doc.push(c)
         except Exception as exc:  # noqa: BLE001
             self._close_macro(abort=True)
+            self._guard_after(token)
             self._report(exc, "", cmd, on_error)
             return True
         self._on_cancel = on_cancel
@@ -86,9 +111,19 @@ class CommandRunner(QObject):
             self.busy_changed.emit(False)
             self._report(exc, tb, cmd, on_error)
 
-        self._job = self.jobs.start(lambda: cmd.prepare(self.doc), done, error, label=label)
+        def work():
+            try:
+                return cmd.prepare(self.doc)
+            finally:
+                self._prepare_returned.emit(token)  # before the result: the record goes first
+
+        self._job = self.jobs.start(work, done, error, label=label)
         self.busy_changed.emit(True)
         return True
+
+    def _guard_after(self, token) -> None:
+        if self.guard is not None and token is not None:
+            self.guard.after(token)
 
     def cancel(self) -> None:
         """Drop the running preparation; the document stays as it was before ``run``."""
@@ -115,3 +150,39 @@ class CommandRunner(QObject):
         if on_error is not None and on_error(exc):
             return
         self.failed.emit(exc, tb, cmd)
+
+
+class GuardedJobs(QObject):
+    """A JobRunner for work that runs native code (the assembly's OSQP): ``start`` calls
+    ``guard.before(None, text=text)`` first and ``guard.after(token)`` once the callable has
+    returned on the worker (cancelled or not). Everything else is the wrapped JobRunner's."""
+
+    _returned = Signal(object)
+
+    def __init__(self, jobs: JobRunner, guard, text: str, parent: QObject | None = None) -> None:
+        super().__init__(parent if parent is not None else jobs)
+        self._jobs = jobs
+        self.guard = guard
+        self.text = text
+        self._returned.connect(self._after)
+
+    def start(self, fn, on_done, on_error, label: str = "Working", background: bool = False):
+        token = self.guard.before(None, text=self.text) if self.guard is not None else None
+
+        @functools.wraps(fn)  # keeps fn's signature: JobRunner passes ``cancelled`` if it takes it
+        def work(*args, **kwargs):
+            try:
+                return fn(*args, **kwargs)
+            finally:
+                self._returned.emit(token)
+
+        return self._jobs.start(work, on_done, on_error, label=label, background=background)
+
+    def _after(self, token) -> None:
+        if self.guard is not None and token is not None:
+            self.guard.after(token)
+
+    def __getattr__(self, name):  # running(), wait(), cancel_all(), busy_changed, ...
+        if name.startswith("_"):
+            raise AttributeError(name)
+        return getattr(self._jobs, name)

@@ -4,6 +4,11 @@ layers and history bottom right; menus, shortcuts, files, the status bar's progr
 The window owns one Document for its whole life: opening a file loads it into a new Document
 first (so a bad file loses nothing) and then adopts its state (``Document.restore_state``).
 Every edit is a command pushed on ``doc.undo_stack``; slow ones go through the CommandRunner.
+
+Native solvers can crash the process. Before any of them runs (a command's ``prepare``, the
+OBSERVATION view's assembly) the window's Autosaver flushes the document as it was before the
+user's action and names the step (``_AutosaveGuard``); at the next start ``offer_recovery``
+says which step was running and recovers the work without it.
 """
 
 from __future__ import annotations
@@ -28,11 +33,11 @@ from PySide6.QtWidgets import (
 
 from sketchforge.document import commands as C
 from sketchforge.document import fileformat as ff
-from sketchforge.document.autosave import Autosaver, autosave_interval
+from sketchforge.document.autosave import Autosaver, autosave_interval, describe_stop, find_recoverable, forget, recover
 from sketchforge.document.layer import Light
 from sketchforge.errors import SketchforgeError
 from sketchforge.qt.canvas import Canvas
-from sketchforge.qt.command_runner import CommandRunner
+from sketchforge.qt.command_runner import CommandRunner, GuardedJobs
 from sketchforge.qt.errors_ui import ask_yes_no, error_text, show_error
 from sketchforge.qt.panels.creation_panel import CreationPanel
 from sketchforge.qt.panels.history_panel import HistoryPanel
@@ -49,6 +54,32 @@ FILE_FILTER = "sketchforge documents (*.json *.sketchforge);;All files (*)"
 MAX_RECENT = 8
 
 
+class _AutosaveGuard:
+    """The CommandRunner's (and the assembly's) guard: the window's current Autosaver writes
+    the state before the solve and names it (``Autosaver.begin_solve``), and forgets the record
+    when the solver has returned. A failing disk is reported but never blocks the solve."""
+
+    def __init__(self, window) -> None:
+        self.window = window
+
+    def before(self, cmd=None, **kwargs):
+        saver = getattr(self.window, "autosaver", None)
+        if saver is None:
+            return None
+        try:
+            return saver, saver.begin_solve(cmd, **kwargs)
+        except (SketchforgeError, OSError) as exc:
+            self.window.show_message(f"autosave before the solve failed: {error_text(exc)}")
+            return None
+
+    def after(self, token) -> None:
+        saver, inner = token
+        try:
+            saver.end_solve(inner)  # the autosaver that started it, even if the window has a new one
+        except (SketchforgeError, OSError) as exc:
+            self.window.show_message(f"autosave failed: {error_text(exc)}")
+
+
 class MainWindow(QMainWindow):
     def __init__(self, doc, host=None, settings: QSettings | None = None, parent=None) -> None:
         super().__init__(parent)
@@ -60,7 +91,8 @@ class MainWindow(QMainWindow):
         self.state = "creation"
         self.current_layer: str | None = None
         self.jobs = JobRunner(self)
-        self.runner = CommandRunner(doc, self.jobs, self)
+        self.solve_guard = _AutosaveGuard(self)
+        self.runner = CommandRunner(doc, self.jobs, self, guard=self.solve_guard)
 
         self._build_widgets()
         self._build_menus()
@@ -79,21 +111,44 @@ class MainWindow(QMainWindow):
     def _autosave(self) -> None:
         try:
             self.autosaver.tick()
-        except SketchforgeError as exc:
+        except (SketchforgeError, OSError) as exc:
             self.show_message(f"autosave failed: {error_text(exc)}")
 
     def offer_recovery(self) -> bool:
-        """At start: offer the newest autosave left by a session that did not end normally.
-        Returns True when one was recovered (it opens as unsaved changes)."""
-        from sketchforge.document.autosave import find_recoverable, recover
-
+        """At start: offer the newest autosave left by a session that did not end normally,
+        naming the step that was running if a solver crashed (that step is not in the
+        autosave, so it is not replayed). Returns True when one was recovered (it opens as
+        unsaved changes). Declining keeps the autosave: it is offered again next time."""
         items = find_recoverable()
+        reports = [i for i in items if not i.has_document]
+        if reports:
+            # A crash during a solve on a document without unsaved changes: nothing to
+            # recover, but the person should know which step brought sketchforge down.
+            lines = []
+            for r in reports:
+                name = r.original or "the untitled document"
+                if any(rec.get("unsaved") for rec in r.running):  # the autosave could not be written
+                    lines.append(f"{describe_stop(r)} The unsaved changes to {name} could not be autosaved before that step; the step was not applied.")
+                else:
+                    lines.append(f"{describe_stop(r)} There were no unsaved changes to {name}, so nothing was lost; that step was not applied.")
+            QMessageBox.information(self, "sketchforge stopped during a computation", "\n\n".join(lines))
+            for r in reports:
+                forget(r)
+        items = [i for i in items if i.has_document]
         if not items:
             return False
         item = items[0]
         where = item.original or "an untitled document"
-        if not ask_yes_no(self, "Recover unsaved work?", f"sketchforge found unsaved work on {where} from a session that did not close normally. Recover it?"):
-            return False
+        stopped = describe_stop(item)
+        if stopped and any(r.get("command") is not None for r in item.running):
+            question = f"{stopped} Your work on {where} up to that step can be recovered; that step was left out. Recover it?"
+        elif stopped:
+            question = f"{stopped} Your work on {where} can be recovered (that computation is not part of it). Recover it?"
+        else:
+            question = f"sketchforge found unsaved work on {where} from a session that did not close normally. Recover it?"
+        question += f"\n\nNo keeps the autosave ({item.path}); it is offered again at the next start."
+        if not ask_yes_no(self, "Recover unsaved work?", question):
+            return False  # the autosave stays where it is: this session never writes or removes it
         try:
             loaded = recover(item, host=self.host)
         except SketchforgeError as exc:
@@ -102,15 +157,22 @@ class MainWindow(QMainWindow):
         self.adopt(loaded, Path(item.original) if item.original else None)
         self.doc.undo_stack.reset_clean()  # recovered work is not saved anywhere yet
         self._sync_title()
-        item.path.unlink(missing_ok=True)  # the new autosaver takes over from here
-        self.autosaver.save_now()
+        try:
+            self.autosaver.save_now()  # the new autosaver takes over from here...
+        except (SketchforgeError, OSError) as exc:
+            self.show_message(f"autosave failed: {error_text(exc)}; the recovered autosave {item.path} is kept")
+            return True
+        forget(item)  # ...and only then is the old one removed
+        if stopped:
+            self.show_message("recovered; the step that was running when sketchforge stopped was left out")
         return True
 
     # --- construction ---------------------------------------------------------------------------
     def _build_widgets(self) -> None:
         doc = self.doc
         self.canvas = Canvas(doc, self.host)
-        self.view3d = View3D(doc, self.jobs)
+        # The assembly runs OSQP (native): guarded like a command's solve.
+        self.view3d = View3D(doc, GuardedJobs(self.jobs, self.solve_guard, "Assemble model", self))
         self.center = QStackedWidget()
         self.center.addWidget(self.canvas)
         self.center.addWidget(self.view3d)
