@@ -6,8 +6,8 @@ import numpy as np
 import shapely
 import shapely.ops
 
-from sketchforge.geometry.isophotes import isophotes
 from sketchforge.geometry.reflectance import LAMBERTIAN
+from sketchforge_isophote_tool.fidelity import honoured_samples, isophote_lines, mean_distance
 from sketchforge_isophote_tool.isophote import picked_isophote
 from sketchforge_isophote_tool.layerdata import layer_data
 from sketchforge_isophote_tool.testing import LIGHT
@@ -29,17 +29,10 @@ def isophote_stroke(mesh, pick, offset=0.0, half=0.25, light=LIGHT):
     return np.asarray(seg.coords), c, iso
 
 
-def stroke_points(stroke_geom, step):
-    return np.concatenate([np.asarray(shapely.segmentize(g, step).coords) for g in getattr(stroke_geom, "geoms", [stroke_geom])])
-
-
 def fidelity(result, light=LIGHT):
-    """(mean distance stroke -> old isophote, mean distance stroke -> new c-isophote, h, new lines),
-    measured at stroke samples inside B•*."""
+    """(mean distance stroke -> old isophote, mean distance stroke -> new c-isophote, h), measured
+    independently of the pipeline on the new mesh, at the stroke samples the edit honours."""
     ld = layer_data(result.mesh, light, LAMBERTIAN)
-    lines = [L for L in isophotes(ld.V2, result.mesh.F, ld.E, result.c)[0] if len(L) > 1]
-    new = shapely.MultiLineString(lines)
-    P = stroke_points(result.stroke, 0.5 * ld.h)
-    P = P[shapely.contains_xy(result.regions.B_star, P[:, 0], P[:, 1])]
-    pts = shapely.points(P)
-    return float(shapely.distance(pts, result.isophote).mean()), float(shapely.distance(pts, new).mean()), ld.h, lines
+    pieces = [np.asarray(g.coords) for g in getattr(result.stroke, "geoms", [result.stroke])]
+    P = honoured_samples(ld.planar, pieces, result.band)
+    return mean_distance(P, result.isophote), mean_distance(P, isophote_lines(ld.planar, ld.E, result.c)), ld.h

@@ -1,22 +1,20 @@
-"""The isophote edit `sculpt()`: errors, consistency, locality, repeated edits, compilations,
-and the `sculpt_isophote` command."""
+"""The isophote edit `sculpt()`: errors, the issue's crash case, locality, accumulation,
+continuity under round-off, the never-worse guard, and the `sculpt_isophote` command."""
 
 import numpy as np
 import pytest
 import shapely
-from scipy.spatial import cKDTree
+import shapely.ops
 
-from sculpt_helpers import isophote_stroke
-from sketchforge.errors import NothingToDoError, SculptError
-from sketchforge.geometry import field_jax
-from sketchforge_isophote_tool import sculpt
+from sculpt_helpers import fidelity, isophote_stroke
+from sketchforge.errors import SculptError, SketchforgeError
+from sketchforge.geometry.contour import segment_crossings
+from sketchforge.geometry.isophotes import isophotes
+from sketchforge.geometry.mesh import Mesh
 from sketchforge.geometry.reflectance import LAMBERTIAN
-from sketchforge_isophote_tool.isophote import band_around
-from sketchforge_isophote_tool.jaxcache import TRACES
-from sketchforge_isophote_tool.layerdata import layer_data
-from sketchforge_isophote_tool.pipeline import DEFAULT_OPTIONS, integrate_from_entry
-from sketchforge_isophote_tool.regions import compute_regions
-from sketchforge_isophote_tool.stroke import clip_to_band, prepare_stroke
+from sketchforge_isophote_tool import sculpt
+from sketchforge_isophote_tool.isophote import picked_isophote
+from sketchforge_isophote_tool.layerdata import layer_data, slope_operators
 from sketchforge_isophote_tool.testing import LIGHT, inflated
 
 ISSUE_STROKE = [[0.1, -0.3], [0.15, -0.1], [0.22, 0.1], [0.3, 0.3]]
@@ -28,11 +26,6 @@ def ellipse():
     return inflated("ellipse", 0.03)
 
 
-@pytest.fixture(scope="module")
-def issue_edit(ellipse):
-    return sculpt(ellipse, LIGHT, [0.2, 0.1], 0.3, ISSUE_STROKE)
-
-
 # --- errors -----------------------------------------------------------------------------------
 
 
@@ -40,13 +33,20 @@ def issue_edit(ellipse):
     "kw,msg",
     [
         ({"stroke": [[0.1, 0.1]]}, "at least 2"),
+        ({"stroke": [[0.1, 0.1], [0.1, 0.1]]}, "at least 2"),
         ({"band": 0.0}, "positive"),
         ({"band": -1}, "positive"),
+        ({"band": "wide"}, "number"),
         ({"pick": [5.0, 5.0]}, "outside the layer"),
+        ({"pick": [np.nan, 0.0]}, "finite"),
         ({"stroke": [[-0.9, -0.1], [-0.8, -0.2]]}, "no part inside the band"),
-        ({"stroke": [[0.1, np.nan], [0.2, 0.2]]}, "non-finite"),
+        ({"stroke": [[0.1, np.nan], [0.2, 0.2]]}, "not a finite"),
+        ({"stroke": [[0.1, 0.2, 0.3]]}, "pairs"),
         ({"stroke": ISSUE_STROKE + [[1e9, 0.3]]}, "too long"),  # was a MemoryError (600 GiB)
-        ({"options": {"solver": "euler"}}, "solver"),
+        ({"stroke": ISSUE_STROKE + [[1e300, 0.3]]}, "within"),
+        ({"options": {"solver": "euler"}}, "unknown sculpt options"),
+        ({"options": {"smoothness": -1}}, "smoothness"),
+        ({"options": {"steps": 0}}, "steps"),
     ],
 )
 def test_invalid_edits_raise_sculpt_error(ellipse, kw, msg):
@@ -55,90 +55,199 @@ def test_invalid_edits_raise_sculpt_error(ellipse, kw, msg):
         sculpt(ellipse, LIGHT, args["pick"], args["band"], args["stroke"], options=args["options"])
 
 
+def test_stroke_inside_the_rim_margin_is_refused_with_what_to_do(ellipse):
+    with pytest.raises(SculptError, match="rim margin.*draw it further inside"):
+        sculpt(ellipse, LIGHT, [0.2, 0.1], 0.3, [[0.999, 0.0], [0.995, 0.05]])
+
+
+# --- the issue's crash case ---------------------------------------------------------------------
+
+
+def _issue_case():
+    """Ellipse 1.0 × 0.7 rotated 0.3 rad (300 points), resolution 0.02, light 45°; the pick is
+    the vertex on the 0.45 isophote closest to the peak; the stroke is the middle half of that
+    isophote shifted 0.1 to its left (an offset curve that crosses itself)."""
+    from sketchforge_inflate.inflate import inflate_stroke
+
+    t = np.linspace(0, 2 * np.pi, 300, endpoint=False)
+    a = 0.3
+    rot = np.array([[np.cos(a), np.sin(a)], [-np.sin(a), np.cos(a)]])
+    mesh = inflate_stroke(np.column_stack([np.cos(t), 0.7 * np.sin(t)]) @ rot, True, {"resolution": 0.02})
+    ld = layer_data(mesh, LIGHT, LAMBERTIAN)
+    iso = shapely.LineString(max(isophotes(ld.V2, mesh.F, ld.E, 0.45)[0], key=len))
+    near = np.nonzero(shapely.distance(shapely.points(ld.V2), iso) < 0.5 * ld.h)[0]
+    pick = ld.V2[near[np.argmin(np.linalg.norm(ld.V2[near] - ld.V2[np.argmax(ld.z)], axis=1))]]
+    _, picked = picked_isophote(ld, pick)
+    mid = np.asarray(shapely.ops.substring(picked, 0.25 * picked.length, 0.75 * picked.length).coords)
+    # Each point moved 0.1 along its own left normal, as a hand would trace it: where the
+    # isophote bends tighter than 0.1 the result folds over itself (a swallowtail).
+    d = np.gradient(mid, axis=0)
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    return mesh, pick, mid + 0.1 * np.column_stack([-d[:, 1], d[:, 0]])
+
+
+def test_issue_crash_case_is_deterministic_and_lands():
+    """Was SIGSEGV on one run and 'Matrix is exactly singular' on the next (duplicate PSLG
+    vertices from a self-crossing stroke). Now: no triangulation at all, the same result on
+    every run, and the isophote where drawn."""
+    mesh, pick, stroke = _issue_case()
+    assert len(segment_crossings(stroke, closed=False))  # the failure class: a self-crossing stroke
+    raw = np.vstack([stroke, stroke[::-1][1:] + [0.0, 1e-3]])  # and back over itself
+    results = [sculpt(mesh, LIGHT, pick, 0.3, stroke) for _ in range(3)]
+    assert all(r.mesh.identical(results[0].mesh) for r in results)
+    before, after, h = fidelity(results[0])
+    assert before > 3 * h and after <= max(2 * h, 0.3 * before)
+    r = sculpt(mesh, LIGHT, pick, 0.3, raw)  # the scribble: cleaned, not a crash
+    assert np.isfinite(r.mesh.V).all()
+
+
 # --- consistency ------------------------------------------------------------------------------
 
 
-@pytest.mark.parametrize("shape,pick", CASES)
-def test_strips_on_unchanged_shading_reproduce_heights(shape, pick):
-    mesh = inflated(shape, 0.03)
-    peak = mesh.V[:, 2].max()
-    st, c, iso = isophote_stroke(mesh, pick)
-    ld = layer_data(mesh, LIGHT, LAMBERTIAN)
-    band = band_around(ld, iso, 0.3)
-    stroke = shapely.LineString(clip_to_band(prepare_stroke(st, ld.h), band, ld.h)[0])
-    margin = 3 * ld.h
-    R = compute_regions(ld, LIGHT, LAMBERTIAN, band, stroke, margin, 2 * ld.h)
-    E_old = field_jax.grid_field_from_nodes(ld.E_nodes, ld.raster[0], ld.raster[1])
-    strips = integrate_from_entry(ld, LIGHT, LAMBERTIAN, R.M, R.entry, E_old, DEFAULT_OPTIONS, margin)
-    S = np.concatenate(strips)
-    S = S[shapely.contains_xy(R.M, S[:, 0], S[:, 1])]  # the samples the reconstruction uses
-    err = np.abs(S[:, 4] - ld.locator.interpolate(ld.z, S[:, :2])) / peak
-    assert err.max() < 0.02
+def test_slope_operators_are_the_vertex_normals_the_app_shades_with(ellipse):
+    from sketchforge.geometry.normals import slopes, vertex_normals
+
+    Gp, Gq = slope_operators(ellipse.V[:, :2], ellipse.F)
+    p, q = slopes(vertex_normals(ellipse.V, ellipse.F), 1e-6)
+    interior = np.setdiff1d(np.arange(ellipse.n_vertices), ellipse.boundary)
+    z = ellipse.V[:, 2]
+    assert np.abs(Gp @ z - p)[interior].max() < 1e-9 and np.abs(Gq @ z - q)[interior].max() < 1e-9
 
 
 @pytest.mark.parametrize("shape,pick", CASES)
 def test_stroke_on_the_isophote_changes_little(shape, pick):
     mesh = inflated(shape, 0.03)
     st, c, _ = isophote_stroke(mesh, pick)
-    r = sculpt(mesh, LIGHT, pick, 0.3, st)
-    assert r.changed.any()
-    assert np.abs(r.mesh.V[:, 2] - mesh.V[:, 2]).max() <= 0.03 * mesh.V[:, 2].max()
+    try:
+        r = sculpt(mesh, LIGHT, pick, 0.3, st)
+    except SketchforgeError as exc:  # "already on the isophote" is an allowed answer
+        assert "nothing to change" in str(exc)
+        return
+    assert np.abs(r.mesh.V[:, 2] - mesh.V[:, 2]).max() <= 0.005 * mesh.V[:, 2].max()
 
 
 # --- locality ---------------------------------------------------------------------------------
 
 
-def test_issue_example_is_local(ellipse, issue_edit):
-    r = issue_edit
-    R = r.regions
-    h = layer_data(ellipse, LIGHT, LAMBERTIAN).h
-    assert r.stroke.difference(R.M.buffer(1e-9)).length < 1e-6  # stroke ⊂ M•
-    assert R.M.difference(R.S.buffer(1e-9)).area < 1e-9  # M• ⊆ S•
-    assert R.B_star.difference(R.M.buffer(1e-9)).area < 1e-9
-    assert R.max_gap <= 2 * h + 1e-12
-    V = ellipse.V
-    inM = shapely.contains_xy(R.M, V[:, 0], V[:, 1])
-    S = np.concatenate(r.strips)
-    d, _ = cKDTree(S[:, :2]).query(V[inM, :2])
-    assert d.max() <= 2 * h
-    assert not r.changed[~inM].any()
-    out = ~inM
-    assert r.mesh.V[out].tobytes() == V[out].tobytes()  # bit-identical outside M•
-    assert np.array_equal(r.mesh.F, ellipse.F) and np.array_equal(r.mesh.V[:, :2], V[:, :2])
-    assert (r.mesh.V[ellipse.boundary, 2] == 0).all()
+def _check_local(mesh, r):
+    V = mesh.V
+    d = shapely.distance(shapely.points(V[:, :2]), r.stroke)
+    reach = r.reach
+    assert reach <= r.band_radius + r.layer.planar.margin + 3 * r.h
+    assert not r.changed[d > reach].any()
+    out = ~r.changed
+    assert r.mesh.V[out].tobytes() == V[out].tobytes()  # bit-identical where unchanged
+    assert np.array_equal(r.mesh.F, mesh.F) and np.array_equal(r.mesh.V[:, :2], V[:, :2])
+    assert (r.mesh.V[mesh.boundary, 2] == 0).all()
     assert np.isfinite(r.mesh.V).all() and (r.mesh.V[:, 2] >= 0).all()
-    assert set(r.timings) >= {"strips", "regions", "interpolation", "integration", "rbf"}
 
 
-def test_several_edits_in_a_row(ellipse):
-    mesh = ellipse
-    for pick, off in [([0.2, 0.1], 0.08), ([0.2, 0.1], -0.05), ([-0.3, -0.3], 0.06)]:
-        st, _, _ = isophote_stroke(mesh, pick, off)
-        r = sculpt(mesh, LIGHT, pick, 0.3, st)
-        assert np.isfinite(r.mesh.V).all() and r.changed.any()
-        assert r.mesh.V[~r.changed].tobytes() == mesh.V[~r.changed].tobytes()
-        mesh = r.mesh
+def test_edit_is_local(ellipse):
+    st, _, _ = isophote_stroke(ellipse, [0.2, 0.1], 0.1)
+    r = sculpt(ellipse, LIGHT, [0.2, 0.1], 0.3, st)
+    _check_local(ellipse, r)
+    assert r.changed.sum() > 100
+    assert set(r.timings) >= {"layer", "stroke", "zones", "shading", "heights", "check", "total"}
 
 
-def test_no_recompile_for_a_layer_of_another_size():
-    from sketchforge_isophote_tool import warm_up
+def test_ten_edits_then_a_null_edit_drifts_below_one_percent():
+    """Accumulation (issue point 6): every edit local; after 10 edits a stroke drawn on an
+    isophote moves heights by at most 1% of the peak (6% with the strip pipeline's seams)."""
+    rng = np.random.default_rng(7)
+    mesh = inflated("ellipse", 0.03)
+    done = 0
+    while done < 10:
+        ld = layer_data(mesh, LIGHT, LAMBERTIAN)
+        pick = ld.V2[rng.choice(np.nonzero((ld.planar.d_rim > 0.2) & (ld.E > 0.1))[0])]
+        st, _, _ = isophote_stroke(mesh, pick, rng.uniform(2, 4) * ld.h * rng.choice([-1, 1]), half=0.2)
+        try:
+            r = sculpt(mesh, LIGHT, pick, 0.25, st)
+        except SculptError:
+            continue
+        _check_local(mesh, r)
+        mesh, done = r.mesh, done + 1
+    peak = mesh.V[:, 2].max()
+    for pick in ([0.1, 0.05], [-0.2, 0.2], [0.3, -0.2]):
+        st, _, _ = isophote_stroke(mesh, pick, half=0.2)
+        try:
+            r = sculpt(mesh, LIGHT, pick, 0.25, st)
+        except SketchforgeError as exc:
+            assert "nothing to change" in str(exc)
+            continue
+        assert np.abs(r.mesh.V[:, 2] - mesh.V[:, 2]).max() <= 0.01 * peak
 
-    warm_up(buckets=(64, 256))
-    before = dict(TRACES)
-    for shape, res in [("ellipse", 0.04), ("pillow", 0.035)]:
-        m = inflated(shape, res)
-        st, _, _ = isophote_stroke(m, [0.2, 0.1], 0.05)
-        sculpt(m, LIGHT, [0.2, 0.1], 0.3, st)
-    assert dict(TRACES) == before
+
+# --- continuity ---------------------------------------------------------------------------------
 
 
-def test_stroke_far_from_strips_is_nothing_to_do_or_sculpt_error(ellipse):
-    # a stroke inside the band but entirely inside the rim margin
-    with pytest.raises((NothingToDoError, SculptError)):
-        sculpt(ellipse, LIGHT, [0.2, 0.1], 0.3, [[0.999, 0.0], [0.995, 0.05]])
+def _perturbed(a, rng, rel=1e-12):
+    a = np.asarray(a, dtype=np.float64)
+    return a * (1.0 + rel * rng.uniform(-1, 1, a.shape))
+
+
+@pytest.mark.parametrize("shape,pick,offset", [("ellipse", [0.2, 0.1], 0.1), ("m", [0.3, 0.45], -0.08), ("pillow", [-0.3, 0.2], 0.06)])
+def test_round_off_in_any_input_moves_heights_below_1e6_of_the_peak(shape, pick, offset):
+    """Issue point 5: 1e-12 relative noise on the pick, the stroke or the mesh changes the result
+    by at most 1e-6 of the peak (no discrete choice flips on round-off)."""
+    rng = np.random.default_rng(3)
+    mesh = inflated(shape, 0.03)
+    st, _, _ = isophote_stroke(mesh, pick, offset)
+    ref = sculpt(mesh, LIGHT, pick, 0.3, st).mesh.V[:, 2]
+    peak = mesh.V[:, 2].max()
+    for trial in range(2):
+        noisy_mesh = Mesh(_perturbed(mesh.V, rng), mesh.F, mesh.boundary, mesh.junction)
+        for m, p, s in ((mesh, _perturbed(pick, rng), st), (mesh, pick, _perturbed(st, rng)), (noisy_mesh, pick, st)):
+            z = sculpt(m, LIGHT, p, 0.3, s).mesh.V[:, 2]
+            assert np.abs(z - ref).max() <= 1e-6 * peak
+
+
+# --- never worse ------------------------------------------------------------------------------
+
+
+def test_an_edit_that_would_end_farther_falls_back_or_is_refused(ellipse, monkeypatch):
+    """If the height solve's answer moved the isophote away from the stroke, the pipeline keeps
+    the best partial edit that brings it closer, or refuses with what to do: never a silent
+    worse result."""
+    import sketchforge_isophote_tool.pipeline as pl
+
+    real = pl.solve_heights
+    st, _, _ = isophote_stroke(ellipse, [0.2, 0.1], 0.1)
+    good = sculpt(ellipse, LIGHT, [0.2, 0.1], 0.3, st)
+    # Overshoot: 8x the change puts the isophote past the stroke, farther than before...
+    monkeypatch.setattr(pl, "solve_heights", lambda *a, **k: 8.0 * real(*a, **k))
+    r = sculpt(ellipse, LIGHT, [0.2, 0.1], 0.3, st)
+    assert r.fraction < 1.0 and r.after < r.before
+    # ...and the wrong sign can only be refused.
+    monkeypatch.setattr(pl, "solve_heights", lambda *a, **k: -real(*a, **k))
+    with pytest.raises(SculptError, match="farther from the stroke.*draw"):
+        sculpt(ellipse, LIGHT, [0.2, 0.1], 0.3, st)
+    assert good.fraction == 1.0
+
+
+# --- thin parts -------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("width", [0.2, 0.3])
+def test_a_thin_limb_can_be_sculpted(width):
+    from sketchforge_inflate.inflate import inflate_stroke
+
+    arc = np.column_stack([np.linspace(-0.7, 0.7, 50), 0.25 * np.sin(np.linspace(-1.5, 1.5, 50))])
+    outline = np.asarray(shapely.LineString(arc).buffer(0.5 * width, quad_segs=16).exterior.coords)[:-1]
+    mesh = inflate_stroke(outline, True, {"resolution": 0.03})
+    ld = layer_data(mesh, LIGHT, LAMBERTIAN)
+    # A pick on the lit flank of the limb's middle, halfway between its ridge and its rim.
+    flank = (np.abs(ld.V2[:, 0]) < 0.2) & (np.abs(ld.planar.d_rim - 0.25 * width) < 0.5 * ld.h) & (ld.E > 0.2)
+    pick = ld.V2[np.nonzero(flank)[0][0]]
+    st, _, _ = isophote_stroke(mesh, pick, 2.0 * ld.h, half=0.3)
+    r = sculpt(mesh, LIGHT, pick, 0.4 * width, st)
+    before, after, h = fidelity(r)
+    assert before > 1.5 * h and after <= max(2 * h, 0.3 * before)
+    assert r.changed.sum() > 20
 
 
 # --- the command ------------------------------------------------------------------------------
+
+RING = [[np.cos(t), 0.7 * np.sin(t)] for t in np.linspace(0, 2 * np.pi, 200, endpoint=False)]
 
 
 def test_command_journal_undo_redo(real_host):
@@ -146,8 +255,7 @@ def test_command_journal_undo_redo(real_host):
 
     doc = Document(host=real_host)
     doc.execute({"command": "add_layer", "id": "body"})
-    doc.execute({"command": "set_contour", "layer": "body", "points": (np.array(
-        [[np.cos(t), 0.7 * np.sin(t)] for t in np.linspace(0, 2 * np.pi, 200, endpoint=False)])).tolist(), "closed": True})
+    doc.execute({"command": "set_contour", "layer": "body", "points": RING, "closed": True})
     before = doc.layer("body")
     entry = {"command": "sculpt_isophote", "layer": "body", "pick": [0.2, 0.1], "band": 0.3, "stroke": ISSUE_STROKE}
     cmd = doc.execute(entry)
@@ -171,18 +279,16 @@ def test_parameter_change_reapplies_edits_with_their_own_light(real_host):
 
     doc = Document(host=real_host)
     doc.execute({"command": "add_layer", "id": "body"})
-    ring = [[np.cos(t), 0.7 * np.sin(t)] for t in np.linspace(0, 2 * np.pi, 200, endpoint=False)]
-    doc.execute({"command": "set_contour", "layer": "body", "points": ring, "closed": True})
+    doc.execute({"command": "set_contour", "layer": "body", "points": RING, "closed": True})
     doc.execute({"command": "sculpt_isophote", "layer": "body", "pick": [0.2, 0.1], "band": 0.3, "stroke": ISSUE_STROKE})
     edited = doc.layer("body")
     doc.execute({"command": "set_light", "direction": [-1.0, 0.0, 0.0]})
     doc.execute({"command": "set_inflate_params", "layer": "body", "params": {"inflation": 1.3}})
     rebuilt = doc.layer("body")
     assert len(rebuilt.edits) == 1
-    # Same result as: inflate at 1.3 with the original light, then the same edit.
     ref = Document(host=real_host)
     ref.execute({"command": "add_layer", "id": "body"})
-    ref.execute({"command": "set_contour", "layer": "body", "points": ring, "closed": True})
+    ref.execute({"command": "set_contour", "layer": "body", "points": RING, "closed": True})
     ref.execute({"command": "set_inflate_params", "layer": "body", "params": {"inflation": 1.3}})
     ref.execute({"command": "sculpt_isophote", "layer": "body", "pick": [0.2, 0.1], "band": 0.3, "stroke": ISSUE_STROKE})
     assert rebuilt.mesh.identical(ref.layer("body").mesh)
@@ -207,12 +313,11 @@ def test_third_party_reflectance_model_sculpts_like_lambertian():
             return [ReflectanceModel("half_lambert", lambda n, l: ((jnp.dot(n, l) + 1.0) / 2.0) ** 2)]
 
     host = make_test_host(HalfLambert(), entry_points=True, allowlist=["inflate", "isophote_tool"])
-    ring = [[np.cos(t), 0.7 * np.sin(t)] for t in np.linspace(0, 2 * np.pi, 200, endpoint=False)]
     results = {}
     for model in ("lambertian", "half_lambert"):
         doc = Document(host=host)
         doc.execute({"command": "add_layer", "id": "body"})
-        doc.execute({"command": "set_contour", "layer": "body", "points": ring, "closed": True})
+        doc.execute({"command": "set_contour", "layer": "body", "points": RING, "closed": True})
         before = doc.layer("body")
         entry = {"command": "sculpt_isophote", "layer": "body", "pick": [0.2, 0.1], "band": 0.3,
                  "stroke": ISSUE_STROKE, "model": model}

@@ -8,41 +8,11 @@ makes. All loops run over bucket slots (a few tens at most), never over points.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 import numpy as np
 
 #: Barycentric slack: a point whose smallest barycentric coordinate is above -BARY_TOL counts as
 #: inside, so points on shared edges and at vertices are always found despite rounding.
 BARY_TOL = 1e-10
-
-
-@dataclass(frozen=True)
-class Buckets:
-    """The locator's grid of triangle buckets, for consumers that need the raw arrays
-    (e.g. :func:`sketchforge.geometry.field_jax.make_bucket_field` turns them into a padded
-    JAX table).
-
-    Attributes
-    ----------
-    origin : (2,) float64
-        Lower-left corner of cell (0, 0).
-    h : float
-        Cell size (square cells).
-    nx, ny : int
-        Cells along x and y.
-    start : (nx*ny + 1,) int64
-        Cell ``cy * nx + cx`` lists ``tris[start[cell]:start[cell + 1]]``.
-    tris : (t,) int64
-        Triangle indices sorted by cell.
-    """
-
-    origin: np.ndarray
-    h: float
-    nx: int
-    ny: int
-    start: np.ndarray
-    tris: np.ndarray
 
 
 class TriangleLocator:
@@ -113,13 +83,6 @@ class TriangleLocator:
         ij[:, 0] = np.clip(ij[:, 0], 0, self._nx - 1)
         ij[:, 1] = np.clip(ij[:, 1], 0, self._ny - 1)
         return ij
-
-    @property
-    def buckets(self) -> Buckets:
-        """The grid of triangle buckets (see :class:`Buckets`); read-only views."""
-        if self._m == 0:
-            raise ValueError("an empty triangulation has no buckets")
-        return Buckets(self._origin, float(self._h), self._nx, self._ny, self._cell_start, self._cell_tris)
 
     def locate(self, P: np.ndarray, nearest: bool = False) -> tuple[np.ndarray, np.ndarray]:
         """Containing triangle and barycentric coordinates of each point.

@@ -2,7 +2,7 @@
 
 A model is a :class:`~sketchforge.plugins.registry.ReflectanceModel` whose ``R(n, l)`` is
 written with ``jax.numpy``. It must be signed (negative in shadow, never ``max(·, 0)``): the
-strip equations follow -∇R and the c = 0 isophote edit needs a gradient in the shadow too
+height solve follows ∇R and the c = 0 isophote edit needs a gradient in the shadow too
 (thesis ch. 4 intro). R_p and R_q come from ``jax.grad`` of R composed with
 n(p, q) = (-p, -q, 1) / sqrt(1 + p² + q²), so a plugin model works everywhere the Lambertian one
 does. Everything here runs in float64 (:func:`sketchforge.numerics.enable_x64`).
@@ -73,7 +73,7 @@ def reflectance_pq(model: ReflectanceModel) -> Callable:
     -------
     callable
         ``R(p, q, l)``: p, q scalar float64, l (3,) float64 -> scalar float64. Traceable, so it
-        can be called inside another ``jax.jit``/``vmap`` (the strip right-hand side).
+        can be called inside another ``jax.jit``/``vmap``.
     """
     return jax.jit(_pq_form(model.R))
 

@@ -47,7 +47,7 @@ class SculptIsophote(ReplaceLayerCommand):
     band: float = 0.3
     stroke: list = field(default_factory=list)
     model: str = "lambertian"
-    #: The last SculptResult (regions, strips, timings) for display; not saved.
+    #: The last SculptResult (edit zone, fidelity, timings) for display; not saved.
     result: object = field(default=None, repr=False, compare=False)
 
     def text(self) -> str:

@@ -1,8 +1,14 @@
-"""Per-layer data every step of an edit needs, computed once per (mesh, light, model).
+"""Per-layer data every step of an edit needs, computed once and cached.
 
-p and q (from the vertex normals), the signed shading E per vertex, the outline polygon, the rim-margin region
-Ω*, a point locator, and the smooth JAX grid fields (p, q and E). Cached on the mesh's bytes so
-that a second edit on an unchanged layer (or undo/redo back to it) skips this work.
+Two levels, because an edit changes only heights:
+
+:class:`PlanarData` depends on the layer's triangulation in the drawing plane (V2, F) only,
+so it survives every edit of that layer: the slope operators (p, q as exactly linear functions
+of the heights), the squared Laplacian, the lumped mass, the outline, a point locator, the
+distance of each vertex to the outline and the layer's local width there, and the rim margin.
+
+:class:`LayerData` adds what depends on the heights, the light and the reflectance model:
+p, q, the shading E and R's slope gradient at every vertex.
 """
 
 from __future__ import annotations
@@ -13,98 +19,188 @@ from dataclasses import dataclass
 
 import numpy as np
 import scipy.ndimage as ndi
+import scipy.sparse as sp
 import shapely
 
-from sketchforge.geometry import field_jax
+from sketchforge.geometry import guard
+from sketchforge.geometry.fairing import squared_laplacian_matrix
+from sketchforge.geometry.laplacian import laplacian_and_mass
 from sketchforge.geometry.locate import TriangleLocator
 from sketchforge.geometry.mesh import Mesh
-from sketchforge.geometry.normals import slopes, vertex_normals
 from sketchforge.geometry.reflectance import evaluate_pq
 from sketchforge.plugins.registry import ReflectanceModel
 
+#: Default rim margin: max(RIM_EDGES · h, RIM_SIZE · size), size = 2·area/perimeter.
+RIM_EDGES = 3.0
+RIM_SIZE = 0.12
+#: Where the layer is thin, the rim margin is at most this fraction of the local half-width,
+#: so a limb 0.2 wide keeps an editable middle (thesis ch. 5: Ω* vanished on thin parts).
+RIM_WIDTH_FRACTION = 0.2
 
-#: Smallest |n_z| used for p = -n_x/n_z: contour vertices' averaged normals are steep but must
-#: stay finite (4.5: boundary normals come from the adjacent triangles). Twice the core's
-#: default clamp: slopes at most 50, which the strip solvers' step sizes were tuned for.
-MIN_NZ = 0.02
+
+@dataclass
+class PlanarData:
+    """What an edit needs from a layer's triangulation in the drawing plane.
+
+    Attributes
+    ----------
+    V2 : (n, 2) float64
+    F : (m, 3) int64
+    h : float
+        Mean edge length.
+    Gp, Gq : (n, n) scipy.sparse.csr_matrix float64
+        Slope operators: p = Gp @ z, q = Gq @ z are exactly the slopes of the area-weighted
+        vertex normals the app shades with (see :func:`slope_operators`).
+    Q : (n, n) scipy.sparse.csr_matrix float64
+        Squared Laplacian Lᵀ M⁻¹ L (cotangent L, lumped M).
+    mass : (n,) float64
+        Lumped vertex areas.
+    outline : shapely.Polygon
+    locator : TriangleLocator
+    is_contour : (n,) bool
+    d_rim : (n,) float64
+        Distance of each vertex to the outline.
+    margin : float
+        The layer's rim margin: max(3h, 0.12·size).
+    margin_v : (n,) float64
+        The rim margin at each vertex: ``margin``, or less where the layer is thin.
+    width_grid : tuple
+        ``(origin (2,), spacing, W (gx, gy))``: the local half-width sampled on a grid, for
+        :meth:`margin_at`.
+    """
+
+    V2: np.ndarray
+    F: np.ndarray
+    h: float
+    Gp: sp.csr_matrix
+    Gq: sp.csr_matrix
+    Q: sp.csr_matrix
+    mass: np.ndarray
+    outline: object
+    locator: TriangleLocator
+    is_contour: np.ndarray
+    d_rim: np.ndarray
+    margin: float
+    margin_v: np.ndarray
+    width_grid: tuple
+
+    def margin_at(self, P: np.ndarray) -> np.ndarray:
+        """The rim margin (k,) at points P (k, 2): bilinear in the local-width grid, so it is
+        continuous in P."""
+        origin, spacing, W = self.width_grid
+        u = (np.asarray(P, np.float64).reshape(-1, 2) - origin) / spacing
+        rho = ndi.map_coordinates(W, u.T, order=1, mode="nearest")
+        return np.minimum(self.margin, RIM_WIDTH_FRACTION * rho)
+
+    def omega_star(self, margin: float | None = None):
+        """The layer minus a rim margin (shapely geometry), for display."""
+        return self.outline.buffer(-(self.margin if margin is None else margin))
 
 
 @dataclass
 class LayerData:
-    """Derived data of one layer under one light and reflectance model.
+    """A layer under one light and reflectance model.
 
     Attributes
     ----------
     mesh : Mesh
-    V2 : (n, 2) float64
+    planar : PlanarData
     z : (n,) float64
-    h : float
-        Mean edge length (the mesh resolution).
     pq : (n, 2) float64
-        Surface gradient from the area-weighted vertex normals.
+        Slopes of the vertex normals.
     E : (n,) float64
-        Signed shading R(n, l) per vertex.
-    outline : shapely.Polygon
-        The layer's contour.
-    locator : TriangleLocator
-        Point location on the layer (its ``interpolate`` snaps points just outside).
-    raster : tuple
-        ``(origin, spacing, face, bary)`` of the fixed-size grid (see field_jax).
-    pq_field : field_jax.GridField
-        Smooth p, q (2 channels).
-    E_nodes : (G, G, 1) float64
-        E sampled at the grid nodes (extended outside the outline).
-    dist_nodes : (G, G) float64
-        Approximate distance from each node to the outline, positive inside, 0 outside.
-    is_contour : (n,) bool
+        Signed shading R(p, q) per vertex: what the app shows.
+    light : (3,) float64
+    model : ReflectanceModel
     """
 
     mesh: Mesh
-    V2: np.ndarray
+    planar: PlanarData
     z: np.ndarray
-    h: float
     pq: np.ndarray
     E: np.ndarray
-    outline: object
-    locator: TriangleLocator
-    raster: tuple
-    pq_field: object
-    E_nodes: np.ndarray
-    dist_nodes: np.ndarray
-    is_contour: np.ndarray
+    light: np.ndarray
+    model: ReflectanceModel
 
-    def omega_star(self, margin: float):
-        """The layer minus a rim margin (shapely geometry)."""
-        return self.outline.buffer(-margin)
+    # Shorthands for the planar fields the pipeline reads most.
+    @property
+    def V2(self) -> np.ndarray:
+        return self.planar.V2
+
+    @property
+    def h(self) -> float:
+        return self.planar.h
+
+    @property
+    def outline(self):
+        return self.planar.outline
+
+    @property
+    def locator(self) -> TriangleLocator:
+        return self.planar.locator
+
+    @property
+    def is_contour(self) -> np.ndarray:
+        return self.planar.is_contour
 
 
-_CACHE: "OrderedDict[tuple, LayerData]" = OrderedDict()
-_CACHE_SIZE = 8
+def slope_operators(V2: np.ndarray, F: np.ndarray) -> tuple[sp.csr_matrix, sp.csr_matrix]:
+    """Sparse Gp, Gq (n, n) with (Gp z, Gq z) = slopes of the area-weighted vertex normals.
+
+    For a height field, a face's unnormalised normal (b − a) × (c − a) is 2A·(−p_f, −q_f, 1)
+    with A its signed area in the plane and (p_f, q_f) the gradient of the linear z on it. The
+    area-weighted vertex normal (:func:`sketchforge.geometry.normals.vertex_normals`) sums
+    these, so its slopes are the plane-area-weighted mean of the face gradients: exactly linear
+    in z. The solver can thus work on the very shading the person sees.
+
+    Parameters
+    ----------
+    V2 : (n, 2) float64
+    F : (m, 3) int64, counter-clockwise
+
+    Returns
+    -------
+    Gp, Gq : (n, n) scipy.sparse.csr_matrix float64
+    """
+    n, m = len(V2), len(F)
+    a, b, c = V2[F[:, 0]], V2[F[:, 1]], V2[F[:, 2]]
+    A2 = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
+    rows = np.repeat(np.arange(m), 3)
+    gx, gy = np.empty((m, 3)), np.empty((m, 3))
+    for k in range(3):
+        e = V2[F[:, (k + 2) % 3]] - V2[F[:, (k + 1) % 3]]  # the edge opposite corner k
+        gx[:, k] = -e[:, 1] / A2
+        gy[:, k] = e[:, 0] / A2
+    Dx = sp.csr_matrix((gx.ravel(), (rows, F.ravel())), shape=(m, n))
+    Dy = sp.csr_matrix((gy.ravel(), (rows, F.ravel())), shape=(m, n))
+    avg = sp.csr_matrix((np.repeat(0.5 * A2, 3), (F.ravel(), rows)), shape=(n, m))
+    total = np.asarray(avg.sum(axis=1)).ravel()
+    avg = sp.diags(np.divide(1.0, total, out=np.zeros(n), where=total != 0)) @ avg
+    return (avg @ Dx).tocsr(), (avg @ Dy).tocsr()
 
 
-def mesh_key(mesh: Mesh) -> bytes:
-    h = hashlib.blake2b(digest_size=16)
-    for a in (mesh.V, mesh.F, mesh.boundary):
-        h.update(a.tobytes())
-    return h.digest()
-
-
-def layer_data(mesh: Mesh, light: np.ndarray, model: ReflectanceModel) -> LayerData:
-    """Cached :class:`LayerData` of ``mesh`` under ``light`` (3,) and ``model``."""
-    key = (mesh_key(mesh), tuple(np.round(np.asarray(light, float), 15)), model.name, id(model.R))
-    if key in _CACHE:
-        _CACHE.move_to_end(key)
-        return _CACHE[key]
-    ld = _compute(mesh, np.asarray(light, np.float64), model)
-    _CACHE[key] = ld
-    while len(_CACHE) > _CACHE_SIZE:
-        _CACHE.popitem(last=False)
-    return ld
+def _width_grid(outline, h: float, reach: float) -> tuple:
+    """Local half-width of the layer on a grid of spacing ~h/2: the largest distance to the
+    outline within ``reach`` of each node (a max filter of the distance transform), so a thin
+    limb reads its own half-width even next to its rim, and a large body reads at least
+    ``reach``."""
+    lo = np.array(outline.bounds[:2]) - 2 * h
+    hi = np.array(outline.bounds[2:]) + 2 * h
+    spacing = 0.5 * h
+    # A grid of at most ~600² nodes whatever the layer: coarser spacing on huge layers.
+    spacing = max(spacing, float((hi - lo).max()) / 600.0)
+    nx, ny = (np.ceil((hi - lo) / spacing).astype(int) + 1).tolist()
+    X, Y = np.meshgrid(lo[0] + spacing * np.arange(nx), lo[1] + spacing * np.arange(ny), indexing="ij")
+    inside = shapely.contains_xy(outline, X, Y)
+    D = ndi.distance_transform_edt(inside) * spacing
+    r = max(int(np.ceil(reach / spacing)), 1)
+    W = ndi.maximum_filter(D, size=2 * r + 1, mode="constant")
+    return lo, spacing, W
 
 
 def outline_polygon(mesh: Mesh):
-    """The layer outline as a valid shapely Polygon."""
-    loop = mesh.V[mesh.boundary, :2]
+    """The layer outline as a valid, counter-clockwise shapely Polygon."""
+    loop = guard.points(mesh.V[mesh.boundary, :2], "layer outline")
     poly = shapely.Polygon(loop)
     if not poly.is_valid:
         poly = shapely.make_valid(poly)
@@ -113,38 +209,89 @@ def outline_polygon(mesh: Mesh):
     return shapely.geometry.polygon.orient(poly, 1.0)
 
 
-def _compute(mesh: Mesh, light: np.ndarray, model: ReflectanceModel) -> LayerData:
-    V, F = mesh.V, mesh.F
-    V2 = np.ascontiguousarray(V[:, :2])
+def _planar(mesh: Mesh) -> PlanarData:
+    V2 = np.ascontiguousarray(mesh.V[:, :2])
+    F = np.ascontiguousarray(mesh.F, dtype=np.int64)
     e = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
     h = float(np.linalg.norm(V2[e[:, 0]] - V2[e[:, 1]], axis=1).mean())
-    N = vertex_normals(V, F)
-    pq = np.column_stack(slopes(N, MIN_NZ))
-    # E from the clamped slopes (not from N) so that E = R(p, q) holds exactly at every vertex.
-    E = evaluate_pq(model, pq[:, 0], pq[:, 1], light)[0]
-    raster = field_jax.layer_raster(V2, F)
-    origin, spacing, face, bary = raster
-    # p, q and E from the vertex normals, i.e. the shading the person sees. (Measured: strips
-    # on this unchanged shading reproduce inflated layers' heights to 0.1-0.2% RMS, as well as
-    # p, q, E derived from a B-spline of z; see the report in tests/test_sculpt.py.)
-    nodes = field_jax.resample(np.column_stack([pq, E]), F, face, bary)
-    pq_field = field_jax.grid_field_from_nodes(nodes[:, :, :2], origin, spacing)
-    covered = face >= 0
-    dist = ndi.distance_transform_edt(covered) * spacing
-    is_contour = np.zeros(len(V), bool)
+    Gp, Gq = slope_operators(V2, F)
+    L, M = laplacian_and_mass(V2, F)
+    outline = outline_polygon(mesh)
+    is_contour = np.zeros(len(V2), bool)
     is_contour[mesh.boundary] = True
-    return LayerData(
-        mesh=mesh,
+    d_rim = shapely.distance(shapely.points(V2), outline.exterior)
+    d_rim[is_contour] = 0.0
+    size = 2.0 * outline.area / outline.length
+    margin = max(RIM_EDGES * h, RIM_SIZE * size)
+    grid = _width_grid(outline, h, margin / RIM_WIDTH_FRACTION)
+    pd = PlanarData(
         V2=V2,
-        z=np.array(V[:, 2]),
+        F=F,
         h=h,
-        pq=pq,
-        E=E,
-        outline=outline_polygon(mesh),
+        Gp=Gp,
+        Gq=Gq,
+        Q=squared_laplacian_matrix(L, M).tocsr(),
+        mass=np.asarray(M.diagonal(), dtype=np.float64),
+        outline=outline,
         locator=TriangleLocator(V2, F),
-        raster=raster,
-        pq_field=pq_field,
-        E_nodes=nodes[:, :, 2:3],
-        dist_nodes=dist,
         is_contour=is_contour,
+        d_rim=d_rim,
+        margin=margin,
+        margin_v=np.zeros(0),
+        width_grid=grid,
     )
+    pd.margin_v = pd.margin_at(V2)
+    return pd
+
+
+_PLANAR: "OrderedDict[bytes, PlanarData]" = OrderedDict()
+_CACHE: "OrderedDict[tuple, LayerData]" = OrderedDict()
+_CACHE_SIZE = 8
+
+
+def _digest(*arrays) -> bytes:
+    h = hashlib.blake2b(digest_size=16)
+    for a in arrays:
+        h.update(np.ascontiguousarray(a).tobytes())
+    return h.digest()
+
+
+def planar_data(mesh: Mesh) -> PlanarData:
+    """Cached :class:`PlanarData` of a layer (keyed on its planar positions and triangles)."""
+    key = _digest(mesh.V[:, :2], mesh.F, mesh.boundary)
+    hit = _PLANAR.get(key)
+    if hit is None:
+        hit = _PLANAR[key] = _planar(mesh)
+        while len(_PLANAR) > _CACHE_SIZE:
+            _PLANAR.popitem(last=False)
+    else:
+        _PLANAR.move_to_end(key)
+    return hit
+
+
+def mesh_key(mesh: Mesh) -> bytes:
+    return _digest(mesh.V, mesh.F, mesh.boundary)
+
+
+def shading(pd: PlanarData, z: np.ndarray, light: np.ndarray, model: ReflectanceModel):
+    """Slopes (n, 2), shading E (n,) and its slope gradient R_p, R_q (n,) for heights z (n,)."""
+    p, q = pd.Gp @ z, pd.Gq @ z
+    R, Rp, Rq = evaluate_pq(model, p, q, light)
+    return np.column_stack([p, q]), R, Rp, Rq
+
+
+def layer_data(mesh: Mesh, light: np.ndarray, model: ReflectanceModel) -> LayerData:
+    """Cached :class:`LayerData` of ``mesh`` under ``light`` (3,) and ``model``."""
+    light = np.asarray(light, np.float64).reshape(3)
+    key = (mesh_key(mesh), light.tobytes(), model.name, id(model.R))
+    hit = _CACHE.get(key)
+    if hit is not None:
+        _CACHE.move_to_end(key)
+        return hit
+    pd = planar_data(mesh)
+    z = np.array(mesh.V[:, 2])
+    pq, E, _, _ = shading(pd, z, light, model)
+    ld = _CACHE[key] = LayerData(mesh, pd, z, pq, E, light, model)
+    while len(_CACHE) > _CACHE_SIZE:
+        _CACHE.popitem(last=False)
+    return ld

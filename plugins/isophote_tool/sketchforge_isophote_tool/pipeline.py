@@ -1,54 +1,62 @@
 """The isophote edit as a pure function: ``sculpt(mesh, light, pick, band, stroke) -> SculptResult``.
 
-Pipeline (thesis 4.3-4.6, see ARCHITECTURE.md steps 4-8):
+Pipeline (thesis 4.3–4.6; what differs from the thesis and why is said in each module):
 
-1. pick -> isovalue c (0 in shadow), isophote through the pick, band = isophote ⊕ disk(band)
-2. stroke: smoothed, resampled, clipped to the band
-3. region strips from the contour -> S•, B•, B•*, M•                      (regions.py)
-4. shading in B•* re-interpolated with e = c on the stroke                 (interp.py)
-5. characteristic strips from the entry curve of ∂M•                       (characteristics.py)
-6. heights of M•'s vertices by local multiquadric RBF                      (reconstruct.py)
+1. pick -> isovalue c (0 in shadow), the isophote through the pick, band = isophote ⊕ disk
+   (:mod:`.isophote`)
+2. stroke: loops, hooks and back-tracking removed, smoothed, resampled, clipped to the band
+   (:mod:`.stroke`, :mod:`sketchforge.geometry.strokes`)
+3. zones, all by distance to the stroke d_s (continuous in every input):
+   edit zone   band ∩ {d_s < band radius}: where the shading may change (4.3's B•*);
+   support U   {d_s < band radius + ring}: the vertices whose height may change; ring = rim
+               margin + 2 edge lengths, so no vertex farther than band + margin + 2h from the
+               stroke ever moves (4.3's M•, kept local: see :mod:`.heights`)
+4. the shading change δE in the edit zone, E = c on the stroke (:mod:`.shading`, 4.4)
+5. heights: Gauss–Newton on R(p, q) = E_old + δE over U (:mod:`.heights`, 4.5–4.6)
+6. never worse: if the isophote ends farther from the stroke than it started, the best
+   partial edit is kept (half, a quarter of the change); if none is closer, the edit is
+   refused with what to draw instead (:mod:`.fidelity`).
 """
 
 from __future__ import annotations
 
 import time
+from collections import OrderedDict
 from dataclasses import dataclass, field
 
 import numpy as np
 import shapely
+from scipy.spatial import cKDTree
 
 from sketchforge.errors import NothingToDoError, SculptError, SolverError
-from sketchforge.geometry import field_jax
 from sketchforge.geometry.mesh import Mesh
 from sketchforge.geometry.reflectance import LAMBERTIAN
 from sketchforge.plugins.registry import ReflectanceModel
 
-from .characteristics import CHAR_STEPS, SOLVERS, integrate_characteristics
-from .interp import LocalShading, interpolate_shading
+from .fidelity import honoured_samples, isophote_lines, mean_distance
+from .heights import GN_STEPS, solve_heights
 from .isophote import band_around, picked_isophote
-from .layerdata import LayerData, layer_data
-from .gaps import StripGaps, insert_strips
-from .regions import Regions, compute_regions
-from .reconstruct import reconstruct_heights
-from .stroke import clip_to_band, even_parameters, polyline_at, prepare_stroke
+from .layerdata import LayerData, layer_data, shading
+from .shading import bary_rows, shading_change
+from .stroke import clip_to_band, prepare_stroke, stroke_samples
 
-#: Options of :func:`sculpt` (lengths "in edge lengths" are multiples of the mean edge length h).
+#: Options of :func:`sculpt`; lengths "in edge lengths" are multiples of the mean edge length h.
 DEFAULT_OPTIONS = {
-    "solver": "rk4",  # strip solver: "rk4" (fixed step), "tsit5" or "kvaerno5" (diffrax)
-    "rtol": 1e-7,  # tolerance of the adaptive solvers
-    "rim_margin": None,  # Ω* = layer minus this margin (drawing units); None: max(3h, 0.12·size)
-    "shading_energy": "delta",  # "delta" or "absolute" (thesis 4.4.1 as printed), see interp.py
-    "max_gap": 2.0,  # neighbouring region strips near the stroke at most this far (edge lengths)
-    "seed_spacing": 0.5,  # spacing of characteristic seeds on the entry curve (edge lengths)
-    "cover": 1.5,  # refine characteristic seeds until strips are this close (edge lengths)
-    "smoothing": 0.05,  # RBF smoothing λ (thesis 4.6.1)
-    "kernel_scale": 4.0,  # multiquadric scale (edge lengths): ε = 1 / (kernel_scale · h)
-    "neighbors": 40,  # RBF local support size
-    "ring": 3.0,  # width of the ring of untouched support vertices (edge lengths)
+    "smoothness": 1.0,  # α: weight of the squared Laplacian of the height change, in units of h²
+    "ring": None,  # width of the ring around the edit zone where heights return to the old ones; None: rim margin + 2h
+    "ring_weight": 0.1,  # data weight at the outer edge of the ring (1 in the edit zone)
+    "rim_margin": None,  # drawing units; None: max(3h, 0.12·size), less where the layer is thin
+    "steps": GN_STEPS,  # Gauss–Newton steps
+    "stroke_weight": 20.0,  # weight of E = c along the stroke in the height solve, against a band of width h
+    "never_worse": True,  # fall back to a partial edit, or refuse, rather than end farther from the stroke
 }
 
-MAX_COVER_ROUNDS = 4
+#: Partial edits tried, in order, when the full one would leave the isophote farther from the
+#: stroke than before.
+FALLBACK_FRACTIONS = (0.5, 0.25)
+#: Distances below this many edge lengths are below what first-order vertex normals resolve:
+#: an edit that ends within it of the stroke is not "farther", whatever it started from.
+RESOLUTION_EDGES = 0.25
 
 
 @dataclass
@@ -68,15 +76,20 @@ class SculptResult:
     band : shapely geometry
     stroke : shapely (Multi)LineString
         The cleaned stroke clipped to the band.
-    regions : Regions
-        S•, B•, B•*, M•, Ω*, the region strips and the entry curve.
-    strips : list of (j, 5) float64
-        Integrated characteristic strips (x, y, p, q, z).
-    shading : LocalShading
-        The interpolated shading on B•*.
+    dE : (n,) float64
+        The shading change at the vertices (the target of the height solve is E + dE).
+    before, after : float
+        Mean distance from the stroke to the isophote before and after, in drawing units.
+    fraction : float
+        1 for the full edit; 0.5 or 0.25 when only part of it brought the isophote closer.
     timings : dict[str, float]
         Seconds per step.
     options : dict
+    layer : LayerData
+        The layer before the edit (for :meth:`characteristics`).
+    band_radius : float
+    reach : float
+        Band radius plus ring: the farthest a changed vertex can be from the stroke.
     """
 
     mesh: Mesh
@@ -85,83 +98,118 @@ class SculptResult:
     isophote: object
     band: object
     stroke: object
-    regions: Regions
-    strips: list
-    shading: LocalShading
+    dE: np.ndarray
+    before: float
+    after: float
+    fraction: float = 1.0
     timings: dict = field(default_factory=dict)
     options: dict = field(default_factory=dict)
+    layer: object = field(default=None, repr=False)
+    band_radius: float = 0.0
+    reach: float = 0.0
+
+    @property
+    def edit_zone(self):
+        """Where the shading changes: the band within one band radius of the stroke (shapely;
+        built on request, for display)."""
+        return self.band.intersection(self.stroke.buffer(self.band_radius))
+
+    @property
+    def support(self):
+        """Where heights may change: the edit zone and its ring, inside the layer (shapely)."""
+        return self.stroke.buffer(self.reach).intersection(self.layer.outline)
+
+    def new_isophotes(self) -> list:
+        """The isophote E = c on the edited surface (polylines (k, 2) within the support), for
+        display: where the redrawn isophote actually landed."""
+        from .layerdata import shading as shade
+
+        pd = self.layer.planar
+        _, E, _, _ = shade(pd, self.mesh.V[:, 2], self.layer.light, self.layer.model)
+        near = shapely.intersection(isophote_lines(pd, E, self.c), self.support)
+        return [np.asarray(g.coords) for g in getattr(near, "geoms", [near]) if g.geom_type == "LineString" and not g.is_empty]
+
+    @property
+    def h(self) -> float:
+        """The layer's edge length (fidelity is best read in edge lengths)."""
+        return self.layer.h
+
+    def characteristics(self, n: int = 15) -> list:
+        """Base characteristics through the stroke (polylines (k, 2)), for display; traced on
+        request, not during the edit (see :mod:`.characteristics`)."""
+        from .characteristics import base_characteristics
+
+        pieces = [np.asarray(g.coords) for g in getattr(self.stroke, "geoms", [self.stroke])]
+        return base_characteristics(self.layer, pieces, self.reach, n)
 
 
-def _mask_nodes(ld: LayerData, region, dilate: float) -> np.ndarray:
-    """1 on grid nodes inside ``region`` dilated by ``dilate``, else 0 (G, G)."""
-    origin, spacing, face, _ = ld.raster
-    G = face.shape[0]
-    reg = region.buffer(dilate)
-    lo = np.clip(np.floor((np.array(reg.bounds[:2]) - origin) / spacing).astype(int), 0, G - 1)
-    hi = np.clip(np.ceil((np.array(reg.bounds[2:]) - origin) / spacing).astype(int), 0, G - 1)
-    out = np.zeros((G, G))
-    ix = np.arange(lo[0], hi[0] + 1)
-    iy = np.arange(lo[1], hi[1] + 1)
-    X, Y = np.meshgrid(origin[0] + spacing * ix, origin[1] + spacing * iy, indexing="ij")
-    out[lo[0] : hi[0] + 1, lo[1] : hi[1] + 1] = shapely.contains_xy(reg, X, Y)
-    return out
+def _options(options: dict | None) -> dict:
+    opts = dict(DEFAULT_OPTIONS)
+    if options:
+        unknown = set(options) - set(DEFAULT_OPTIONS)
+        if unknown:
+            raise SculptError(f"unknown sculpt options: {sorted(unknown)}; known: {sorted(DEFAULT_OPTIONS)}")
+        opts.update(options)
+    for key in ("smoothness", "ring_weight", "stroke_weight"):
+        v = float(opts[key])
+        if not (np.isfinite(v) and v >= 0):
+            raise SculptError(f"the sculpt option {key!r} must be a number >= 0, got {opts[key]!r}")
+    if not (isinstance(opts["steps"], (int, np.integer)) and 1 <= opts["steps"] <= 50):
+        raise SculptError(f"the sculpt option 'steps' must be an integer in 1..50, got {opts['steps']!r}")
+    return opts
 
 
-def edited_field(ld: LayerData, shading: LocalShading):
-    """GridField of the edited shading: old E, replaced on B•*'s triangulation."""
-    origin, spacing, face, _ = ld.raster
-    nodes = ld.E_nodes.copy()
-    if len(shading.F):
-        f2, b2 = field_jax.rasterize(shading.V, shading.F, origin, spacing, face.shape[0])
-        cov = f2 >= 0
-        nodes[cov, 0] = np.einsum("kc,kc->k", b2[cov], shading.e[shading.F[f2[cov]]])
-    return field_jax.grid_field_from_nodes(nodes, origin, spacing)
+def _band_radius(band) -> float:
+    try:
+        r = float(band)
+    except (TypeError, ValueError, OverflowError):
+        raise SculptError(f"the band radius must be a number, got {band!r}") from None
+    if not (np.isfinite(r) and r > 0):
+        raise SculptError(f"the band radius must be a positive number, got {band}")
+    return r
 
 
-def integrate_from_entry(ld, light, model, M, entry, E_field, opts, margin) -> list[np.ndarray]:
-    """Seed characteristic strips on the entry curves and refine until they cover M•."""
-    h = ld.h
-    mask = _mask_nodes(ld, M, 1.5 * float(ld.raster[1]))
-    minx, miny, maxx, maxy = M.bounds
-    length = 1.5 * float(np.hypot(maxx - minx, maxy - miny)) + 2 * h
-    ds = length / CHAR_STEPS
-    if opts["solver"] != "rk4":
-        ds = 0.5 * h  # initial step of the adaptive solvers
-    gaps_of = StripGaps(M)
+_PICKS: "OrderedDict[tuple, tuple]" = OrderedDict()
 
-    def run(P):
-        pq = field_jax.eval_points(ld.pq_field, P)[0]
-        z = ld.locator.interpolate(ld.z, P)
-        y0 = np.column_stack([P, pq, z])
-        return integrate_characteristics(
-            y0, E_field, mask, ld.dist_nodes, light, model, ds, length, 0.5 * margin, opts["solver"], opts["rtol"]
-        )
 
-    params = [even_parameters(P, opts["seed_spacing"] * h) for P in entry]
-    pts = [polyline_at(P, t) for P, t in zip(entry, params)]
-    flat = run(np.concatenate(pts)) if pts else []
-    strips, k = [], 0
-    for t in params:
-        strips.append(flat[k : k + len(t)])
-        k += len(t)
-    for _ in range(MAX_COVER_ROUNDS):
-        new_pts, where = [], []
-        for c, (P, t) in enumerate(zip(entry, params)):
-            st = strips[c]
-            gaps = gaps_of([(st[i], st[i + 1]) for i in range(len(st) - 1)])
-            bad = np.nonzero((gaps > opts["cover"] * h) & (np.diff(t) > 1e-3 * h))[0]
-            if len(bad):
-                nt = 0.5 * (t[bad] + t[bad + 1])
-                new_pts.append(polyline_at(P, nt))
-                where.append((c, nt))
-        if not new_pts:
-            break
-        res = run(np.concatenate(new_pts))
-        k = 0
-        for c, nt in where:
-            params[c], strips[c] = insert_strips(params[c], strips[c], nt, res[k : k + len(nt)])
-            k += len(nt)
-    return [s for st in strips for s in st]
+def _pick(ld: LayerData, pick, r: float):
+    """(c, isophote, band) for a pick, cached: redrawing the stroke for the same pick (the
+    app's live preview does it on every throttled mouse move) skips the isophote and band."""
+    p = np.asarray(pick, dtype=np.float64).reshape(-1)
+    key = (id(ld), p.tobytes(), r)
+    hit = _PICKS.get(key)
+    if hit is not None and hit[0] is ld:
+        _PICKS.move_to_end(key)
+        return hit[1:]
+    c, iso = picked_isophote(ld, pick)
+    band_geom = band_around(ld, iso, r)
+    shapely.prepare(band_geom)
+    _PICKS[key] = (ld, c, iso, band_geom)
+    while len(_PICKS) > 8:
+        _PICKS.popitem(last=False)
+    return c, iso, band_geom
+
+
+def _smoothstep(t: np.ndarray) -> np.ndarray:
+    t = np.clip(t, 0.0, 1.0)
+    return t * t * (3.0 - 2.0 * t)
+
+
+def _distance_to(pieces: list[np.ndarray], P: np.ndarray, h: float, upper: float) -> np.ndarray:
+    """Distance (k,) from points P (k, 2) to the stroke pieces, capped at ``upper``: the nearest
+    of samples every h/8 along them (within h/64 of the exact distance; a minimum of
+    continuous functions, so continuous in the stroke)."""
+    S = np.concatenate([_densify(p, 0.125 * h) for p in pieces])
+    d, _ = cKDTree(S).query(P, distance_upper_bound=upper)
+    return np.minimum(d, upper)
+
+
+def _densify(P: np.ndarray, step: float) -> np.ndarray:
+    seg = np.linalg.norm(np.diff(P, axis=0), axis=1)
+    k = np.maximum(np.ceil(seg / step).astype(int), 1)
+    t = np.concatenate([np.arange(n) / n for n in k])
+    i = np.repeat(np.arange(len(seg)), k)
+    return np.vstack([P[i] + t[:, None] * (P[i + 1] - P[i]), P[-1:]])
 
 
 def sculpt(
@@ -173,7 +221,7 @@ def sculpt(
     model: ReflectanceModel = LAMBERTIAN,
     options: dict | None = None,
 ) -> SculptResult:
-    """Redraw the isophote through ``pick`` along ``stroke``; recompute heights where affected.
+    """Redraw the isophote through ``pick`` along ``stroke``; recompute the heights it affects.
 
     Parameters
     ----------
@@ -199,77 +247,93 @@ def sculpt(
     Raises
     ------
     SculptError
-        Invalid pick, band or stroke (the message says which).
+        Invalid pick, band or stroke, or a stroke the surface cannot follow (the message says
+        what to draw instead).
     NothingToDoError
-        The edit changes nothing (e.g. empty impacted region).
+        The stroke lies on the isophote already.
     SolverError
         A solver produced non-finite values.
     """
-    opts = dict(DEFAULT_OPTIONS)
-    if options:
-        unknown = set(options) - set(DEFAULT_OPTIONS)
-        if unknown:
-            raise SculptError(f"unknown sculpt options: {sorted(unknown)}")
-        opts.update(options)
-    if opts["shading_energy"] not in ("delta", "absolute"):
-        raise SculptError(f"unknown shading energy {opts['shading_energy']!r}; choose 'delta' or 'absolute'")
-    if opts["solver"] not in SOLVERS:
-        raise SculptError(f"unknown strip solver {opts['solver']!r}; choose one of {list(SOLVERS)}")
-    try:
-        band = float(band)
-    except (TypeError, ValueError):
-        raise SculptError(f"the band radius must be a number, got {band!r}") from None
-    if not (np.isfinite(band) and band > 0):
-        raise SculptError(f"the band radius must be a positive number, got {band}")
+    opts = _options(options)
+    r = _band_radius(band)
     light = np.asarray(light, np.float64).reshape(3)
-    T = {}
+    T: dict = {}
     t0 = time.perf_counter()
     ld = layer_data(mesh, light, model)
-    h = ld.h
-    # Near the rim p, q are large and a small error in them is a large error in z: strips
-    # started or run closer than ~3 edge lengths from the contour drift (measured: 8% of the
-    # peak on the pillow with a 2h margin, 1% with 4h).
-    # The default is also tied to the layer's size (2·area/perimeter, the radius of a disk) so
-    # the same edit at two resolutions recomputes the same region.
-    size = 2.0 * ld.outline.area / ld.outline.length
-    margin = max(3.0 * h, 0.12 * size) if opts["rim_margin"] is None else float(opts["rim_margin"])
+    pd, h = ld.planar, ld.h
+    margin = pd.margin if opts["rim_margin"] is None else float(opts["rim_margin"])
+    if not (np.isfinite(margin) and margin >= 0):
+        raise SculptError(f"the rim margin must be a number >= 0, got {opts['rim_margin']!r}")
     T["layer"] = time.perf_counter() - t0
 
     t = time.perf_counter()
-    c, iso = picked_isophote(ld, pick)
-    P = prepare_stroke(stroke, h)
-    band_geom = band_around(ld, iso, band)
-    pieces = clip_to_band(P, band_geom, h)
+    c, iso, band_geom = _pick(ld, pick, r)
+    pieces = clip_to_band(prepare_stroke(stroke, h), band_geom, h)
     stroke_geom = shapely.MultiLineString(pieces) if len(pieces) > 1 else shapely.LineString(pieces[0])
-    T["isophote"] = time.perf_counter() - t
+    honoured = honoured_samples(pd, pieces, band_geom)
+    if len(honoured) == 0:
+        local = float(np.max(np.minimum(pd.margin_at(np.concatenate(pieces)), margin)))
+        raise SculptError(
+            f"the stroke runs within the rim margin ({local:.2g} from the outline here), where the surface "
+            "turns vertical and cannot follow a redrawn isophote: draw it further inside the shape"
+        )
+    before = mean_distance(honoured, iso)
+    T["stroke"] = time.perf_counter() - t
 
     t = time.perf_counter()
-    regions = compute_regions(ld, light, model, band_geom, stroke_geom, margin, opts["max_gap"] * h, timings=T)
-    T["regions"] = time.perf_counter() - t - T.get("strips", 0.0)
-    if not regions.entry:
-        raise NothingToDoError("no strip enters the impacted region inside the rim margin")
+    ring = margin + 2.0 * h if opts["ring"] is None else float(opts["ring"])
+    interior = ~pd.is_contour
+    d_s = _distance_to(pieces, pd.V2, h, r + ring)
+    in_band = shapely.contains_xy(band_geom, pd.V2[:, 0], pd.V2[:, 1])
+    free_E = in_band & (d_s < r) & interior
+    U = (d_s < r + ring) & interior
+    margin_v = np.minimum(pd.margin_v, margin)
+    rim = _smoothstep(pd.d_rim / np.maximum(margin_v, 1e-300)) if margin > 0 else np.ones(len(pd.V2))
+    w0 = float(opts["ring_weight"])
+    w = rim * (w0 + (1.0 - w0) * (1.0 - _smoothstep((d_s - r) / max(ring, 1e-300))))
+    samples = stroke_samples(pieces)
+    ds_rim = shapely.distance(shapely.points(samples.P), pd.outline.exterior)
+    m_s = np.minimum(pd.margin_at(samples.P), margin)
+    w_s = _smoothstep(ds_rim / np.maximum(m_s, 1e-300)) if margin > 0 else np.ones(len(ds_rim))
+    T["zones"] = time.perf_counter() - t
 
     t = time.perf_counter()
-    shading = interpolate_shading(ld, regions.B_star, stroke_geom, c, opts["shading_energy"])
-    E_field = edited_field(ld, shading)
-    T["interpolation"] = time.perf_counter() - t
+    dE = shading_change(pd, ld.E, free_E, samples, w_s, c)
+    T["shading"] = time.perf_counter() - t
 
     t = time.perf_counter()
-    strips = integrate_from_entry(ld, light, model, regions.M, regions.entry, E_field, opts, margin)
-    T["integration"] = time.perf_counter() - t
-
-    t = time.perf_counter()
-    z, inM = reconstruct_heights(
-        ld, regions.M, strips, opts["smoothing"], opts["kernel_scale"], int(opts["neighbors"]), opts["ring"], margin
+    B = bary_rows(pd, samples.P, np.ones(len(samples.P)))
+    dz = solve_heights(
+        ld, ld.E + dE, U, w, float(opts["smoothness"]), int(opts["steps"]),
+        (B, samples.w * w_s), c, float(opts["stroke_weight"]),
     )
-    T["rbf"] = time.perf_counter() - t
+    T["heights"] = time.perf_counter() - t
+
+    t = time.perf_counter()
+    fraction, z, after = 1.0, None, np.inf
+    for frac in (1.0,) + (FALLBACK_FRACTIONS if opts["never_worse"] else ()):
+        zf = np.maximum(ld.z + frac * dz, 0.0)  # heights >= 0 by contract
+        zf[pd.is_contour] = 0.0
+        _, Ef, _, _ = shading(pd, zf, light, model)
+        af = mean_distance(honoured, isophote_lines(pd, Ef, c))
+        if z is None or af < after:
+            fraction, z, after = frac, zf, af
+        if not opts["never_worse"] or af <= max(before, RESOLUTION_EDGES * h):
+            break
+    T["check"] = time.perf_counter() - t
+    if opts["never_worse"] and after > max(before, RESOLUTION_EDGES * h):
+        raise SculptError(
+            f"the surface cannot take this shading here: every version of the edit left the isophote farther "
+            f"from the stroke ({after / h:.1f} edge lengths) than it was ({before / h:.1f}); draw the new "
+            "isophote closer to the old one, or further from the rim"
+        )
     if not np.isfinite(z).all():
         raise SolverError("the edit produced non-finite heights; the layer was left unchanged")
-    if not inM.any():
-        raise NothingToDoError("the impacted region holds no vertex of the layer")
-    z[ld.is_contour] = 0.0
-    z[~inM] = ld.z[~inM]  # bit-identical outside M•
-    new_mesh = mesh.with_heights(z)
     changed = z != ld.z
+    if not changed.any():
+        raise NothingToDoError("the stroke lies on the isophote already: nothing to change")
+    new_mesh = mesh.with_heights(z)
     T["total"] = time.perf_counter() - t0
-    return SculptResult(new_mesh, changed, c, iso, band_geom, stroke_geom, regions, strips, shading, T, opts)
+    return SculptResult(
+        new_mesh, changed, c, iso, band_geom, stroke_geom, dE, before, after, fraction, T, opts, ld, r, r + ring
+    )

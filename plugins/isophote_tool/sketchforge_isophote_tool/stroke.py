@@ -1,11 +1,16 @@
-"""Clean a redrawn isophote stroke: validate, smooth, resample, clip to the band."""
+"""The redrawn isophote: cleaned, smoothed, resampled, clipped to the band, and sampled for
+the line integral that pins the new shading to it."""
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 import shapely
 
 from sketchforge.errors import SculptError
+from sketchforge.geometry import guard
+from sketchforge.geometry.strokes import clean_open_stroke
 
 #: Most points of a resampled stroke (spacing h/2): ~50 000 edge lengths, far beyond any drawn
 #: stroke. A journal entry with a far-off point would otherwise allocate without bound (a point
@@ -36,7 +41,8 @@ def resample_polyline(P: np.ndarray, spacing: float) -> np.ndarray:
 
 
 def prepare_stroke(stroke, h: float, smooth_iters: int = 3) -> np.ndarray:
-    """Validate, smooth and resample a stroke at spacing h/2.
+    """Clean (loops, hooks, back-tracking: :func:`sketchforge.geometry.strokes.clean_open_stroke`),
+    resample at spacing h/2 and smooth a drawn stroke.
 
     Parameters
     ----------
@@ -44,36 +50,44 @@ def prepare_stroke(stroke, h: float, smooth_iters: int = 3) -> np.ndarray:
     h : float
         Mesh edge length.
     smooth_iters : int
-        Passes of (1/4, 1/2, 1/4) smoothing with fixed ends, after resampling: removes hand
-        jitter below the mesh resolution without moving the ends.
+        Passes of (1/4, 1/2, 1/4) smoothing after resampling (ends fixed on an open stroke):
+        removes hand jitter below the mesh resolution.
+
+    Returns
+    -------
+    (j, 2) float64
+        A simple polyline; a closed one (a whole isophote redrawn) repeats its first point.
 
     Raises
     ------
     SculptError
-        Fewer than 2 distinct points, non-finite values, or a stroke longer than
-        ``MAX_STROKE_SAMPLES`` half edge lengths.
+        Not a list of finite points, fewer than 2 distinct points, longer than
+        ``MAX_STROKE_SAMPLES`` half edge lengths, or nothing left after cleaning.
     """
-    try:
-        P = np.asarray(stroke, np.float64)
-    except (TypeError, ValueError):
-        raise SculptError("the stroke must be a list of [x, y] points") from None
-    if P.ndim != 2 or P.shape[1] != 2:
-        raise SculptError(f"the stroke must be a list of [x, y] points, got shape {P.shape}")
-    if not np.isfinite(P).all():
-        raise SculptError("the stroke has non-finite coordinates")
-    keep = np.concatenate([[True], np.linalg.norm(np.diff(P, axis=0), axis=1) > 1e-12])
-    P = P[keep]
-    if len(P) < 2:
-        raise SculptError("the stroke needs at least 2 distinct points")
-    length = _arc_lengths(P)[-1]
+    P = guard_length(stroke, h)
+    clean = clean_open_stroke(P, h, error=SculptError)
+    P = resample_polyline(clean.points, 0.5 * h)
+    for _ in range(smooth_iters):
+        if clean.closed:
+            ring = P[:-1]
+            ring = 0.25 * np.roll(ring, 1, axis=0) + 0.5 * ring + 0.25 * np.roll(ring, -1, axis=0)
+            P = np.vstack([ring, ring[:1]])
+        else:
+            P[1:-1] = 0.25 * P[:-2] + 0.5 * P[1:-1] + 0.25 * P[2:]
+    return P
+
+
+def guard_length(stroke, h: float) -> np.ndarray:
+    """The stroke as finite (k, 2) float64 points, refusing one too long to resample."""
+    from sketchforge.geometry.strokes import validate_points
+
+    P = validate_points(stroke, SculptError, "stroke")
+    length = float(np.linalg.norm(np.diff(P, axis=0), axis=1).sum()) if len(P) > 1 else 0.0
     if length > MAX_STROKE_SAMPLES * 0.5 * h:
         raise SculptError(
             f"the stroke is {length:.3g} drawing units long, too long for a layer of edge length "
             f"{h:.3g} (at most {MAX_STROKE_SAMPLES * 0.5 * h:.3g}): draw it over the layer"
         )
-    P = resample_polyline(P, 0.5 * h)
-    for _ in range(smooth_iters):
-        P[1:-1] = 0.25 * P[:-2] + 0.5 * P[1:-1] + 0.25 * P[2:]
     return P
 
 
@@ -85,11 +99,43 @@ def clip_to_band(P: np.ndarray, band, h: float) -> list[np.ndarray]:
     SculptError
         If no part of the stroke lies inside the band.
     """
-    inter = shapely.LineString(P).intersection(band)
+    line = guard.geometry(shapely.LineString(P), "stroke")
+    inter = line.intersection(band)
     pieces = []
     for g in getattr(inter, "geoms", [inter]):
         if g.geom_type == "LineString" and not g.is_empty and g.length >= 0.5 * h:
             pieces.append(resample_polyline(np.asarray(g.coords), 0.5 * h))
     if not pieces:
-        raise SculptError("the stroke has no part inside the band around the picked isophote")
+        raise SculptError("the stroke has no part inside the band around the picked isophote: draw it inside the dashed band")
     return pieces
+
+
+@dataclass
+class StrokeSamples:
+    """Quadrature of a line integral along the stroke pieces: ∫ f ds ≈ Σ w_k f(P_k).
+
+    Attributes
+    ----------
+    P : (k, 2) float64
+        Two Gauss points per segment of every piece.
+    w : (k,) float64
+        Their weights (half the segment length each).
+    """
+
+    P: np.ndarray
+    w: np.ndarray
+
+
+def stroke_samples(pieces: list[np.ndarray]) -> StrokeSamples:
+    """Two-point Gauss quadrature on every segment of the pieces: exact for the squared
+    residual of a linear field along a segment, and the points move continuously with the
+    stroke (no sample appears or vanishes as it is redrawn a hair differently)."""
+    g = 0.5 / np.sqrt(3.0)
+    pts, wts = [], []
+    for P in pieces:
+        seg = np.diff(P, axis=0)
+        half = 0.5 * np.linalg.norm(seg, axis=1)
+        for t in (0.5 - g, 0.5 + g):
+            pts.append(P[:-1] + t * seg)
+            wts.append(half)
+    return StrokeSamples(np.concatenate(pts), np.concatenate(wts))

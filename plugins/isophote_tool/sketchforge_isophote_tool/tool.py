@@ -25,6 +25,10 @@ API (what a front end calls)
     thread and push it later. Raises SculptError without a pick.
 ``command_dict(stroke) -> dict``
     Its journal entry.
+``preview_job(stroke) -> callable``
+    A zero-argument function computing the edit the stroke would make (a ``SculptResult``,
+    not applied), with the layer, light, pick, band and model captured now: a front end runs
+    it on a worker thread while the stroke is still being drawn and shows ``result.mesh``.
 ``press / move / release``
     The headless gesture. press-release without moving picks (as ``pick_at``); after a pick,
     press-move-release redraws: ``release`` builds the command, pushes it synchronously,
@@ -220,6 +224,19 @@ class SculptIsophoteTool(Tool):
     def command_for(self, stroke) -> SculptIsophote:
         """The command for the current pick and ``stroke``, built but not pushed."""
         return SculptIsophote.from_dict(self.command_dict(stroke))
+
+    def preview_job(self, stroke):
+        """A pure function computing the edit ``stroke`` would make now (see the module
+        docstring). Raises SculptError without a pick."""
+        if self.pick is None or self.layer_id not in self.doc.layer_ids():
+            raise SculptError(PICK_FIRST)
+        from .pipeline import sculpt
+
+        mesh = self.doc.layer(self.layer_id).mesh
+        light = np.array(self.doc.light.direction, dtype=np.float64)
+        pick, band, model = self.pick.copy(), float(self.band), self.model()
+        points = np.array(stroke, dtype=np.float64).reshape(-1, 2)
+        return lambda: sculpt(mesh, light, pick, band, points, model)
 
     # --- headless gesture ---------------------------------------------------------------------
     def _add(self, p: np.ndarray) -> None:

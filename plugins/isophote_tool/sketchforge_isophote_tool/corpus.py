@@ -1,0 +1,301 @@
+"""A randomized corpus of isophote edits on shapes nobody here drew (fixed seeds).
+
+Shared by ``tests/test_sculpt_corpus.py`` (a reduced subset in CI) and
+``benchmarks/bench_sculpt_corpus.py`` (the full set). Everything is deterministic in its seed.
+
+Shapes (:func:`random_outline`), each a closed outline in drawing units, about 1–2.5 across:
+
+``blob``
+    A smooth random star-shaped curve r(θ) = R(1 + Σ a_k cos(kθ + φ_k)), k = 2..5.
+``star``
+    5–8 rounded points with deep notches (r varies by ±35–50%).
+``thin``
+    A bent limb 0.2–0.3 wide (a buffered arc).
+``concave``
+    A "C", "U", "L" or "S" letter stroke 0.3–0.45 wide (deep concavities, thin parts).
+
+Edits (:func:`random_edit`): a pick on a lit vertex away from the rim, the isophote through it,
+and a stroke made from a piece of that isophote:
+
+``shift``   moved sideways by 1–5 edge lengths;
+``bump``    moved by 1–5 edge lengths in the middle, ends kept (a sine profile);
+``loop``    a shift or bump with a small loop (radius 1–2 edge lengths) drawn into it;
+``outside`` a shift whose ends run on past the band (the part outside must be ignored).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import shapely
+import shapely.ops
+
+SHAPES = ("blob", "star", "thin", "concave")
+KINDS = ("shift", "bump", "loop", "outside")
+
+
+def _ring(poly) -> np.ndarray:
+    return np.asarray(poly.exterior.coords)[:-1]
+
+
+def random_outline(kind: str, rng: np.random.Generator, n: int = 400) -> np.ndarray:
+    """A closed outline (k, 2) float64 of a random shape of ``kind`` (see the module docstring)."""
+    t = np.linspace(0.0, 2 * np.pi, n, endpoint=False)
+    if kind == "blob":
+        r = np.ones_like(t)
+        for k in range(2, 6):
+            r += rng.uniform(0.0, 0.22 / k) * np.cos(k * t + rng.uniform(0, 2 * np.pi))
+        a = rng.uniform(0.75, 1.05)
+        P = np.column_stack([a * r * np.cos(t), rng.uniform(0.6, 0.9) * r * np.sin(t)])
+    elif kind == "star":
+        k = int(rng.integers(5, 9))
+        depth = rng.uniform(0.35, 0.5)
+        # A raised cosine keeps the points rounded (a plain cosine star's notches are sharp).
+        w = 0.5 * (1 + np.cos(k * t + rng.uniform(0, 2 * np.pi)))
+        r = rng.uniform(0.85, 1.1) * (1 - depth + 2 * depth * w**1.5)
+        P = np.column_stack([r * np.cos(t), r * np.sin(t)])
+    elif kind == "thin":
+        width = rng.uniform(0.2, 0.3)
+        bend = rng.uniform(0.4, 1.2)
+        s = np.linspace(-0.7, 0.7, 60)
+        arc = np.column_stack([np.sin(bend * s) / bend, (1 - np.cos(bend * s)) / bend])
+        P = _ring(shapely.LineString(arc).buffer(0.5 * width, quad_segs=16).simplify(0.002))
+    elif kind == "concave":
+        width = rng.uniform(0.3, 0.45)
+        letter = str(rng.choice(["C", "U", "L", "S"]))
+        if letter == "C":
+            a = np.linspace(0.5, 2 * np.pi - 0.5, 60)
+            path = 0.75 * np.column_stack([np.cos(a), np.sin(a)])
+        elif letter == "U":
+            a = np.linspace(np.pi, 2 * np.pi, 30)
+            path = np.concatenate([[[-0.6, 0.8]], 0.6 * np.column_stack([np.cos(a), np.sin(a)]), [[0.6, 0.8]]])
+        elif letter == "L":
+            path = np.array([[-0.5, 0.9], [-0.5, -0.6], [0.7, -0.6]])
+        else:
+            a = np.linspace(0, 1.5 * np.pi, 40)
+            top = 0.45 * np.column_stack([np.cos(a), np.sin(a)]) + [0, 0.45]
+            bot = 0.45 * np.column_stack([-np.cos(a + 0.5 * np.pi), np.sin(a + 0.5 * np.pi)]) + [0, -0.45]
+            path = np.concatenate([top[::-1], bot])
+        P = _ring(shapely.LineString(path).buffer(0.5 * width, quad_segs=16).simplify(0.002))
+    else:
+        raise ValueError(f"unknown shape kind {kind!r}; choose one of {SHAPES}")
+    theta = rng.uniform(0, 2 * np.pi)
+    Rm = np.array([[np.cos(theta), -np.sin(theta)], [np.sin(theta), np.cos(theta)]])
+    return P @ Rm.T
+
+
+@dataclass
+class Edit:
+    """One corpus edit: the inputs of ``sculpt`` and what the stroke asks for.
+
+    Attributes
+    ----------
+    shape, kind : str
+    pick : (2,) float64
+    band : float
+    stroke : (k, 2) float64
+    move : float
+        The requested sideways move in edge lengths (signed: > 0 towards the darker side).
+    intended : (j, 2) float64
+        The stroke as meant: without the loop and the run-on ends (what fidelity is measured
+        against).
+    """
+
+    shape: str
+    kind: str
+    pick: np.ndarray
+    band: float
+    stroke: np.ndarray
+    move: float
+    intended: np.ndarray
+
+
+def _offset(seg: shapely.LineString, profile: np.ndarray, n: int = 80) -> np.ndarray:
+    """Points of ``seg`` moved along its left normal by ``profile`` (callable of t in [0, 1])."""
+    t = np.linspace(0.0, 1.0, n)
+    P = np.array([seg.interpolate(s, normalized=True).coords[0] for s in t])
+    d = np.gradient(P, axis=0)
+    d /= np.linalg.norm(d, axis=1, keepdims=True) + 1e-300
+    left = np.column_stack([-d[:, 1], d[:, 0]])
+    return P + profile(t)[:, None] * left
+
+
+def _with_loop(P: np.ndarray, radius: float, rng: np.random.Generator) -> np.ndarray:
+    """Insert a small closed loop (a circle of ``radius`` tangent to the path) at a random point."""
+    k = int(rng.integers(len(P) // 4, 3 * len(P) // 4))
+    d = P[k + 1] - P[k - 1]
+    d /= np.linalg.norm(d)
+    side = float(rng.choice([-1.0, 1.0]))
+    centre = P[k] + radius * side * np.array([-d[1], d[0]])
+    a0 = np.arctan2(P[k, 1] - centre[1], P[k, 0] - centre[0])
+    # Around the circle in the direction that continues the path forward (a hand-drawn curl).
+    a = a0 + side * np.linspace(0.0, 2 * np.pi, 24)[1:-1]
+    loop = centre + radius * np.column_stack([np.cos(a), np.sin(a)])
+    return np.concatenate([P[: k + 1], loop, P[k:]])
+
+
+def random_edit(shape: str, ld, light, rng: np.random.Generator, kind: str | None = None, band: float | None = None):
+    """A random edit on a layer (see the module docstring), or None when the layer has no
+    suitable isophote near the random pick (the caller draws again).
+
+    Parameters
+    ----------
+    shape : str
+        The shape's kind (recorded in the Edit).
+    ld : LayerData
+        The layer's cached data (``sketchforge_isophote_tool.layerdata.layer_data``).
+    light : (3,) float64
+    rng : numpy Generator
+    kind : str or None
+        One of :data:`KINDS`; None draws one.
+    band : float or None
+        Band radius; None: a third of the layer's largest inradius, at most 0.3, at least 3h.
+    """
+    from sketchforge.errors import SculptError
+
+    from .isophote import picked_isophote
+
+    h = ld.h
+    kind = kind or str(rng.choice(KINDS))
+    pts = shapely.points(ld.V2)
+    d = shapely.distance(pts, ld.outline.exterior)
+    inradius = float(d.max())
+    if band is None:
+        band = float(np.clip(inradius / 1.5, 3 * h, 0.3))
+    # A pick on a lit vertex at least a third of the inradius (and 2h) inside the rim: strokes
+    # next to the rim ask for near-vertical surface, which no edit can honour.
+    cand = np.nonzero((d > max(0.35 * inradius, 2 * h)) & (ld.E > 0.05) & (ld.E < 0.95))[0]
+    if len(cand) == 0:
+        return None
+    pick = ld.V2[int(rng.choice(cand))] + rng.normal(0, 0.1 * h, 2)
+    try:
+        c, iso = picked_isophote(ld, pick)
+    except SculptError:
+        return None
+    s0 = iso.project(shapely.Point(pick))
+    half = rng.uniform(0.6, 1.2) * band
+    seg = shapely.ops.substring(iso, max(s0 - half, 0.0), min(s0 + half, iso.length))
+    if seg.length < 4 * h:
+        return None
+    move = float(rng.uniform(1.0, 5.0)) * float(rng.choice([-1.0, 1.0]))
+    amount = move * h
+    if kind in ("shift", "outside"):
+        profile = lambda t: np.full_like(t, -amount)  # noqa: E731  (left = brighter side)
+    else:
+        profile = lambda t: -amount * np.sin(np.pi * t)  # noqa: E731
+    if kind == "loop" and rng.random() < 0.5:
+        profile = lambda t: np.full_like(t, -amount)  # noqa: E731
+    P = _offset(seg, profile)
+    intended = P
+    if kind == "loop":
+        P = _with_loop(P, rng.uniform(1.0, 2.0) * h, rng)
+    if kind == "outside":
+        # Run on past the band: straight extensions 1.5 band radii long at both ends.
+        a = P[0] - P[1]
+        b = P[-1] - P[-2]
+        a /= np.linalg.norm(a)
+        b /= np.linalg.norm(b)
+        ext = np.linspace(0, 1.5 * band, 12)[1:, None]
+        P = np.concatenate([(P[0] + ext * a)[::-1], P, P[-1] + ext * b])
+    return Edit(shape, kind, np.asarray(pick, float), band, P, move, intended)
+
+
+# --- running the corpus ------------------------------------------------------------------------
+
+
+@dataclass
+class Outcome:
+    """What one corpus edit did.
+
+    Attributes
+    ----------
+    shape, kind : str
+    move : float
+        Requested move, in edge lengths.
+    status : str
+        "ok", "refused" (a SketchforgeError: the message says why) or "crash" (anything else).
+    reason : str
+        The refusal or crash message ("" when ok).
+    before, after : float
+        Mean stroke-to-isophote distance before and after, in edge lengths (nan unless ok).
+    fraction : float
+        1 for the full edit, less for a partial one (nan unless ok).
+    seconds : float
+        Wall time of the edit.
+    vertices : int
+    """
+
+    shape: str
+    kind: str
+    move: float
+    status: str
+    reason: str
+    before: float
+    after: float
+    fraction: float
+    seconds: float
+    vertices: int
+
+    @property
+    def lands(self) -> bool:
+        """The issue's criterion: after <= max(2 edge lengths, 0.3 × before)."""
+        return self.status == "ok" and self.after <= max(2.0, 0.3 * self.before)
+
+
+def corpus_layers(shapes=SHAPES, per_shape: int = 4, seed: int = 0, resolution: float = 0.03):
+    """Yield (shape, index, mesh, rng) for ``per_shape`` random layers of each shape kind; the rng
+    (seeded by (seed, shape, index)) then draws that layer's edits."""
+    from sketchforge_inflate.inflate import inflate_stroke
+
+    for shape in shapes:
+        for i in range(per_shape):
+            rng = np.random.default_rng([seed, SHAPES.index(shape), i])
+            outline = random_outline(shape, rng)
+            mesh = inflate_stroke(outline, True, {"resolution": resolution, "inflation": 1.0, "smoothing": 0.5})
+            yield shape, i, mesh, rng
+
+
+def run_edits(shape: str, mesh, rng, light, edits: int, kinds=KINDS) -> list[Outcome]:
+    """Draw ``edits`` random edits on one layer (kinds in turn) and run each through ``sculpt``."""
+    import time
+
+    from sketchforge.errors import SketchforgeError
+    from sketchforge.geometry.reflectance import LAMBERTIAN
+
+    from .layerdata import layer_data
+    from .pipeline import sculpt
+
+    ld = layer_data(mesh, light, LAMBERTIAN)
+    out: list[Outcome] = []
+    tries = 0
+    while len(out) < edits and tries < 20 * edits:
+        tries += 1
+        e = random_edit(shape, ld, light, rng, kind=kinds[len(out) % len(kinds)])
+        if e is None:
+            continue
+        t = time.perf_counter()
+        try:
+            r = sculpt(mesh, light, e.pick, e.band, e.stroke)
+        except SketchforgeError as exc:
+            out.append(Outcome(shape, e.kind, e.move, "refused", str(exc), np.nan, np.nan, np.nan, time.perf_counter() - t, mesh.n_vertices))
+            continue
+        except Exception as exc:  # noqa: BLE001  (what the corpus is for: finding these)
+            out.append(Outcome(shape, e.kind, e.move, "crash", repr(exc), np.nan, np.nan, np.nan, time.perf_counter() - t, mesh.n_vertices))
+            continue
+        seconds = time.perf_counter() - t
+        out.append(Outcome(shape, e.kind, e.move, "ok", "", r.before / ld.h, r.after / ld.h, r.fraction, seconds, mesh.n_vertices))
+    return out
+
+
+def refusal_reason(message: str) -> str:
+    """A short key for a refusal message (for counting refusals by reason)."""
+    for key, label in (
+        ("rim margin", "stroke in the rim margin"),
+        ("no part inside the band", "stroke outside the band"),
+        ("cannot take this shading", "no closer isophote reachable"),
+        ("nothing to change", "already on the isophote"),
+    ):
+        if key in message:
+            return label
+    return message.split(":")[0][:60]
