@@ -91,6 +91,7 @@ class Canvas(pg.GraphicsView):
         self._tool = None
         self._reference: pg.ImageItem | None = None
         self._light_center = np.zeros(2)
+        self._preview: tuple[str, object] | None = None  # (layer id, mesh) shown instead of the layer's
 
         self.isolines = it.PolylinesItem(it.cosmetic_pen(it.ISOLINES, 1.0))
         self.outline = it.PolylinesItem(it.cosmetic_pen(it.SELECTED, 1.5, Qt.PenStyle.DotLine), closed=True)
@@ -159,8 +160,25 @@ class Canvas(pg.GraphicsView):
         item = self._layer_items.get(layer.id)
         if item is None:
             return
+        if self._preview is not None and self._preview[0] == layer.id:
+            layer = layer.evolve(mesh=self._preview[1])
         item.set_layer(layer, self.doc.light, self._shader())
         item.setVisible(layer.visible)
+
+    def show_preview(self, layer_id: str, mesh) -> None:
+        """Draw ``mesh`` in place of the layer's surface until :meth:`clear_preview` (a view
+        state only: the document is not touched)."""
+        if layer_id not in self.doc.layer_ids():
+            return
+        self._preview = (layer_id, mesh)
+        self._refresh_layer(self.doc.layer(layer_id))
+
+    def clear_preview(self) -> None:
+        if self._preview is None:
+            return
+        layer_id, self._preview = self._preview[0], None
+        if layer_id in self.doc.layer_ids():
+            self._refresh_layer(self.doc.layer(layer_id))
 
     def _on_layers(self, *args) -> None:
         self.rebuild()

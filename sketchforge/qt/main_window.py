@@ -322,6 +322,7 @@ class MainWindow(QMainWindow):
         self.creation_panel.isolines_changed.connect(self.canvas.set_isoline_count)
         self.sculpt_panel.radius_changed.connect(self.sculpt.set_radius)
         self.sculpt_panel.show_changed.connect(lambda s, r: self.sculpt.set_show(s, r))
+        self.sculpt_panel.preview_changed.connect(self.sculpt.set_preview)
         self.sculpt_panel.model_changed.connect(self._model_changed)
         self.light_panel.angle_edited.connect(self.set_light_angle)
 

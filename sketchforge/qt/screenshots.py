@@ -42,9 +42,10 @@ def stage_sculpt(window, app) -> None:
     if sc.available():
         sc.stroke_release(stroke[-1])
         settle(window, app, timeout_s=300)
-    # the impacted region M• and B•* (dashed black); strips cover most of the layer and are
-    # left off here (the panel's "show strips" box)
+    # where the shading changed and where heights could change (dashed), and the
+    # characteristics through the stroke (the panel's two "show" boxes)
     window.sculpt_panel.regions.setChecked(True)
+    window.sculpt_panel.strips.setChecked(True)
     settle(window, app)
 
 

@@ -2,10 +2,14 @@
 
 Click: pick the isophote under the mouse on the front-most visible layer there (white), and
 show the band around it (orange, dashed). Wheel or the panel's slider: band radius. Drag: the
-redrawn isophote (cyan). Release: a ``sculpt_isophote`` command is built from (layer, pick,
-band radius, stroke), prepared off the GUI thread (progress + cancel in the status bar) and
-pushed. Drawing again after an attempt replaces it: the attempt is undone first, and redone if
-the new one fails. An edit that changes nothing reports the plugin's reason.
+redrawn isophote (cyan). While the stroke is drawn, a live
+preview of the edit is computed off the GUI thread (one at a time, always for the latest
+stroke: throttled by the solve itself, ~50 ms at 5k vertices) and the picked layer is shown
+with the previewed surface; Esc or a new pick drops it. Release: a ``sculpt_isophote`` command
+is built from (layer, pick, band radius, stroke), prepared off the GUI thread (progress +
+cancel in the status bar) and pushed. Drawing again after an attempt replaces it: the attempt
+is undone first, and redone if the new one fails. An edit that changes nothing reports the
+plugin's reason.
 
 The gesture's logic (pick, isophote, band, options, building the command) is the plugin's
 ``SculptIsophoteTool`` (``host.tools["sculpt_isophote"]``); this controller only draws its
@@ -19,6 +23,7 @@ import numpy as np
 from PySide6.QtCore import QObject, Signal
 
 from sketchforge.errors import SketchforgeError
+from sketchforge.qt.command_runner import GuardedJobs
 from sketchforge.qt.render2d import polygon_rings
 
 TOOL_NAME = "sculpt_isophote"
@@ -40,10 +45,18 @@ class SculptController(QObject):
         self.radius = 0.15
         self.show_strips = False
         self.show_regions = False
+        self.live_preview = True
         self.status = ""
         self._last_attempt = None
         self.last_info: dict = {}
         self.tool = self._make_tool()
+        # Previews run native solvers too: guarded like commands (the autosave is current).
+        self._preview_jobs = GuardedJobs(runner.jobs, getattr(runner, "guard", None), "Sculpt preview", self)
+        self._preview_job = None  # the job in flight
+        self._preview_pending = None  # the latest stroke, waiting for the job in flight
+        self._preview_generation = 0  # bumped to drop results of a finished gesture
+        #: the last preview's SculptResult (for tests and the status line), None if none shown
+        self.preview_result = None
 
     def _make_tool(self):
         try:
@@ -82,6 +95,7 @@ class SculptController(QObject):
 
     # --- state ------------------------------------------------------------------------------------
     def reset(self) -> None:
+        self.stop_preview()
         if self.tool is not None:
             self.tool.reset()
         self._last_attempt = None
@@ -133,6 +147,7 @@ class SculptController(QObject):
             self.message.emit(PLUGIN_MISSING)
             self._set_status(PLUGIN_MISSING)
             return False
+        self.stop_preview()
         self._last_attempt = None
         self.last_info = {}
         for name in ("stroke", "strips", "regions"):
@@ -160,11 +175,69 @@ class SculptController(QObject):
         if self.tool is not None:
             self.tool.move(pos)
             self._show_stroke()
+            stroke = self.tool.overlay.get("stroke")
+            if self.live_preview and self.tool.pick is not None and stroke is not None and len(stroke) >= 2:
+                self._request_preview(np.array(stroke))
 
     def cancel(self) -> None:
+        self.stop_preview()
         if self.tool is not None:
             self.tool.cancel()
         self.canvas.set_overlay("stroke", [])
+
+    # --- live preview ---------------------------------------------------------------------------
+    def set_preview(self, on: bool) -> None:
+        self.live_preview = bool(on)
+        if not on:
+            self.stop_preview()
+
+    def _request_preview(self, stroke: np.ndarray) -> None:
+        """Compute the edit for ``stroke`` off the GUI thread; while one is computing, only the
+        latest stroke waits (moves in between are skipped: the solve is the throttle)."""
+        if self._preview_job is not None:
+            self._preview_pending = stroke
+            return
+        try:
+            job = self.tool.preview_job(stroke)
+        except SketchforgeError:
+            return
+        generation, layer_id = self._preview_generation, self.tool.layer_id
+
+        def done(result) -> None:
+            self._preview_job = None
+            if generation == self._preview_generation:
+                self.preview_result = result
+                self.canvas.show_preview(layer_id, result.mesh)
+                self._set_status(
+                    f"preview: the isophote would move from {result.before / result.h:.1f} to "
+                    f"{result.after / result.h:.1f} edge lengths of the stroke — release to apply"
+                )
+            self._next_preview()
+
+        def failed(exc, tb) -> None:
+            self._preview_job = None
+            if generation == self._preview_generation and isinstance(exc, SketchforgeError):
+                self.canvas.clear_preview()
+                self.preview_result = None
+                self._set_status(f"preview: {exc}")
+            self._next_preview()
+
+        self._preview_job = self._preview_jobs.start(job, done, failed, label="Sculpt preview", background=True)
+
+    def _next_preview(self) -> None:
+        stroke, self._preview_pending = self._preview_pending, None
+        if stroke is not None and self.live_preview:
+            self._request_preview(stroke)
+
+    def stop_preview(self) -> None:
+        """Drop the preview: results still in flight are ignored, the layer is shown as it is."""
+        self._preview_generation += 1
+        self._preview_pending = None
+        if self._preview_job is not None:
+            self._preview_job.cancel()
+            self._preview_job = None
+        self.preview_result = None
+        self.canvas.clear_preview()
 
     def stroke_release(self, pos) -> None:
         if self.tool is None:
@@ -172,6 +245,7 @@ class SculptController(QObject):
             self._set_status(PLUGIN_MISSING)
             return
         stroke = self.tool.end_stroke(pos)
+        self.stop_preview()
         if not len(stroke):
             return
         self._show_stroke()
@@ -185,6 +259,10 @@ class SculptController(QObject):
     def apply(self, cmd) -> None:
         """Replace the last attempt (if it is still on top of the history) with ``cmd``."""
         stack = self.doc.undo_stack
+        guard = getattr(self.runner, "guard", None)
+        # The crash guard records the state before this gesture, the last attempt included:
+        # it must run before that attempt is undone.
+        token = guard.before(cmd) if guard is not None else None
         replaced = None
         if (
             self._last_attempt is not None
@@ -208,13 +286,28 @@ class SculptController(QObject):
             self._last_attempt = done_cmd
             self.last_info = result_info(done_cmd)
             self._show_debug()
-            self._set_status("applied; draw again to replace this attempt, or click to pick another isophote")
+            r = getattr(done_cmd, "result", None)
+            moved = ""
+            if r is not None and callable(getattr(r, "new_isophotes", None)):
+                # The isophote as it now runs (white), over the stroke that asked for it (cyan).
+                self.canvas.set_overlay("isophote", r.new_isophotes())
+            if r is not None and hasattr(r, "before"):
+                part = "" if r.fraction == 1.0 else f" ({r.fraction:.0%} of the change: the full one overshot)"
+                moved = f"isophote {r.before / r.h:.1f} → {r.after / r.h:.1f} edge lengths from the stroke{part}; "
+            self._set_status(f"applied: {moved}draw again to replace this attempt, or click to pick another isophote")
 
         self._set_status("sculpting…")
         started = self.runner.run(
-            cmd, label="Sculpting", on_done=on_done, on_error=on_error, on_cancel=lambda: (restore(), self._set_status("cancelled"))
+            cmd,
+            label="Sculpting",
+            on_done=on_done,
+            on_error=on_error,
+            on_cancel=lambda: (restore(), self._set_status("cancelled")),
+            guard_token=token,
         )
         if not started:
+            if guard is not None and token is not None:
+                guard.after(token)
             restore()
             self.message.emit("a solve is already running")
 
@@ -230,15 +323,16 @@ class SculptController(QObject):
         self._show_debug()
 
     def _show_debug(self) -> None:
-        """Strips and regions of the last edit, from the plugin command's ``result`` (a
-        SculptResult: ``result.strips`` characteristic strips (j, 5) with x, y first;
-        ``result.regions`` with region ``strips`` and the shapely regions ``M`` (impacted,
-        thesis M•) and ``B_star`` (B•*))."""
+        """Characteristics and regions of the last edit, from the plugin command's ``result``
+        (a SculptResult: ``characteristics()`` polylines through the stroke, traced on request;
+        ``edit_zone`` where the shading changed and ``support`` where heights may change)."""
         info = self.last_info
         strips: list = []
         rings: list = []
-        if self.show_strips:
-            strips.extend(np.asarray(s)[:, :2] for s in info.get("strips", []) if len(s) > 1)
+        if self.show_strips and "characteristics" in info:
+            if info.get("_lines") is None:
+                info["_lines"] = info["characteristics"]()
+            strips.extend(np.asarray(s)[:, :2] for s in info["_lines"] if len(s) > 1)
         if self.show_regions:
             for geom in info.get("regions", []):
                 rings.extend(polygon_rings(geom) if hasattr(geom, "geom_type") else [np.asarray(geom)])
@@ -247,11 +341,14 @@ class SculptController(QObject):
 
 
 def result_info(cmd) -> dict:
-    """What the canvas can show of a finished sculpt command (empty if it reports nothing)."""
+    """What the canvas can show of a finished sculpt command (empty if it reports nothing):
+    ``characteristics`` (a callable giving polylines) and ``regions`` (shapely geometries)."""
     result = getattr(cmd, "result", None)
     if result is None:
         return {}
-    regions = getattr(result, "regions", None)
-    strips = list(getattr(regions, "strips", []) or []) + list(getattr(result, "strips", []) or [])
-    shapes = [g for g in (getattr(regions, "M", None), getattr(regions, "B_star", None)) if g is not None]
-    return {"strips": strips, "regions": shapes}
+    info: dict = {}
+    if callable(getattr(result, "characteristics", None)):
+        info["characteristics"] = result.characteristics
+    shapes = [g for g in (getattr(result, "edit_zone", None), getattr(result, "support", None)) if g is not None]
+    info["regions"] = shapes
+    return info

@@ -83,3 +83,40 @@ def test_pick_and_stroke_equal_the_headless_command(make_window, mouse, qtbot, h
     qtbot.waitActive(w)
     qtbot.keyClick(w, Qt.Key.Key_Z, Qt.KeyboardModifier.ControlModifier)
     assert np.array_equal(w.doc.layer("blob").mesh.V, ellipse_doc(host).layer("blob").mesh.V)
+
+
+def test_live_preview_while_drawing_then_cancel_or_apply(make_window, mouse, qtbot, host):
+    """While the stroke is drawn the picked layer shows the previewed surface (computed off the
+    GUI thread, the document untouched); cancelling drops it, releasing applies the edit."""
+    from PySide6.QtCore import QEvent
+
+    if COMMAND not in host.commands.names():
+        pytest.skip("the isophote tool plugin is not installed")
+    w = make_window(ellipse_doc(host))
+    w.canvas.fit()
+    w.modes.sculpture.setChecked(True)
+    w.sculpt_panel.spin.setValue(0.15)
+    m = mouse(w.canvas)
+    m.click_pixel(m.aim((0.3, 0.05))[0])
+    original = w.doc.layer("blob").mesh
+    item = w.canvas._layer_items["blob"]
+    pixels = [m.aim((0.36, y))[0] for y in np.linspace(-0.3, 0.3, 9)]
+    L, N = Qt.MouseButton.LeftButton, Qt.MouseButton.NoButton
+    m._send(QEvent.Type.MouseMove, pixels[0], N, N)
+    m._send(QEvent.Type.MouseButtonPress, pixels[0], L, L)
+    for p in pixels[1:]:
+        m._send(QEvent.Type.MouseMove, p, N, L)
+    qtbot.waitUntil(lambda: w.sculpt.preview_result is not None and w.sculpt._preview_job is None, timeout=60_000)
+    assert "preview" in w.sculpt.status
+    assert item._mesh is not original and not np.array_equal(item._mesh.V, original.V)
+    assert w.doc.undo_stack.count() == 0 and w.doc.layer("blob").mesh is original
+    w.sculpt.cancel()  # Esc
+    assert w.sculpt.preview_result is None and item._mesh is original
+    m._send(QEvent.Type.MouseButtonRelease, pixels[-1], L, N)  # the cancelled drag's release: nothing
+    wait_idle(qtbot, w, timeout=120_000)
+    # draw again and release: applied, and the view shows the document's new surface
+    m.drag_pixels(pixels)
+    wait_idle(qtbot, w, timeout=120_000)
+    assert w.doc.undo_stack.count() == 1, w.sculpt.status
+    assert "applied" in w.sculpt.status and "edge lengths" in w.sculpt.status
+    assert item._mesh is w.doc.layer("blob").mesh

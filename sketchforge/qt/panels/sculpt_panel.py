@@ -1,5 +1,5 @@
 """SCULPTURE controls: the tool, the band radius (slider, or the mouse wheel in the drawing),
-what to show (strips, regions) and what the last edit said."""
+the live preview, what to show (characteristics, the edit region) and what the last edit said."""
 
 from __future__ import annotations
 
@@ -16,7 +16,8 @@ _STEPS = 1000
 class SculptPanel(QGroupBox):
     radius_changed = Signal(float)
     model_changed = Signal(str)
-    show_changed = Signal(bool, bool)  # strips, regions
+    show_changed = Signal(bool, bool)  # characteristics, edit region
+    preview_changed = Signal(bool)
 
     def __init__(self, parent=None) -> None:
         super().__init__("Sculpture", parent)
@@ -26,7 +27,7 @@ class SculptPanel(QGroupBox):
         self.tool.setToolTip("Sculpt tools from plugins (thesis 4.1: one tool so far)")
         form.addRow("Tool", self.tool)
         self.model = QComboBox()
-        self.model.setToolTip("Reflectance model the strip solver inverts (plugins can add models)")
+        self.model.setToolTip("Reflectance model the height solve inverts (plugins can add models)")
         self.model.currentTextChanged.connect(lambda t: t and self.model_changed.emit(t))
         form.addRow("Reflectance", self.model)
         self.slider = QSlider(Qt.Orientation.Horizontal)
@@ -38,8 +39,14 @@ class SculptPanel(QGroupBox):
         self.spin.setKeyboardTracking(False)
         form.addRow("Band radius", self.slider)
         form.addRow("", self.spin)
-        self.strips = QCheckBox("show strips")
-        self.regions = QCheckBox("show regions")
+        self.preview = QCheckBox("live preview")
+        self.preview.setChecked(True)
+        self.preview.setToolTip("Recompute the edit while the stroke is drawn (the surface shown is not applied until release)")
+        self.strips = QCheckBox("show characteristics")
+        self.strips.setToolTip("The characteristic directions (thesis 3.1) through the stroke: along them a shading change becomes a height change")
+        self.regions = QCheckBox("show edit region")
+        self.regions.setToolTip("Where the shading changed (the band near the stroke) and where heights may change (its ring)")
+        form.addRow(self.preview)
         form.addRow(self.strips)
         form.addRow(self.regions)
         self.status = QLabel()
@@ -52,6 +59,7 @@ class SculptPanel(QGroupBox):
         self.spin.valueChanged.connect(self._emit)
         self.strips.toggled.connect(lambda _: self.show_changed.emit(self.strips.isChecked(), self.regions.isChecked()))
         self.regions.toggled.connect(lambda _: self.show_changed.emit(self.strips.isChecked(), self.regions.isChecked()))
+        self.preview.toggled.connect(self.preview_changed.emit)
 
     def set_models(self, names) -> None:
         self.model.blockSignals(True)
