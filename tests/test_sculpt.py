@@ -329,3 +329,30 @@ def test_third_party_reflectance_model_sculpts_like_lambertian():
         assert doc.layer("body").same_state(before)
     peak = results["lambertian"].max()
     assert np.abs(results["half_lambert"] - results["lambertian"]).max() < 0.05 * peak
+
+
+def test_edits_on_two_threads_at_once_match_the_sequential_ones():
+    """The app can have a preview still finishing on one worker while the command's solve
+    starts on another: shared caches must not break either."""
+    import threading
+
+    from sketchforge_isophote_tool import layerdata, pipeline
+
+    mesh = inflated("pillow", 0.03)
+    jobs = [isophote_stroke(mesh, [0.2, 0.1], off)[0] for off in (0.06, 0.08, -0.06, -0.08)]
+    want = [sculpt(mesh, LIGHT, [0.2, 0.1], 0.3, st).mesh for st in jobs]
+    for _ in range(3):
+        layerdata._CACHE.clear(), layerdata._PLANAR.clear(), pipeline._PICKS.clear()
+        got, errors = [None] * len(jobs), []
+
+        def run(i):
+            try:
+                got[i] = sculpt(mesh, LIGHT, [0.2, 0.1], 0.3, jobs[i]).mesh
+            except Exception as exc:  # noqa: BLE001
+                errors.append(exc)
+
+        threads = [threading.Thread(target=run, args=(i,)) for i in range(len(jobs))]
+        [t.start() for t in threads]
+        [t.join() for t in threads]
+        assert not errors
+        assert all(g.identical(w) for g, w in zip(got, want))

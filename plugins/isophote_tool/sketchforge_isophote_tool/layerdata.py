@@ -14,6 +14,7 @@ p, q, the shading E and R's slope gradient at every vertex.
 from __future__ import annotations
 
 import hashlib
+import threading
 from collections import OrderedDict
 from dataclasses import dataclass
 
@@ -263,6 +264,24 @@ def _planar(mesh: Mesh) -> PlanarData:
 _PLANAR: "OrderedDict[bytes, PlanarData]" = OrderedDict()
 _CACHE: "OrderedDict[tuple, LayerData]" = OrderedDict()
 _CACHE_SIZE = 8
+#: The app runs edits on worker threads (a preview still finishing while the command's solve
+#: starts): cache lookups and inserts hold this lock; the computations do not.
+_LOCK = threading.Lock()
+
+
+def cached(cache: OrderedDict, key, make):
+    """``cache[key]``, made by ``make()`` on a miss; LRU of _CACHE_SIZE entries, thread-safe."""
+    with _LOCK:
+        hit = cache.get(key)
+        if hit is not None:
+            cache.move_to_end(key)
+            return hit
+    value = make()
+    with _LOCK:
+        cache[key] = value
+        while len(cache) > _CACHE_SIZE:
+            cache.popitem(last=False)
+    return value
 
 
 def _digest(*arrays) -> bytes:
@@ -274,15 +293,7 @@ def _digest(*arrays) -> bytes:
 
 def planar_data(mesh: Mesh) -> PlanarData:
     """Cached :class:`PlanarData` of a layer (keyed on its planar positions and triangles)."""
-    key = _digest(mesh.V[:, :2], mesh.F, mesh.boundary)
-    hit = _PLANAR.get(key)
-    if hit is None:
-        hit = _PLANAR[key] = _planar(mesh)
-        while len(_PLANAR) > _CACHE_SIZE:
-            _PLANAR.popitem(last=False)
-    else:
-        _PLANAR.move_to_end(key)
-    return hit
+    return cached(_PLANAR, _digest(mesh.V[:, :2], mesh.F, mesh.boundary), lambda: _planar(mesh))
 
 
 def mesh_key(mesh: Mesh) -> bytes:
@@ -300,14 +311,11 @@ def layer_data(mesh: Mesh, light: np.ndarray, model: ReflectanceModel) -> LayerD
     """Cached :class:`LayerData` of ``mesh`` under ``light`` (3,) and ``model``."""
     light = np.asarray(light, np.float64).reshape(3)
     key = (mesh_key(mesh), light.tobytes(), model.name, id(model.R))
-    hit = _CACHE.get(key)
-    if hit is not None:
-        _CACHE.move_to_end(key)
-        return hit
-    pd = planar_data(mesh)
-    z = np.array(mesh.V[:, 2])
-    pq, E, _, _ = shading(pd, z, light, model)
-    ld = _CACHE[key] = LayerData(mesh, pd, z, pq, E, light, model)
-    while len(_CACHE) > _CACHE_SIZE:
-        _CACHE.popitem(last=False)
-    return ld
+
+    def make() -> LayerData:
+        pd = planar_data(mesh)
+        z = np.array(mesh.V[:, 2])
+        pq, E, _, _ = shading(pd, z, light, model)
+        return LayerData(mesh, pd, z, pq, E, light, model)
+
+    return cached(_CACHE, key, make)

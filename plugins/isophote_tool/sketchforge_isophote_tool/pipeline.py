@@ -36,7 +36,7 @@ from sketchforge.plugins.registry import ReflectanceModel
 from .fidelity import honoured_samples, isophote_lines, mean_distance
 from .heights import GN_STEPS, solve_heights
 from .isophote import band_around, picked_isophote
-from .layerdata import LayerData, layer_data, shading
+from .layerdata import LayerData, cached, layer_data, shading
 from .shading import bary_rows, shading_change
 from .stroke import clip_to_band, prepare_stroke, stroke_samples
 
@@ -154,6 +154,14 @@ def _options(options: dict | None) -> dict:
         v = float(opts[key])
         if not (np.isfinite(v) and v >= 0):
             raise SculptError(f"the sculpt option {key!r} must be a number >= 0, got {opts[key]!r}")
+    for key in ("ring", "rim_margin"):
+        if opts[key] is not None:
+            try:
+                v = float(opts[key])
+            except (TypeError, ValueError, OverflowError):
+                v = float("nan")
+            if not (np.isfinite(v) and v >= 0):
+                raise SculptError(f"the sculpt option {key!r} must be a number >= 0 (drawing units) or None, got {opts[key]!r}")
     if not (isinstance(opts["steps"], (int, np.integer)) and 1 <= opts["steps"] <= 50):
         raise SculptError(f"the sculpt option 'steps' must be an integer in 1..50, got {opts['steps']!r}")
     return opts
@@ -177,17 +185,17 @@ def _pick(ld: LayerData, pick, r: float):
     app's live preview does it on every throttled mouse move) skips the isophote and band."""
     p = np.asarray(pick, dtype=np.float64).reshape(-1)
     key = (id(ld), p.tobytes(), r)
-    hit = _PICKS.get(key)
-    if hit is not None and hit[0] is ld:
-        _PICKS.move_to_end(key)
-        return hit[1:]
-    c, iso = picked_isophote(ld, pick)
-    band_geom = band_around(ld, iso, r)
-    shapely.prepare(band_geom)
-    _PICKS[key] = (ld, c, iso, band_geom)
-    while len(_PICKS) > 8:
-        _PICKS.popitem(last=False)
-    return c, iso, band_geom
+
+    def make():
+        c, iso = picked_isophote(ld, pick)
+        band_geom = band_around(ld, iso, r)
+        shapely.prepare(band_geom)
+        return ld, c, iso, band_geom
+
+    hit = cached(_PICKS, key, make)
+    if hit[0] is not ld:  # an id reused by a newer LayerData: recompute
+        hit = make()
+    return hit[1:]
 
 
 def _smoothstep(t: np.ndarray) -> np.ndarray:
@@ -262,8 +270,6 @@ def sculpt(
     ld = layer_data(mesh, light, model)
     pd, h = ld.planar, ld.h
     margin = pd.margin if opts["rim_margin"] is None else float(opts["rim_margin"])
-    if not (np.isfinite(margin) and margin >= 0):
-        raise SculptError(f"the rim margin must be a number >= 0, got {opts['rim_margin']!r}")
     T["layer"] = time.perf_counter() - t0
 
     t = time.perf_counter()
