@@ -60,3 +60,27 @@ def test_same_edit_at_two_resolutions_agrees():
     for r in (rf, rc):
         before, after, h = fidelity(r)
         assert after <= max(2 * h, 0.3 * before)
+
+
+def test_what_the_app_draws_after_an_edit():
+    """The landed isophote (white in the app) runs along the stroke, and the characteristics
+    pass through the stroke in the direction -∇R (the strips' base direction, thesis 3.1.2)."""
+    from sketchforge_isophote_tool.layerdata import shading
+
+    mesh = inflated("ellipse", 0.03)
+    st, _, _ = isophote_stroke(mesh, [0.2, 0.1], 0.1)
+    r = sculpt(mesh, LIGHT, [0.2, 0.1], 0.3, st)
+    landed = np.concatenate(r.new_isophotes())
+    P = np.asarray(shapely.segmentize(r.stroke, 0.5 * r.h).coords)
+    assert shapely.distance(shapely.points(P), shapely.MultiPoint(landed)).mean() < 2 * r.h
+    lines = r.characteristics(n=9)
+    assert len(lines) == 9
+    _, _, Rp, Rq = shading(r.layer.planar, r.layer.z, LIGHT, r.layer.model)
+    for line in lines:
+        assert shapely.distance(shapely.LineString(line), r.stroke) < 1e-9  # through the stroke
+        k = int(np.argmin(shapely.distance(shapely.points(line), r.stroke)))
+        k = min(max(k, 1), len(line) - 2)
+        tangent = line[k + 1] - line[k - 1]
+        flow = -r.layer.locator.interpolate(np.column_stack([Rp, Rq]), line[k][None])[0]
+        cos = abs(tangent @ flow) / (np.linalg.norm(tangent) * np.linalg.norm(flow))
+        assert cos > 0.98, cos
