@@ -461,6 +461,17 @@ class System(NamedTuple):
     fixed: np.ndarray | None
 
 
+def _finite_csc(A, what: str, role: str) -> sp.csc_matrix:
+    """A as CSC float64 with finite entries, or GeometryError naming ``role`` of ``what``."""
+    try:
+        M = sp.csc_matrix(A, dtype=np.float64)
+    except (TypeError, ValueError) as exc:
+        raise GeometryError(f"{what}: {role} is not a numeric 2-D array ({exc})") from None
+    if not np.isfinite(M.data).all():
+        raise GeometryError(f"{what}: {role} has an entry that is not a finite number")
+    return M
+
+
 def sparse_system(A, b=None, what: str = "the linear system", *, fixed=None) -> System:
     """A sparse linear system that igl.min_quad_with_fixed or a scipy solver can take.
 
@@ -485,15 +496,10 @@ def sparse_system(A, b=None, what: str = "the linear system", *, fixed=None) -> 
         indices out of range (igl reads out of bounds); a free row of A that is all zeros (a
         vertex no triangle uses, e.g. a duplicate Triangle dropped): the system is singular.
     """
-    try:
-        M = sp.csc_matrix(A, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise GeometryError(f"{what}: the matrix is not a numeric 2-D array ({exc})") from None
+    M = _finite_csc(A, what, "the matrix")
     n = M.shape[0]
     if M.shape != (n, n):
         raise GeometryError(f"{what}: the matrix must be square, got shape {M.shape}")
-    if not np.isfinite(M.data).all():
-        raise GeometryError(f"{what}: the matrix has an entry that is not a finite number")
     if b is not None:
         B = np.asarray(b, dtype=np.float64)
         b = finite(B, (n,) if B.ndim <= 1 else (n, B.shape[1]), f"the right-hand side of {what}")
@@ -538,18 +544,13 @@ def qp(P, q, A, l, u, what: str = "the quadratic program"):
         Shapes that do not match; NaN anywhere; infinity outside the bounds (or +inf as a
         lower bound, -inf as an upper one: no x satisfies them); some l > u.
     """
-    try:
-        P = sp.csc_matrix(P, dtype=np.float64)
-        A = sp.csc_matrix(A, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise GeometryError(f"{what}: a matrix is not a numeric 2-D array ({exc})") from None
+    P = _finite_csc(P, what, "the objective matrix")
+    A = _finite_csc(A, what, "the constraint matrix")
     N = P.shape[0]
     if P.shape != (N, N):
         raise GeometryError(f"{what}: the objective matrix must be square, got shape {P.shape}")
     if A.shape[1] != N:
         raise GeometryError(f"{what}: the constraint matrix has {A.shape[1]} columns for {N} unknowns")
-    if not (np.isfinite(P.data).all() and np.isfinite(A.data).all()):
-        raise GeometryError(f"{what}: a matrix has an entry that is not a finite number")
     q = finite(q, (N,), f"the linear term of {what}")
     m = A.shape[0]
     bounds = []
