@@ -259,7 +259,7 @@ class MainWindow(QMainWindow):
         self.act_undo = self._action(e, "Undo", self.undo, QKeySequence.StandardKey.Undo)
         self.act_redo = self._action(e, "Redo", self.redo, ["Ctrl+Shift+Z", "Ctrl+Y"])
         e.addSeparator()
-        self.act_cancel = self._action(e, "Cancel running solve", self.runner.cancel, "Esc")
+        self.act_cancel = self._action(e, "Cancel", self.cancel_current, "Esc")
 
         lm = mb.addMenu("&Layer")
         self._action(lm, "&Add layer", self.add_layer, "Ctrl+Shift+N")
@@ -685,6 +685,11 @@ class MainWindow(QMainWindow):
             act = self.recent_menu.addAction(f)
             act.triggered.connect(lambda _=False, f=f: self.open_path(Path(f)))
         self.recent_menu.setEnabled(bool(files))
+
+    def cancel_current(self) -> None:
+        """Esc: stop the running solve, and drop a sculpt stroke being drawn with its preview."""
+        self.runner.cancel()
+        self.sculpt.cancel()
 
     # --- background warm-up and closing ---------------------------------------------------------
     def start_warm_up(self) -> None:

@@ -110,7 +110,7 @@ def test_live_preview_while_drawing_then_cancel_or_apply(make_window, mouse, qtb
     assert "preview" in w.sculpt.status
     assert item._mesh is not original and not np.array_equal(item._mesh.V, original.V)
     assert w.doc.undo_stack.count() == 0 and w.doc.layer("blob").mesh is original
-    w.sculpt.cancel()  # Esc
+    w.act_cancel.trigger()  # Esc
     assert w.sculpt.preview_result is None and item._mesh is original
     m._send(QEvent.Type.MouseButtonRelease, pixels[-1], L, N)  # the cancelled drag's release: nothing
     wait_idle(qtbot, w, timeout=120_000)
