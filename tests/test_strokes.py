@@ -131,15 +131,33 @@ def layer():
     return inflated("ellipse", 0.04)
 
 
+def _band_ring(mesh, band):
+    from sketchforge.geometry.reflectance import LAMBERTIAN
+    from sketchforge_isophote_tool.isophote import band_around, picked_isophote
+    from sketchforge_isophote_tool.layerdata import layer_data
+
+    ld = layer_data(mesh, LIGHT, LAMBERTIAN)
+    geom = band_around(ld, picked_isophote(ld, [0.2, 0.1])[1], band)
+    poly = max(getattr(geom, "geoms", [geom]), key=lambda g: g.area)
+    return np.asarray(poly.exterior.coords)
+
+
 @settings(max_examples=60, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
 @given(st.data())
 def test_any_polyline_through_sculpt_gives_a_result_or_one_line(layer, data):
     """Random polylines placed over the layer (some on the band's edge, some off the layer):
     the edit either applies (finite heights, contour at 0) or raises a SketchforgeError."""
-    P = _polyline(data.draw)
-    anchor = data.draw(st.sampled_from([(0.2, 0.1), (0.1, 0.35), (0.95, 0.0), (-1.5, 0.0), (0.45, 0.38)]))
-    P = P - P.mean(axis=0) + np.array(anchor)
     band = data.draw(st.sampled_from([0.05, 0.3, 1.5]))
+    if data.draw(st.booleans()):
+        P = _polyline(data.draw)
+        anchor = data.draw(st.sampled_from([(0.2, 0.1), (0.1, 0.35), (0.95, 0.0), (-1.5, 0.0), (0.45, 0.38)]))
+        P = P - P.mean(axis=0) + np.array(anchor)
+    else:
+        # Points exactly on the band's edge (its own vertices), a run of them, maybe jittered.
+        ring = _band_ring(layer, band)
+        k0 = data.draw(st.integers(0, len(ring) - 2))
+        k1 = data.draw(st.integers(k0 + 1, min(k0 + 60, len(ring) - 1)))
+        P = ring[k0 : k1 + 1] + data.draw(st.sampled_from([0.0, 1e-12, 1e-3])) * np.sin(np.arange(k1 - k0 + 1))[:, None]
     try:
         r = sculpt(layer, LIGHT, [0.2, 0.1], band, P)
     except SketchforgeError as exc:

@@ -221,5 +221,7 @@ def clean_open_stroke(points, h: float, error=ValueError, what: str = "stroke") 
     P, spikes = _remove_spikes(P, h)
     P, closed, loops = _resolve_loops(P)
     if len(P) < 2 or _arclength(P)[-1] < 0.5 * h:
-        raise error(f"nothing of the {what} is left after removing its loops and hooks: draw a plain curve")
+        if loops + hooks + spikes:
+            raise error(f"nothing of the {what} is left after removing its loops and hooks: draw a plain curve")
+        raise error(f"the {what} is shorter than the resolution ({h:.3g}): draw a longer one")
     return CleanStroke(np.ascontiguousarray(P), closed, loops, hooks, spikes)
