@@ -356,3 +356,19 @@ def test_edits_on_two_threads_at_once_match_the_sequential_ones():
         [t.join() for t in threads]
         assert not errors
         assert all(g.identical(w) for g, w in zip(got, want))
+
+
+@pytest.mark.parametrize("damage", ["nan", "zero_area"])
+def test_a_damaged_layer_mesh_is_refused_in_one_line_before_native_code(ellipse, damage):
+    """A snapshot mesh can be hand-edited: the guard refuses it before libigl sees it."""
+    from sketchforge.errors import GeometryError
+
+    V = np.array(ellipse.V)
+    F = np.array(ellipse.F)
+    if damage == "nan":
+        V[F[10, 0], 0] = np.nan
+    else:
+        V[F[10, 1], :2] = V[F[10, 0], :2]  # two corners of one triangle on top of each other
+    with pytest.raises(GeometryError) as info:
+        sculpt(Mesh(V, F, ellipse.boundary), LIGHT, [0.2, 0.1], 0.3, ISSUE_STROKE)
+    assert "\n" not in str(info.value) and "mesh" in str(info.value)

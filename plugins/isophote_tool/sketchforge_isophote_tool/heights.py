@@ -34,7 +34,6 @@ import numpy as np
 import scipy.sparse as sp
 
 from sketchforge.errors import SolverError
-from sketchforge.geometry import guard
 from sketchforge.geometry.dirichlet import DirichletSolver
 from sketchforge.geometry.reflectance import evaluate_pq
 
@@ -123,8 +122,8 @@ def solve_heights(
             if stroke_rows is not None:
                 Js = B @ Jall
                 H = H + Js.T @ sp.diags(Ws) @ Js
-            H, g, _ = guard.sparse_system(H.tocsc(), g, "the height solve")
-            solver = DirichletSolver(H, np.zeros(0, np.int64))
+            # DirichletSolver checks the system (guard.sparse_system) before libigl factors it.
+            solver = DirichletSolver(H.tocsc(), np.zeros(0, np.int64), "the height solve")
         x = x + solver.solve(-g)
     if not np.isfinite(x).all():
         raise SolverError("the height solve produced non-finite values; the layer was left unchanged")

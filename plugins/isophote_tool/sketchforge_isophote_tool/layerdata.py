@@ -217,12 +217,9 @@ def distance_to_ring(P: np.ndarray, ring: np.ndarray, k: int = 8) -> np.ndarray:
 
 def outline_polygon(mesh: Mesh):
     """The layer outline as a valid, counter-clockwise shapely Polygon."""
-    loop = guard.points(mesh.V[mesh.boundary, :2], "layer outline")
-    poly = shapely.Polygon(loop)
-    if not poly.is_valid:
-        poly = shapely.make_valid(poly)
-        if poly.geom_type != "Polygon":
-            poly = max(getattr(poly, "geoms", [poly]), key=lambda g: g.area)
+    poly = guard.polygon(mesh.V[mesh.boundary, :2], "the layer's outline")
+    if poly.geom_type != "Polygon":
+        poly = max(getattr(poly, "geoms", [poly]), key=lambda g: g.area)
     return shapely.geometry.polygon.orient(poly, 1.0)
 
 
@@ -231,8 +228,9 @@ def _planar(mesh: Mesh) -> PlanarData:
     F = np.ascontiguousarray(mesh.F, dtype=np.int64)
     e = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
     h = float(np.linalg.norm(V2[e[:, 0]] - V2[e[:, 1]], axis=1).mean())
+    # First: its guard refuses non-finite positions and zero-area faces before anything divides.
+    L, M = laplacian_and_mass(V2, F, what="the layer's mesh")
     Gp, Gq = slope_operators(V2, F)
-    L, M = laplacian_and_mass(V2, F)
     outline = outline_polygon(mesh)
     is_contour = np.zeros(len(V2), bool)
     is_contour[mesh.boundary] = True

@@ -24,7 +24,6 @@ import numpy as np
 import scipy.sparse as sp
 
 from sketchforge.errors import SolverError
-from sketchforge.geometry import guard
 from sketchforge.geometry.dirichlet import DirichletSolver
 
 from .layerdata import PlanarData
@@ -73,8 +72,8 @@ def shading_change(pd: PlanarData, E: np.ndarray, free: np.ndarray, samples: Str
     beta = STROKE_WEIGHT / pd.h**3
     A = pd.Q[idx][:, idx] + beta * (Bf.T @ sp.diags(ws) @ Bf)
     b = beta * (Bf.T @ (ws * r))
-    A, b, _ = guard.sparse_system(A.tocsc(), b, "the shading interpolation")
-    dE[idx] = DirichletSolver(A, np.zeros(0, np.int64)).solve(b)
+    # DirichletSolver checks the system (guard.sparse_system) before libigl factors it.
+    dE[idx] = DirichletSolver(A.tocsc(), np.zeros(0, np.int64), "the shading interpolation").solve(b)
     if not np.isfinite(dE).all():
         raise SolverError("the shading interpolation in the band produced non-finite values")
     return dE

@@ -99,7 +99,7 @@ def clip_to_band(P: np.ndarray, band, h: float) -> list[np.ndarray]:
     SculptError
         If no part of the stroke lies inside the band.
     """
-    line = guard.geometry(shapely.LineString(P), "stroke")
+    line = guard.linestring(P, "the stroke")
     inter = line.intersection(band)
     pieces = []
     for g in getattr(inter, "geoms", [inter]):
