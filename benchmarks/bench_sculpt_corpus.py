@@ -16,6 +16,7 @@ is counted instead of ending the benchmark. Prints:
   and outside the rim margin) and over all;
 - edits that ended farther from the stroke than they started (must be 0);
 - null drift: a stroke drawn on the isophote itself, on every fresh layer, and after 10 edits;
+- the largest height change of each edit (fraction of the peak): median, p95, max;
 - warm time per edit, p50 / p95, and the layers' vertex counts.
 """
 
@@ -161,6 +162,8 @@ def main(layers: int = 10, edits: int = 8) -> None:
     print(f"fidelity after (edge lengths): median {np.median(after):.2f}, p95 {np.percentile(after, 95):.2f}, max {after.max():.2f};"
           f" after/before median {np.median(ratio):.2f}, p95 {np.percentile(ratio, 95):.2f}")
     print(f"partial edits (the full change overshot): {sum(o.fraction < 1 for o in ok)}")
+    mdz = np.array([o.max_dz for o in ok])
+    print(f"largest height change per edit (fraction of the peak): median {np.median(mdz):.1%}, p95 {np.percentile(mdz, 95):.1%}, max {mdz.max():.1%}")
     print(f"worse than before: {len(worse)}")
     print("by shape:")
     for shape in SHAPES:

@@ -224,6 +224,8 @@ class Outcome:
     seconds : float
         Wall time of the edit.
     vertices : int
+    max_dz : float
+        Largest height change, as a fraction of the layer's peak (nan unless ok).
     """
 
     shape: str
@@ -236,6 +238,7 @@ class Outcome:
     fraction: float
     seconds: float
     vertices: int
+    max_dz: float = np.nan
 
     @property
     def lands(self) -> bool:
@@ -284,7 +287,8 @@ def run_edits(shape: str, mesh, rng, light, edits: int, kinds=KINDS) -> list[Out
             out.append(Outcome(shape, e.kind, e.move, "crash", repr(exc), np.nan, np.nan, np.nan, time.perf_counter() - t, mesh.n_vertices))
             continue
         seconds = time.perf_counter() - t
-        out.append(Outcome(shape, e.kind, e.move, "ok", "", r.before / ld.h, r.after / ld.h, r.fraction, seconds, mesh.n_vertices))
+        max_dz = float(np.abs(r.mesh.V[:, 2] - mesh.V[:, 2]).max() / mesh.V[:, 2].max())
+        out.append(Outcome(shape, e.kind, e.move, "ok", "", r.before / ld.h, r.after / ld.h, r.fraction, seconds, mesh.n_vertices, max_dz))
     return out
 
 
