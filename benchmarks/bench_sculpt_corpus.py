@@ -159,6 +159,8 @@ def main(layers: int = 10, edits: int = 8) -> None:
     print(f"success (applied): {len(ok)}/{n} = {len(ok) / n:.1%}")
     print(f"lands (after <= max(2h, 0.3 before)): {len(landed)}/{len(valid)} valid edits = {len(landed) / max(len(valid), 1):.1%};"
           f" {len(landed)}/{n} of all = {len(landed) / n:.1%}")
+    moved = [o for o in outcomes if o.moved]
+    print(f"moved (lands, and the isophote beside the stroke is within the same bound): {len(moved)}/{len(valid)} valid edits = {len(moved) / max(len(valid), 1):.1%}")
     print(f"fidelity after (edge lengths): median {np.median(after):.2f}, p95 {np.percentile(after, 95):.2f}, max {after.max():.2f};"
           f" after/before median {np.median(ratio):.2f}, p95 {np.percentile(ratio, 95):.2f}")
     print(f"partial edits (the full change overshot): {sum(o.fraction < 1 for o in ok)}")

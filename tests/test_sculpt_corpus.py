@@ -36,6 +36,10 @@ def test_isophotes_land_where_drawn_on_95_percent_of_valid_edits(outcomes):
     landed = [o for o in valid if o.lands]
     assert len(valid) >= 0.75 * len(outcomes)
     assert len(landed) >= 0.95 * len(valid), [(o.shape, o.kind, o.move, o.before, o.after, o.reason) for o in valid if not o.lands]
+    # ...and moved there: the isophote beside the stroke runs along it too (a pit whose little
+    # loop touches the stroke while the old isophote stays would pass the first check only)
+    moved = [o for o in valid if o.moved]
+    assert len(moved) >= 0.95 * len(valid), [(o.shape, o.kind, o.before, o.after, o.beside) for o in landed if not o.moved]
     # thin limbs are editable (point 4), not only refused
     assert sum(o.status == "ok" and o.shape == "thin" for o in outcomes) >= 4
 

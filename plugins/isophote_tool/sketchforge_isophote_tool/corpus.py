@@ -226,6 +226,9 @@ class Outcome:
     vertices : int
     max_dz : float
         Largest height change, as a fraction of the layer's peak (nan unless ok).
+    beside : float
+        Mean distance from the new isophote beside the stroke to the stroke, in edge lengths
+        (:func:`.fidelity.beside_distance`; nan unless ok).
     """
 
     shape: str
@@ -239,11 +242,18 @@ class Outcome:
     seconds: float
     vertices: int
     max_dz: float = np.nan
+    beside: float = np.nan
 
     @property
     def lands(self) -> bool:
         """The issue's criterion: after <= max(2 edge lengths, 0.3 × before)."""
         return self.status == "ok" and self.after <= max(2.0, 0.3 * self.before)
+
+    @property
+    def moved(self) -> bool:
+        """Lands, and the isophote beside the stroke is on it too (it moved, rather than a new
+        little loop meeting the stroke while the old course stayed)."""
+        return self.lands and self.beside <= max(2.0, 0.3 * self.before)
 
 
 def corpus_layers(shapes=SHAPES, per_shape: int = 4, seed: int = 0, resolution: float = 0.03):
@@ -266,7 +276,8 @@ def run_edits(shape: str, mesh, rng, light, edits: int, kinds=KINDS) -> list[Out
     from sketchforge.errors import SketchforgeError
     from sketchforge.geometry.reflectance import LAMBERTIAN
 
-    from .layerdata import layer_data
+    from .fidelity import beside_distance, isophote_lines
+    from .layerdata import layer_data, shading
     from .pipeline import sculpt
 
     ld = layer_data(mesh, light, LAMBERTIAN)
@@ -288,7 +299,10 @@ def run_edits(shape: str, mesh, rng, light, edits: int, kinds=KINDS) -> list[Out
             continue
         seconds = time.perf_counter() - t
         max_dz = float(np.abs(r.mesh.V[:, 2] - mesh.V[:, 2]).max() / mesh.V[:, 2].max())
-        out.append(Outcome(shape, e.kind, e.move, "ok", "", r.before / ld.h, r.after / ld.h, r.fraction, seconds, mesh.n_vertices, max_dz))
+        _, E_new, _, _ = shading(ld.planar, r.mesh.V[:, 2], light, LAMBERTIAN)
+        beside = beside_distance(isophote_lines(ld.planar, E_new, r.c), r.stroke, 0.5 * e.band, ld.h) / ld.h
+        out.append(Outcome(shape, e.kind, e.move, "ok", "", r.before / ld.h, r.after / ld.h, r.fraction, seconds,
+                           mesh.n_vertices, max_dz, beside))
     return out
 
 

@@ -38,3 +38,30 @@ def honoured_samples(pd: PlanarData, pieces: list[np.ndarray], band) -> np.ndarr
     inside = shapely.contains_xy(band, P[:, 0], P[:, 1])
     d = shapely.distance(shapely.points(P), pd.outline.exterior)
     return P[inside & (d >= pd.margin_at(P))]
+
+
+def beside_distance(lines, stroke, radius: float, h: float) -> float:
+    """Mean distance from the isophote's points beside the stroke to the stroke: the other
+    direction of the fidelity measure. Points within ``radius`` of the stroke whose nearest
+    stroke point is not one of its ends count; an isophote that moved onto the stroke gives a
+    small value, one that stayed where it was (the stroke met only by a new little loop)
+    a large one. 0 when no point is beside the stroke.
+
+    Parameters
+    ----------
+    lines : shapely (Multi)LineString
+        The isophote, e.g. from :func:`isophote_lines`.
+    stroke : shapely (Multi)LineString
+    radius : float
+    h : float
+        Edge length (sampling step h/4; ends within 2h do not count as beside).
+    """
+    P = shapely.get_coordinates(shapely.segmentize(lines, 0.25 * h)) if not lines.is_empty else np.zeros((0, 2))
+    if len(P) == 0:
+        return 0.0
+    pts = shapely.points(P)
+    d = shapely.distance(pts, stroke)
+    parts = getattr(stroke, "geoms", [stroke])
+    ends = shapely.MultiPoint([p for g in parts for p in (g.coords[0], g.coords[-1])])
+    beside = (d < radius) & (shapely.distance(pts, ends) > d + 2.0 * h)
+    return float(d[beside].mean()) if beside.any() else 0.0
