@@ -6,7 +6,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import shapely
 
 from sketchforge.errors import SculptError
 from sketchforge.geometry import guard
