@@ -6,8 +6,10 @@ import numpy as np
 import shapely
 import shapely.ops
 
+from sketchforge.geometry.intensity import vertex_intensity
+from sketchforge.geometry.isophotes import isophotes
 from sketchforge.geometry.reflectance import LAMBERTIAN
-from sketchforge_isophote_tool.fidelity import honoured_samples, isophote_lines, mean_distance
+from sketchforge_isophote_tool.fidelity import honoured_samples, mean_distance
 from sketchforge_isophote_tool.isophote import picked_isophote
 from sketchforge_isophote_tool.layerdata import layer_data
 from sketchforge_isophote_tool.testing import LIGHT
@@ -30,9 +32,13 @@ def isophote_stroke(mesh, pick, offset=0.0, half=0.25, light=LIGHT):
 
 
 def fidelity(result, light=LIGHT):
-    """(mean distance stroke -> old isophote, mean distance stroke -> new c-isophote, h), measured
-    independently of the pipeline on the new mesh, at the stroke samples the edit honours."""
-    ld = layer_data(result.mesh, light, LAMBERTIAN)
+    """(mean distance stroke -> old isophote, mean distance stroke -> new c-isophote, h) at the
+    stroke samples the edit honours. The new shading is the one the app draws (the core's
+    vertex normals, ``vertex_intensity``), marched with the core's ``isophotes``: not the
+    solver's own slope operators, so a mismatch between the two would show here."""
+    pd = result.layer.planar
     pieces = [np.asarray(g.coords) for g in getattr(result.stroke, "geoms", [result.stroke])]
-    P = honoured_samples(ld.planar, pieces, result.band)
-    return mean_distance(P, result.isophote), mean_distance(P, isophote_lines(ld.planar, ld.E, result.c)), ld.h
+    P = honoured_samples(pd, pieces, result.band)
+    E = vertex_intensity(result.mesh.V, result.mesh.F, light)
+    lines = [L for L in isophotes(result.mesh.V[:, :2], result.mesh.F, E, result.c)[0] if len(L) > 1]
+    return mean_distance(P, result.isophote), mean_distance(P, shapely.MultiLineString(lines)), pd.h

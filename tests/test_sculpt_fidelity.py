@@ -65,7 +65,7 @@ def test_same_edit_at_two_resolutions_agrees():
 def test_what_the_app_draws_after_an_edit():
     """The landed isophote (white in the app) runs along the stroke, and the characteristics
     pass through the stroke in the direction -∇R (the strips' base direction, thesis 3.1.2)."""
-    from sketchforge_isophote_tool.layerdata import shading
+    from sketchforge_isophote_tool.layerdata import vertex_shading
 
     mesh = inflated("ellipse", 0.03)
     st, _, _ = isophote_stroke(mesh, [0.2, 0.1], 0.1)
@@ -75,7 +75,7 @@ def test_what_the_app_draws_after_an_edit():
     assert shapely.distance(shapely.points(P), shapely.MultiPoint(landed)).mean() < 2 * r.h
     lines = r.characteristics(n=9)
     assert len(lines) == 9
-    _, _, Rp, Rq = shading(r.layer.planar, r.layer.z, LIGHT, r.layer.model)
+    _, Rp, Rq = vertex_shading(r.layer.planar, r.layer.z, LIGHT, r.layer.model)
     for line in lines:
         assert shapely.distance(shapely.LineString(line), r.stroke) < 1e-9  # through the stroke
         k = int(np.argmin(shapely.distance(shapely.points(line), r.stroke)))

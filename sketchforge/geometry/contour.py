@@ -101,20 +101,21 @@ def _fmt(p) -> str:
     return f"({p[0]:.4g}, {p[1]:.4g})"
 
 
-def validate_stroke(points) -> np.ndarray:
-    """The stroke as an (n, 2) float64 array, or ContourError saying what is wrong."""
+def validate_stroke(points, error=ContourError, what: str = "stroke") -> np.ndarray:
+    """A drawn stroke as an (n, 2) float64 array, or ``error`` saying in one line what is wrong
+    (the outline of a layer, a redrawn isophote: ``what`` names it)."""
     try:
         P = np.array(points, dtype=np.float64)
-    except (TypeError, ValueError) as exc:
-        raise ContourError(f"the stroke must be a list of [x, y] number pairs ({exc})") from None
+    except (TypeError, ValueError, OverflowError) as exc:
+        raise error(f"the {what} must be a list of [x, y] number pairs ({exc})") from None
     if P.ndim != 2 or P.shape[1] != 2:
-        raise ContourError(f"the stroke must be a list of [x, y] pairs, got an array of shape {P.shape}")
+        raise error(f"the {what} must be a list of [x, y] pairs, got an array of shape {P.shape}")
     if not np.all(np.isfinite(P)):
         bad = int(np.flatnonzero(~np.all(np.isfinite(P), axis=1))[0])
-        raise ContourError(f"the stroke has a point that is not a finite number (point {bad}: {P[bad].tolist()})")
+        raise error(f"the {what} has a point that is not a finite number (point {bad}: {P[bad].tolist()})")
     if P.size and np.max(np.abs(P)) > MAX_COORDINATE:
-        raise ContourError(
-            f"the stroke's coordinates reach {np.max(np.abs(P)):.3g}; they must lie within "
+        raise error(
+            f"the {what}'s coordinates reach {np.max(np.abs(P)):.3g}; they must lie within "
             f"±{MAX_COORDINATE:.0e} drawing units"
         )
     return P
@@ -186,7 +187,7 @@ def segment_crossings(P, closed: bool) -> np.ndarray:
     return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
 
 
-def _intersection_point(a, b, c, d) -> np.ndarray:
+def intersection_point(a, b, c, d) -> np.ndarray:
     """Where segment ab meets segment cd (the midpoint of the overlap if they are parallel)."""
     r, s = b - a, d - c
     den = r[0] * s[1] - r[1] * s[0]
@@ -245,7 +246,7 @@ def prepare_outline(points, resolution: float, closed: bool = False) -> Outline:
     if len(crossings):
         i, j = crossings[0]
         Q = np.vstack([P, P[:1]])
-        x = _intersection_point(Q[i], Q[i + 1], Q[j], Q[j + 1])
+        x = intersection_point(Q[i], Q[i + 1], Q[j], Q[j + 1])
         if not trimmed and j == len(P) - 1 and not closed:
             raise ContourError(
                 f"the straight line closing the stroke (from its end back to its start) crosses the "
@@ -281,7 +282,7 @@ def _trim_overshoot(P):
     # Outermost crossing: the loop it closes keeps as much of the stroke as possible.
     i = int(cand[:, 0].min())
     j = int(cand[cand[:, 0] == i][:, 1].max())
-    x = _intersection_point(P[i], P[i + 1], P[j], P[j + 1])
+    x = intersection_point(P[i], P[i + 1], P[j], P[j + 1])
     loop = np.vstack([x[None], P[i + 1 : j + 1]])
     # Drop points that coincide with the new corner x.
     d = np.linalg.norm(loop - x, axis=1)

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sketchforge.geometry.contour import MAX_COORDINATE, _intersection_point, decimate, segment_crossings
+from sketchforge.geometry.contour import decimate, intersection_point, segment_crossings, validate_stroke
 
 #: Turning angle (degrees, chords over one edge length each side) above which a turn near an
 #: end is a hook.
@@ -74,21 +74,6 @@ def _at(P: np.ndarray, s: np.ndarray, t) -> np.ndarray:
     """Points at arc lengths t along P (s = its arc lengths)."""
     t = np.asarray(t, dtype=np.float64)
     return np.stack([np.interp(t, s, P[:, 0]), np.interp(t, s, P[:, 1])], axis=-1)
-
-
-def validate_points(points, error=ValueError, what: str = "stroke") -> np.ndarray:
-    """(n, 2) float64 finite points within ±MAX_COORDINATE, or ``error`` with a one-line reason."""
-    try:
-        P = np.array(points, dtype=np.float64)
-    except (TypeError, ValueError, OverflowError):
-        raise error(f"the {what} must be a list of [x, y] number pairs") from None
-    if P.ndim != 2 or P.shape[1] != 2:
-        raise error(f"the {what} must be a list of [x, y] pairs, got an array of shape {P.shape}")
-    if not np.isfinite(P).all():
-        raise error(f"the {what} has a point that is not a finite number")
-    if P.size and np.abs(P).max() > MAX_COORDINATE:
-        raise error(f"the {what}'s coordinates reach {np.abs(P).max():.3g}; they must lie within ±{MAX_COORDINATE:.0e}")
-    return P
 
 
 def _turns(P: np.ndarray, window: float) -> np.ndarray:
@@ -170,7 +155,7 @@ def _resolve_loops(P: np.ndarray) -> tuple[np.ndarray, bool, int]:
         i = int(pairs[0, 0])
         j = int(pairs[pairs[:, 0] == i][:, 1].max())  # outermost loop starting at segment i
         R = np.vstack([Q, Q[:1]]) if closed else Q
-        x = _intersection_point(R[i], R[i + 1], R[j], R[j + 1])
+        x = intersection_point(R[i], R[i + 1], R[j], R[j + 1])
         loop = np.vstack([x[None], R[i + 1 : j + 1], x[None]])
         rest = np.vstack([R[: i + 1], x[None], R[j + 1 :]])
         s = _arclength(R)
@@ -205,7 +190,7 @@ def clean_open_stroke(points, h: float, error=ValueError, what: str = "stroke") 
     CleanStroke
         A polyline without self-crossings, consecutive points distinct.
     """
-    P = validate_points(points, error, what)
+    P = validate_stroke(points, error, what)
     if len(P):
         P = P[np.concatenate([[True], np.any(np.diff(P, axis=0) != 0, axis=1)])]
     if len(P) < 2:

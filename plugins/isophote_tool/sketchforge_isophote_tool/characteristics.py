@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .layerdata import LayerData, shading
+from .layerdata import LayerData, vertex_shading
 
 #: Curves drawn through a stroke (spread evenly along it).
 N_CURVES = 15
@@ -38,7 +38,7 @@ def base_characteristics(ld: LayerData, stroke_pieces: list[np.ndarray], reach: 
     s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(P, axis=0), axis=1))])
     t = np.linspace(0.0, s[-1], n + 2)[1:-1]
     seeds = np.column_stack([np.interp(t, s, P[:, 0]), np.interp(t, s, P[:, 1])])
-    _, _, Rp, Rq = shading(pd, ld.z, ld.light, ld.model)
+    _, Rp, Rq = vertex_shading(pd, ld.z, ld.light, ld.model)
     flow = -np.column_stack([Rp, Rq])
     step = 0.5 * pd.h
     n_steps = int(np.ceil(reach / step))

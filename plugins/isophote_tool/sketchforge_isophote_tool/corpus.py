@@ -277,7 +277,7 @@ def run_edits(shape: str, mesh, rng, light, edits: int, kinds=KINDS) -> list[Out
     from sketchforge.geometry.reflectance import LAMBERTIAN
 
     from .fidelity import beside_distance, isophote_lines
-    from .layerdata import layer_data, shading
+    from .layerdata import layer_data, vertex_shading
     from .pipeline import sculpt
 
     ld = layer_data(mesh, light, LAMBERTIAN)
@@ -299,7 +299,7 @@ def run_edits(shape: str, mesh, rng, light, edits: int, kinds=KINDS) -> list[Out
             continue
         seconds = time.perf_counter() - t
         max_dz = float(np.abs(r.mesh.V[:, 2] - mesh.V[:, 2]).max() / mesh.V[:, 2].max())
-        _, E_new, _, _ = shading(ld.planar, r.mesh.V[:, 2], light, LAMBERTIAN)
+        E_new, _, _ = vertex_shading(ld.planar, r.mesh.V[:, 2], light, LAMBERTIAN)
         beside = beside_distance(isophote_lines(ld.planar, E_new, r.c), r.stroke, 0.5 * e.band, ld.h) / ld.h
         out.append(Outcome(shape, e.kind, e.move, "ok", "", r.before / ld.h, r.after / ld.h, r.fraction, seconds,
                            mesh.n_vertices, max_dz, beside))

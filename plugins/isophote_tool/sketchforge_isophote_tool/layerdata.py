@@ -8,7 +8,7 @@ of the heights), the squared Laplacian, the lumped mass, the outline, a point lo
 distance of each vertex to the outline and the layer's local width there, and the rim margin.
 
 :class:`LayerData` adds what depends on the heights, the light and the reflectance model:
-p, q, the shading E and R's slope gradient at every vertex.
+the shading E at every vertex.
 """
 
 from __future__ import annotations
@@ -87,16 +87,8 @@ class PlanarData:
     width_grid: tuple
 
     def margin_at(self, P: np.ndarray) -> np.ndarray:
-        """The rim margin (k,) at points P (k, 2): bilinear in the local-width grid, so it is
-        continuous in P."""
-        origin, spacing, W = self.width_grid
-        u = (np.asarray(P, np.float64).reshape(-1, 2) - origin) / spacing
-        rho = ndi.map_coordinates(W, u.T, order=1, mode="nearest")
-        return np.minimum(self.margin, RIM_WIDTH_FRACTION * rho)
-
-    def omega_star(self, margin: float | None = None):
-        """The layer minus a rim margin (shapely geometry), for display."""
-        return self.outline.buffer(-(self.margin if margin is None else margin))
+        """The rim margin (k,) at points P (k, 2) (see :func:`local_margin`)."""
+        return local_margin(self.width_grid, self.margin, P)
 
 
 @dataclass
@@ -108,8 +100,6 @@ class LayerData:
     mesh : Mesh
     planar : PlanarData
     z : (n,) float64
-    pq : (n, 2) float64
-        Slopes of the vertex normals.
     E : (n,) float64
         Signed shading R(p, q) per vertex: what the app shows.
     light : (3,) float64
@@ -119,7 +109,6 @@ class LayerData:
     mesh: Mesh
     planar: PlanarData
     z: np.ndarray
-    pq: np.ndarray
     E: np.ndarray
     light: np.ndarray
     model: ReflectanceModel
@@ -181,6 +170,15 @@ def slope_operators(V2: np.ndarray, F: np.ndarray) -> tuple[sp.csr_matrix, sp.cs
     return (avg @ Dx).tocsr(), (avg @ Dy).tocsr()
 
 
+def local_margin(width_grid: tuple, margin: float, P: np.ndarray) -> np.ndarray:
+    """The rim margin (k,) at points P (k, 2): ``margin``, or RIM_WIDTH_FRACTION of the local
+    half-width where that is less; bilinear in the width grid, so continuous in P."""
+    origin, spacing, W = width_grid
+    u = (np.asarray(P, np.float64).reshape(-1, 2) - origin) / spacing
+    rho = ndi.map_coordinates(W, u.T, order=1, mode="nearest")
+    return np.minimum(margin, RIM_WIDTH_FRACTION * rho)
+
+
 def _width_grid(outline, h: float, reach: float) -> tuple:
     """Local half-width of the layer on a grid of spacing ~h/2: the largest distance to the
     outline within ``reach`` of each node (a max filter of the distance transform), so a thin
@@ -239,7 +237,7 @@ def _planar(mesh: Mesh) -> PlanarData:
     size = 2.0 * outline.area / outline.length
     margin = max(RIM_EDGES * h, RIM_SIZE * size)
     grid = _width_grid(outline, h, margin / RIM_WIDTH_FRACTION)
-    pd = PlanarData(
+    return PlanarData(
         V2=V2,
         F=F,
         h=h,
@@ -252,11 +250,9 @@ def _planar(mesh: Mesh) -> PlanarData:
         is_contour=is_contour,
         d_rim=d_rim,
         margin=margin,
-        margin_v=np.zeros(0),
+        margin_v=local_margin(grid, margin, V2),
         width_grid=grid,
     )
-    pd.margin_v = pd.margin_at(V2)
-    return pd
 
 
 _PLANAR: "OrderedDict[bytes, PlanarData]" = OrderedDict()
@@ -298,11 +294,10 @@ def mesh_key(mesh: Mesh) -> bytes:
     return _digest(mesh.V, mesh.F, mesh.boundary)
 
 
-def shading(pd: PlanarData, z: np.ndarray, light: np.ndarray, model: ReflectanceModel):
-    """Slopes (n, 2), shading E (n,) and its slope gradient R_p, R_q (n,) for heights z (n,)."""
-    p, q = pd.Gp @ z, pd.Gq @ z
-    R, Rp, Rq = evaluate_pq(model, p, q, light)
-    return np.column_stack([p, q]), R, Rp, Rq
+def vertex_shading(pd: PlanarData, z: np.ndarray, light: np.ndarray, model: ReflectanceModel):
+    """Shading E (n,) at the vertices for heights z (n,), with its slope gradient R_p, R_q (n,):
+    R at the vertex-normal slopes (Gp z, Gq z), what the app shows."""
+    return evaluate_pq(model, pd.Gp @ z, pd.Gq @ z, light)
 
 
 def layer_data(mesh: Mesh, light: np.ndarray, model: ReflectanceModel) -> LayerData:
@@ -313,7 +308,7 @@ def layer_data(mesh: Mesh, light: np.ndarray, model: ReflectanceModel) -> LayerD
     def make() -> LayerData:
         pd = planar_data(mesh)
         z = np.array(mesh.V[:, 2])
-        pq, E, _, _ = shading(pd, z, light, model)
-        return LayerData(mesh, pd, z, pq, E, light, model)
+        E, _, _ = vertex_shading(pd, z, light, model)
+        return LayerData(mesh, pd, z, E, light, model)
 
     return cached(_CACHE, key, make)

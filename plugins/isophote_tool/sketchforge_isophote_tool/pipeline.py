@@ -36,9 +36,9 @@ from sketchforge.plugins.registry import ReflectanceModel
 from .fidelity import honoured_samples, isophote_lines, mean_distance
 from .heights import GN_STEPS, solve_heights
 from .isophote import band_around, picked_isophote
-from .layerdata import LayerData, cached, layer_data, shading
+from .layerdata import LayerData, cached, layer_data, vertex_shading
 from .shading import bary_rows, shading_change
-from .stroke import clip_to_band, prepare_stroke, stroke_samples
+from .stroke import clip_to_band, prepare_stroke, resample_polyline, stroke_samples
 
 #: Options of :func:`sculpt`; lengths "in edge lengths" are multiples of the mean edge length h.
 DEFAULT_OPTIONS = {
@@ -122,10 +122,8 @@ class SculptResult:
     def new_isophotes(self) -> list:
         """The isophote E = c on the edited surface (polylines (k, 2) within the support), for
         display: where the redrawn isophote actually landed."""
-        from .layerdata import shading as shade
-
         pd = self.layer.planar
-        _, E, _, _ = shade(pd, self.mesh.V[:, 2], self.layer.light, self.layer.model)
+        E, _, _ = vertex_shading(pd, self.mesh.V[:, 2], self.layer.light, self.layer.model)
         near = shapely.intersection(isophote_lines(pd, E, self.c), self.support)
         return [np.asarray(g.coords) for g in getattr(near, "geoms", [near]) if g.geom_type == "LineString" and not g.is_empty]
 
@@ -207,17 +205,9 @@ def _distance_to(pieces: list[np.ndarray], P: np.ndarray, h: float, upper: float
     """Distance (k,) from points P (k, 2) to the stroke pieces, capped at ``upper``: the nearest
     of samples every h/8 along them (within h/64 of the exact distance; a minimum of
     continuous functions, so continuous in the stroke)."""
-    S = np.concatenate([_densify(p, 0.125 * h) for p in pieces])
+    S = np.concatenate([resample_polyline(p, 0.125 * h) for p in pieces])
     d, _ = cKDTree(S).query(P, distance_upper_bound=upper)
     return np.minimum(d, upper)
-
-
-def _densify(P: np.ndarray, step: float) -> np.ndarray:
-    seg = np.linalg.norm(np.diff(P, axis=0), axis=1)
-    k = np.maximum(np.ceil(seg / step).astype(int), 1)
-    t = np.concatenate([np.arange(n) / n for n in k])
-    i = np.repeat(np.arange(len(seg)), k)
-    return np.vstack([P[i] + t[:, None] * (P[i + 1] - P[i]), P[-1:]])
 
 
 def sculpt(
@@ -304,11 +294,11 @@ def sculpt(
     T["zones"] = time.perf_counter() - t
 
     t = time.perf_counter()
-    dE = shading_change(pd, ld.E, free_E, samples, w_s, c)
+    B = bary_rows(pd, samples.P)
+    dE = shading_change(pd, ld.E, free_E, B, samples.w * w_s, c)
     T["shading"] = time.perf_counter() - t
 
     t = time.perf_counter()
-    B = bary_rows(pd, samples.P, np.ones(len(samples.P)))
     dz = solve_heights(
         ld, ld.E + dE, U, w, float(opts["smoothness"]), int(opts["steps"]),
         (B, samples.w * w_s), c, float(opts["stroke_weight"]),
@@ -320,7 +310,7 @@ def sculpt(
     for frac in (1.0,) + (FALLBACK_FRACTIONS if opts["never_worse"] else ()):
         zf = np.maximum(ld.z + frac * dz, 0.0)  # heights >= 0 by contract
         zf[pd.is_contour] = 0.0
-        _, Ef, _, _ = shading(pd, zf, light, model)
+        Ef, _, _ = vertex_shading(pd, zf, light, model)
         af = mean_distance(honoured, isophote_lines(pd, Ef, c))
         if z is None or af < after:
             fraction, z, after = frac, zf, af

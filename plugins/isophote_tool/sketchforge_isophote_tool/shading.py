@@ -27,7 +27,6 @@ from sketchforge.errors import SolverError
 from sketchforge.geometry.dirichlet import DirichletSolver
 
 from .layerdata import PlanarData
-from .stroke import StrokeSamples
 
 #: Weight of the stroke's line integral against the smoothness energy, in units of h⁻³ (the
 #: scale at which the two balance for a change varying over one edge length): the stroke
@@ -35,17 +34,16 @@ from .stroke import StrokeSamples
 STROKE_WEIGHT = 1e3
 
 
-def bary_rows(pd: PlanarData, P: np.ndarray, weights: np.ndarray) -> sp.csr_matrix:
-    """Rows (k, n): weights[k] × the barycentric coordinates of P[k] on the layer; points just
-    outside the outline are snapped onto it."""
+def bary_rows(pd: PlanarData, P: np.ndarray) -> sp.csr_matrix:
+    """Rows (k, n): the barycentric coordinates of P[k] on the layer, so ``B @ f`` interpolates
+    a vertex field at the points; points just outside the outline are snapped onto it."""
     face, bary = pd.locator.locate(P, nearest=True)
     rows = np.repeat(np.arange(len(P)), 3)
-    data = (bary * np.asarray(weights, np.float64)[:, None]).ravel()
-    return sp.csr_matrix((data, (rows, pd.F[face].ravel())), shape=(len(P), len(pd.V2)))
+    return sp.csr_matrix((bary.ravel(), (rows, pd.F[face].ravel())), shape=(len(P), len(pd.V2)))
 
 
-def shading_change(pd: PlanarData, E: np.ndarray, free: np.ndarray, samples: StrokeSamples, w: np.ndarray, c: float) -> np.ndarray:
-    """δE (n,) minimising δEᵀ Q δE + β Σ_k w_k s_k (E(P_k) + δE(P_k) − c)², δE = 0 where not free.
+def shading_change(pd: PlanarData, E: np.ndarray, free: np.ndarray, B: sp.csr_matrix, ws: np.ndarray, c: float) -> np.ndarray:
+    """δE (n,) minimising δEᵀ Q δE + β Σ_k w_k (E(P_k) + δE(P_k) − c)², δE = 0 where not free.
 
     Parameters
     ----------
@@ -54,10 +52,10 @@ def shading_change(pd: PlanarData, E: np.ndarray, free: np.ndarray, samples: Str
         The current shading.
     free : (n,) bool
         Vertices where the shading may change.
-    samples : StrokeSamples
-        Quadrature points and weights s_k along the stroke.
-    w : (k,) float64
-        Extra weight per sample in [0, 1] (fades the stroke out in the rim margin).
+    B : (k, n) scipy.sparse.csr_matrix
+        Barycentric rows of the stroke's quadrature points (:func:`bary_rows`).
+    ws : (k,) float64
+        Their quadrature weights (times a fade to 0 in the rim margin).
     c : float
         The isovalue.
     """
@@ -65,8 +63,6 @@ def shading_change(pd: PlanarData, E: np.ndarray, free: np.ndarray, samples: Str
     idx = np.nonzero(free)[0]
     if len(idx) == 0:
         return dE
-    ws = samples.w * w
-    B = bary_rows(pd, samples.P, np.ones(len(ws)))
     r = c - B @ E
     Bf = B[:, idx]
     beta = STROKE_WEIGHT / pd.h**3

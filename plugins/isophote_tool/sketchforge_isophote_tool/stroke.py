@@ -9,6 +9,7 @@ import numpy as np
 
 from sketchforge.errors import SculptError
 from sketchforge.geometry import guard
+from sketchforge.geometry.contour import validate_stroke
 from sketchforge.geometry.strokes import clean_open_stroke
 
 #: Most points of a resampled stroke (spacing h/2): ~50 000 edge lengths, far beyond any drawn
@@ -78,9 +79,7 @@ def prepare_stroke(stroke, h: float, smooth_iters: int = 3) -> np.ndarray:
 
 def guard_length(stroke, h: float) -> np.ndarray:
     """The stroke as finite (k, 2) float64 points, refusing one too long to resample."""
-    from sketchforge.geometry.strokes import validate_points
-
-    P = validate_points(stroke, SculptError, "stroke")
+    P = validate_stroke(stroke, SculptError, "stroke")
     length = float(np.linalg.norm(np.diff(P, axis=0), axis=1).sum()) if len(P) > 1 else 0.0
     if length > MAX_STROKE_SAMPLES * 0.5 * h:
         raise SculptError(
