@@ -213,6 +213,12 @@ class ReplaceLayerCommand(Command):
     _old: Layer | None = field(default=None, repr=False)
     _new: Layer | None = field(default=None, repr=False)
 
+    @property
+    def replaced(self) -> Layer | None:
+        """The layer value this command replaces (None before its first ``do``): what an
+        attempt that replaces this one would start from."""
+        return self._old
+
     def compute(self, doc, old: Layer) -> Layer:
         raise NotImplementedError
 

@@ -29,6 +29,16 @@ from PySide6.QtCore import QObject, Signal
 from sketchforge.qt.workers import JobRunner
 
 
+#: ``run``'s default ``guard_token``: the runner starts its own crash record.
+_NO_TOKEN = object()
+
+
+def end_guard(guard, token) -> None:
+    """End a crash record started with ``guard.before`` (nothing if there was none)."""
+    if guard is not None and token is not None:
+        guard.after(token)
+
+
 class CommandRunner(QObject):
     busy_changed = Signal(bool)
     #: (exception, traceback text, the command) — the window shows it
@@ -61,21 +71,22 @@ class CommandRunner(QObject):
         on_done: Callable | None = None,
         on_error: Callable | None = None,
         on_cancel: Callable | None = None,
-        guard_token=None,
+        guard_token=_NO_TOKEN,
     ) -> bool:
         """Start; returns False (and does nothing) if another command is being prepared.
 
         ``guard_token``: the caller already called ``guard.before`` (because it changed the
-        document first, e.g. undid an attempt it replaces); the runner ends that record instead
-        of starting its own. If ``run`` returns False the caller ends it."""
+        document first, e.g. undid an attempt it replaces) and passes what it returned (None
+        when that flush failed: it is not retried on the changed document); the runner ends
+        that record instead of starting its own. If ``run`` returns False the caller ends it."""
         if self.busy:
             return False
         before = list(before)
         # The state before the user's action, with the action named, is on disk before any
         # native code runs: a crash in the solver loses nothing and is not replayed.
         token = guard_token
-        if token is None and self.guard is not None:
-            token = self.guard.before(cmd, macro=macro, before=before)
+        if token is _NO_TOKEN:
+            token = self.guard.before(cmd, macro=macro, before=before) if self.guard is not None else None
         stack = self.doc.undo_stack
         if macro is not None:
             stack.begin_macro(macro)
@@ -122,8 +133,7 @@ class CommandRunner(QObject):
         return True
 
     def _guard_after(self, token) -> None:
-        if self.guard is not None and token is not None:
-            self.guard.after(token)
+        end_guard(self.guard, token)
 
     def cancel(self) -> None:
         """Drop the running preparation; the document stays as it was before ``run``."""
@@ -179,8 +189,7 @@ class GuardedJobs(QObject):
         return self._jobs.start(work, on_done, on_error, label=label, background=background)
 
     def _after(self, token) -> None:
-        if self.guard is not None and token is not None:
-            self.guard.after(token)
+        end_guard(self.guard, token)
 
     def __getattr__(self, name):  # running(), wait(), cancel_all(), busy_changed, ...
         if name.startswith("_"):

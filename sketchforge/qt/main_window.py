@@ -689,7 +689,8 @@ class MainWindow(QMainWindow):
     def cancel_current(self) -> None:
         """Esc: stop the running solve, and drop a sculpt stroke being drawn with its preview."""
         self.runner.cancel()
-        self.sculpt.cancel()
+        if self.canvas.interaction == "sculpt":
+            self.sculpt.cancel()
 
     # --- background warm-up and closing ---------------------------------------------------------
     def start_warm_up(self) -> None:

@@ -5,7 +5,9 @@ show the band around it (orange, dashed). Wheel or the panel's slider: band radi
 redrawn isophote (cyan). While the stroke is drawn, a live
 preview of the edit is computed off the GUI thread (one at a time, always for the latest
 stroke: throttled by the solve itself, ~50 ms at 5k vertices) and the picked layer is shown
-with the previewed surface; Esc or a new pick drops it. Release: a ``sculpt_isophote`` command
+with the previewed surface; Esc or a new pick drops it. A preview starts from the surface the
+release will edit (before the last attempt, when that is replaced), and one crash record
+covers a whole gesture's previews (not one disk write per mouse move). Release: a ``sculpt_isophote`` command
 is built from (layer, pick, band radius, stroke), prepared off the GUI thread (progress +
 cancel in the status bar) and pushed. Drawing again after an attempt replaces it: the attempt
 is undone first, and redone if the new one fails. An edit that changes nothing reports the
@@ -23,7 +25,7 @@ import numpy as np
 from PySide6.QtCore import QObject, Signal
 
 from sketchforge.errors import SketchforgeError
-from sketchforge.qt.command_runner import GuardedJobs
+from sketchforge.qt.command_runner import end_guard
 from sketchforge.qt.render2d import polygon_rings
 
 TOOL_NAME = "sculpt_isophote"
@@ -50,11 +52,13 @@ class SculptController(QObject):
         self._last_attempt = None
         self.last_info: dict = {}
         self.tool = self._make_tool()
-        # Previews run native solvers too: guarded like commands (the autosave is current).
-        self._preview_jobs = GuardedJobs(runner.jobs, getattr(runner, "guard", None), "Sculpt preview", self)
-        self._preview_job = None  # the job in flight
+        self._preview_job = None  # the job in flight (never cancelled: its native code runs on)
         self._preview_pending = None  # the latest stroke, waiting for the job in flight
         self._preview_generation = 0  # bumped to drop results of a finished gesture
+        # Previews run native solvers too: one crash record (runner.guard) per gesture, ended
+        # when the gesture is over and its last preview job has returned.
+        self._preview_token = None
+        self._preview_open = False
         #: the last preview's SculptResult (for tests and the status line), None if none shown
         self.preview_result = None
 
@@ -191,6 +195,16 @@ class SculptController(QObject):
         if not on:
             self.stop_preview()
 
+    def _base_mesh(self):
+        """The surface a release will edit: before the last attempt when that is replaced."""
+        stack = self.doc.undo_stack
+        last = self._last_attempt
+        if last is not None and stack.index > 0 and stack.command(stack.index - 1) is last:
+            replaced = getattr(last, "replaced", None)
+            if replaced is not None and replaced.id == self.tool.layer_id:
+                return replaced.mesh
+        return None
+
     def _request_preview(self, stroke: np.ndarray) -> None:
         """Compute the edit for ``stroke`` off the GUI thread; while one is computing, only the
         latest stroke waits (moves in between are skipped: the solve is the throttle)."""
@@ -198,9 +212,14 @@ class SculptController(QObject):
             self._preview_pending = stroke
             return
         try:
-            job = self.tool.preview_job(stroke)
+            job = self.tool.preview_job(stroke, self._base_mesh())
         except SketchforgeError:
             return
+        if not self._preview_open:
+            guard = getattr(self.runner, "guard", None)
+            if self._preview_token is None and guard is not None:
+                self._preview_token = guard.before(None, text="Sculpt preview")
+            self._preview_open = True
         generation, layer_id = self._preview_generation, self.tool.layer_id
 
         def done(result) -> None:
@@ -208,36 +227,42 @@ class SculptController(QObject):
             if generation == self._preview_generation:
                 self.preview_result = result
                 self.canvas.show_preview(layer_id, result.mesh)
-                self._set_status(
-                    f"preview: the isophote would move from {result.before / result.h:.1f} to "
-                    f"{result.after / result.h:.1f} edge lengths of the stroke — release to apply"
-                )
+                self._set_status(f"preview: {result.describe()} — release to apply")
             self._next_preview()
 
         def failed(exc, tb) -> None:
             self._preview_job = None
-            if generation == self._preview_generation and isinstance(exc, SketchforgeError):
+            if generation == self._preview_generation:
                 self.canvas.clear_preview()
                 self.preview_result = None
-                self._set_status(f"preview: {exc}")
+                # A SketchforgeError is the edit's own answer; anything else is a plugin bug,
+                # said as such rather than leaving a stale preview on screen.
+                text = str(exc) if isinstance(exc, SketchforgeError) else f"the preview failed ({exc!r}); see the log"
+                self._set_status(f"preview: {text}")
+                if not isinstance(exc, SketchforgeError):
+                    self.message.emit(text)
             self._next_preview()
 
-        self._preview_job = self._preview_jobs.start(job, done, failed, label="Sculpt preview", background=True)
+        self._preview_job = self.runner.jobs.start(job, done, failed, label="Sculpt preview", background=True)
 
     def _next_preview(self) -> None:
         stroke, self._preview_pending = self._preview_pending, None
-        if stroke is not None and self.live_preview:
+        if stroke is not None and self.live_preview and self._preview_open:
             self._request_preview(stroke)
+        elif self._preview_job is None and not self._preview_open:
+            end_guard(getattr(self.runner, "guard", None), self._preview_token)
+            self._preview_token = None
 
     def stop_preview(self) -> None:
-        """Drop the preview: results still in flight are ignored, the layer is shown as it is."""
+        """Drop the preview: the layer is shown as it is, results still in flight are ignored,
+        and the gesture's crash record ends once the job in flight has returned."""
         self._preview_generation += 1
         self._preview_pending = None
-        if self._preview_job is not None:
-            self._preview_job.cancel()
-            self._preview_job = None
+        self._preview_open = False
         self.preview_result = None
         self.canvas.clear_preview()
+        if self._preview_job is None:
+            self._next_preview()
 
     def stroke_release(self, pos) -> None:
         if self.tool is None:
@@ -258,6 +283,9 @@ class SculptController(QObject):
 
     def apply(self, cmd) -> None:
         """Replace the last attempt (if it is still on top of the history) with ``cmd``."""
+        if self.runner.busy:
+            self.message.emit("a solve is already running")
+            return
         stack = self.doc.undo_stack
         guard = getattr(self.runner, "guard", None)
         # The crash guard records the state before this gesture, the last attempt included:
@@ -287,13 +315,10 @@ class SculptController(QObject):
             self.last_info = result_info(done_cmd)
             self._show_debug()
             r = getattr(done_cmd, "result", None)
-            moved = ""
             if r is not None and callable(getattr(r, "new_isophotes", None)):
                 # The isophote as it now runs (white), over the stroke that asked for it (cyan).
                 self.canvas.set_overlay("isophote", r.new_isophotes())
-            if r is not None and hasattr(r, "before"):
-                part = "" if r.fraction == 1.0 else f" ({r.fraction:.0%} of the change: the full one overshot)"
-                moved = f"isophote {r.before / r.h:.1f} → {r.after / r.h:.1f} edge lengths from the stroke{part}; "
+            moved = f"{r.describe()}; " if callable(getattr(r, "describe", None)) else ""
             self._set_status(f"applied: {moved}draw again to replace this attempt, or click to pick another isophote")
 
         self._set_status("sculpting…")
@@ -306,8 +331,7 @@ class SculptController(QObject):
             guard_token=token,
         )
         if not started:
-            if guard is not None and token is not None:
-                guard.after(token)
+            end_guard(guard, token)
             restore()
             self.message.emit("a solve is already running")
 

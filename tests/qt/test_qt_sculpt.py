@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from PySide6.QtCore import Qt
+from PySide6.QtWidgets import QApplication
 
 from qt_helpers import wait_idle
 from sketchforge.document import fileformat as ff
@@ -120,3 +121,40 @@ def test_live_preview_while_drawing_then_cancel_or_apply(make_window, mouse, qtb
     assert w.doc.undo_stack.count() == 1, w.sculpt.status
     assert "applied" in w.sculpt.status and "edge lengths" in w.sculpt.status
     assert item._mesh is w.doc.layer("blob").mesh
+
+
+def test_a_second_stroke_previews_what_its_release_applies(make_window, mouse, qtbot, host):
+    """Drawing again replaces the last attempt, so its preview must start from the surface
+    before that attempt, not from the attempt itself; and a gesture's previews leave no crash
+    record behind once they are over."""
+    from PySide6.QtCore import QEvent
+
+    if COMMAND not in host.commands.names():
+        pytest.skip("the isophote tool plugin is not installed")
+    w = make_window(ellipse_doc(host))
+    w.canvas.fit()
+    w.modes.sculpture.setChecked(True)
+    w.sculpt_panel.spin.setValue(0.15)
+    m = mouse(w.canvas)
+    m.click_pixel(m.aim((0.3, 0.05))[0])
+    m.drag_pixels([m.aim((0.36, y))[0] for y in np.linspace(-0.3, 0.3, 9)])
+    wait_idle(qtbot, w, timeout=120_000)
+    assert w.doc.undo_stack.count() == 1, w.sculpt.status
+    pixels = [m.aim((0.33, y))[0] for y in np.linspace(-0.3, 0.3, 9)]
+    L, N = Qt.MouseButton.LeftButton, Qt.MouseButton.NoButton
+    m._send(QEvent.Type.MouseMove, pixels[0], N, N)
+    m._send(QEvent.Type.MouseButtonPress, pixels[0], L, L)
+    for p in pixels[1:]:
+        m._send(QEvent.Type.MouseMove, p, N, L)
+    qtbot.waitUntil(lambda: w.sculpt._preview_job is None and w.sculpt.preview_result is not None, timeout=60_000)
+    # the queued latest stroke may still be computing: wait until the preview is for all of it
+    qtbot.waitUntil(lambda: w.sculpt._preview_job is None and w.sculpt._preview_pending is None, timeout=60_000)
+    previewed = w.sculpt.preview_result.mesh
+    m._send(QEvent.Type.MouseButtonRelease, pixels[-1], L, N)
+    QApplication.processEvents()
+    wait_idle(qtbot, w, timeout=120_000)
+    assert w.doc.undo_stack.count() == 1  # replaced, not stacked
+    assert np.allclose(w.doc.layer("blob").mesh.V, previewed.V, atol=1e-12)
+    qtbot.waitUntil(lambda: w.sculpt._preview_job is None, timeout=60_000)
+    QApplication.processEvents()
+    assert not w.autosaver.pending_path.exists()

@@ -127,6 +127,11 @@ class SculptResult:
         near = shapely.intersection(isophote_lines(pd, E, self.c), self.support)
         return [np.asarray(g.coords) for g in getattr(near, "geoms", [near]) if g.geom_type == "LineString" and not g.is_empty]
 
+    def describe(self) -> str:
+        """One line for the person: how far the isophote was and is from the stroke."""
+        part = "" if self.fraction == 1.0 else f" ({self.fraction:.0%} of the change: the whole of it overshot)"
+        return f"isophote {self.before / self.h:.1f} → {self.after / self.h:.1f} edge lengths from the stroke{part}"
+
     @property
     def h(self) -> float:
         """The layer's edge length (fidelity is best read in edge lengths)."""

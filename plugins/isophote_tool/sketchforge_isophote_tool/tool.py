@@ -25,10 +25,12 @@ API (what a front end calls)
     thread and push it later. Raises SculptError without a pick.
 ``command_dict(stroke) -> dict``
     Its journal entry.
-``preview_job(stroke) -> callable``
+``preview_job(stroke, mesh=None) -> callable``
     A zero-argument function computing the edit the stroke would make (a ``SculptResult``,
     not applied), with the layer, light, pick, band and model captured now: a front end runs
     it on a worker thread while the stroke is still being drawn and shows ``result.mesh``.
+    ``mesh``: the surface the edit will start from when it is not the layer's current one
+    (a front end that replaces its last attempt passes the surface before that attempt).
 ``press / move / release``
     The headless gesture. press-release without moving picks (as ``pick_at``); after a pick,
     press-move-release redraws: ``release`` builds the command, pushes it synchronously,
@@ -225,14 +227,14 @@ class SculptIsophoteTool(Tool):
         """The command for the current pick and ``stroke``, built but not pushed."""
         return SculptIsophote.from_dict(self.command_dict(stroke))
 
-    def preview_job(self, stroke):
-        """A pure function computing the edit ``stroke`` would make now (see the module
+    def preview_job(self, stroke, mesh=None):
+        """A pure function computing the edit ``stroke`` would make (see the module
         docstring). Raises SculptError without a pick."""
         if self.pick is None or self.layer_id not in self.doc.layer_ids():
             raise SculptError(PICK_FIRST)
         from .pipeline import sculpt
 
-        mesh = self.doc.layer(self.layer_id).mesh
+        mesh = self.doc.layer(self.layer_id).mesh if mesh is None else mesh
         light = np.array(self.doc.light.direction, dtype=np.float64)
         pick, band, model = self.pick.copy(), float(self.band), self.model()
         points = np.array(stroke, dtype=np.float64).reshape(-1, 2)
