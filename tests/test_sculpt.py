@@ -14,7 +14,7 @@ from sketchforge.geometry.mesh import Mesh
 from sketchforge.geometry.reflectance import LAMBERTIAN
 from sketchforge_isophote_tool import sculpt
 from sketchforge_isophote_tool.isophote import picked_isophote
-from sketchforge_isophote_tool.layerdata import layer_data, slope_operators
+from sketchforge_isophote_tool.layerdata import layer_data
 from sketchforge_isophote_tool.testing import LIGHT, inflated
 
 ISSUE_STROKE = [[0.1, -0.3], [0.15, -0.1], [0.22, 0.1], [0.3, 0.3]]
@@ -102,16 +102,6 @@ def test_issue_crash_case_is_deterministic_and_lands():
 
 
 # --- consistency ------------------------------------------------------------------------------
-
-
-def test_slope_operators_are_the_vertex_normals_the_app_shades_with(ellipse):
-    from sketchforge.geometry.normals import slopes, vertex_normals
-
-    Gp, Gq = slope_operators(ellipse.V[:, :2], ellipse.F)
-    p, q = slopes(vertex_normals(ellipse.V, ellipse.F), 1e-6)
-    interior = np.setdiff1d(np.arange(ellipse.n_vertices), ellipse.boundary)
-    z = ellipse.V[:, 2]
-    assert np.abs(Gp @ z - p)[interior].max() < 1e-9 and np.abs(Gq @ z - q)[interior].max() < 1e-9
 
 
 @pytest.mark.parametrize("shape,pick", CASES)

@@ -118,3 +118,24 @@ def test_intensity_from_mesh_normals_converges_on_gaussian_bump():
         m = gaussian_bump(1.0, h)
         errs.append(np.abs(vertex_intensity(m.V, m.F, L) - gaussian_normals(m.V[:, :2]) @ L).max())
     assert errs[0] < 0.1 and errs[1] < 0.7 * errs[0]
+
+
+def test_gradient_operators_give_the_slopes_of_the_vertex_normals():
+    """(Gx z, Gy z) are exactly the slopes of the area-weighted vertex normals the app shades
+    with (the isophote sculpt fits heights through these operators), and Gx f is
+    vertex_gradient's answer for any field f."""
+    from sketchforge.geometry.intensity import gradient_operators
+    from sketchforge.geometry.normals import slopes, vertex_normals
+
+    m = gaussian_bump(1.0, 0.1)
+    Gx, Gy = gradient_operators(m.V[:, :2], m.F)
+    z = m.V[:, 2]
+    p, q = slopes(vertex_normals(m.V, m.F), 1e-6)
+    assert np.abs(Gx @ z - p).max() < 1e-12 and np.abs(Gy @ z - q).max() < 1e-12
+    f = np.sin(3 * m.V[:, 0]) * m.V[:, 1]
+    Gv = vertex_gradient(m.V[:, :2], m.F, f)
+    assert np.array_equal(Gv[:, 0], Gx @ f) and np.array_equal(Gv[:, 1], Gy @ f)
+    # a vertex used by no face gets a zero row
+    V2 = np.vstack([m.V[:, :2], [[9.0, 9.0]]])
+    Gx2, _ = gradient_operators(V2, m.F)
+    assert Gx2[len(V2) - 1].nnz == 0

@@ -71,6 +71,50 @@ def face_gradient(V2: np.ndarray, F: np.ndarray, f: np.ndarray) -> np.ndarray:
     return G
 
 
+def gradient_operators(V2: np.ndarray, F: np.ndarray):
+    """Sparse operators of :func:`vertex_gradient`: ``(Gx @ f, Gy @ f)`` is the area-weighted
+    mean of the adjacent faces' gradients of f, for any vertex field f.
+
+    For a height field z this is also the slope (p, q) of the area-weighted vertex normals
+    (:func:`sketchforge.geometry.normals.vertex_normals`): a face's unnormalised normal is
+    2A·(−p_f, −q_f, 1), so their sum has slopes Σ A p_f / Σ A. Solvers that fit heights to a
+    shading use them to work on the very shading the app draws, linearly in z.
+
+    Parameters
+    ----------
+    V2 : (n, 2) float64
+    F : (m, 3) int64
+
+    Returns
+    -------
+    Gx, Gy : (n, n) scipy.sparse.csr_matrix float64
+        Zero rows at vertices without faces; faces of zero area in the plane count for nothing.
+    """
+    import scipy.sparse as sp
+
+    V2 = np.asarray(V2, dtype=np.float64)[:, :2]
+    F = np.asarray(F, dtype=np.int64)
+    n, m = len(V2), len(F)
+    a, b, c = V2[F[:, 0]], V2[F[:, 1]], V2[F[:, 2]]
+    e1, e2 = b - a, c - a
+    det = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
+    scale = np.maximum(np.einsum("ij,ij->i", e1, e1), np.einsum("ij,ij->i", e2, e2))
+    ok = np.abs(det) > 1e-14 * scale
+    inv = np.divide(1.0, det, out=np.zeros(m), where=ok)
+    rows = np.repeat(np.arange(m), 3)
+    gx, gy = np.empty((m, 3)), np.empty((m, 3))
+    for k in range(3):
+        e = V2[F[:, (k + 2) % 3]] - V2[F[:, (k + 1) % 3]]  # the edge opposite corner k
+        gx[:, k], gy[:, k] = -e[:, 1] * inv, e[:, 0] * inv
+    Dx = sp.csr_matrix((gx.ravel(), (rows, F.ravel())), shape=(m, n))
+    Dy = sp.csr_matrix((gy.ravel(), (rows, F.ravel())), shape=(m, n))
+    area = np.where(ok, 0.5 * np.abs(det), 0.0)
+    avg = sp.csr_matrix((np.repeat(area, 3), (F.ravel(), rows)), shape=(n, m))
+    total = np.asarray(avg.sum(axis=1)).ravel()
+    avg = sp.diags(np.divide(1.0, total, out=np.zeros(n), where=total > 0)) @ avg
+    return (avg @ Dx).tocsr(), (avg @ Dy).tocsr()
+
+
 def vertex_gradient(V2: np.ndarray, F: np.ndarray, f: np.ndarray) -> np.ndarray:
     """Per-vertex gradient: the area-weighted mean of the adjacent faces' gradients.
 
@@ -88,18 +132,6 @@ def vertex_gradient(V2: np.ndarray, F: np.ndarray, f: np.ndarray) -> np.ndarray:
     (n, 2) float64
         0 at a vertex without faces.
     """
-    V2 = np.asarray(V2, dtype=np.float64)[:, :2]
-    F = np.asarray(F, dtype=np.int64)
-    G = face_gradient(V2, F, f)
-    a, b, c = V2[F[:, 0]], V2[F[:, 1]], V2[F[:, 2]]
-    e1, e2 = b - a, c - a
-    area = 0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0])
-    acc = np.zeros((len(V2), 2))
-    w = np.zeros(len(V2))
-    for k in range(3):
-        np.add.at(acc, F[:, k], G * area[:, None])
-        np.add.at(w, F[:, k], area)
-    out = np.zeros_like(acc)
-    ok = w > 0
-    out[ok] = acc[ok] / w[ok, None]
-    return out
+    Gx, Gy = gradient_operators(V2, F)
+    f = np.asarray(f, dtype=np.float64)
+    return np.column_stack([Gx @ f, Gy @ f])

@@ -2,7 +2,7 @@
 R(p, q) = E solved for the change of height δz on the layer's own vertices.
 
 E_v(z) = R(Gp z, Gq z)_v is the shading the person sees (vertex-normal slopes are exactly
-linear in z, see :func:`.layerdata.slope_operators`). Gauss–Newton on
+linear in z, see :func:`sketchforge.geometry.intensity.gradient_operators`). Gauss–Newton on
 
     Σ_v m_v w_v (E_v(z + δz) − Ê_v)²  +  β h ∫_stroke (E(z + δz) − c)² ds
                                     +  α h² δzᵀ L M⁻¹ L δz,     δz = 0 outside U,

@@ -26,6 +26,7 @@ from scipy.spatial import cKDTree
 
 from sketchforge.geometry import guard
 from sketchforge.geometry.fairing import squared_laplacian_matrix
+from sketchforge.geometry.intensity import gradient_operators
 from sketchforge.geometry.laplacian import laplacian_and_mass
 from sketchforge.geometry.locate import TriangleLocator
 from sketchforge.geometry.mesh import Mesh
@@ -52,7 +53,8 @@ class PlanarData:
         Mean edge length.
     Gp, Gq : (n, n) scipy.sparse.csr_matrix float64
         Slope operators: p = Gp @ z, q = Gq @ z are exactly the slopes of the area-weighted
-        vertex normals the app shades with (see :func:`slope_operators`).
+        vertex normals the app shades with
+        (:func:`sketchforge.geometry.intensity.gradient_operators`).
     Q : (n, n) scipy.sparse.csr_matrix float64
         Squared Laplacian Lᵀ M⁻¹ L (cotangent L, lumped M).
     mass : (n,) float64
@@ -135,41 +137,6 @@ class LayerData:
         return self.planar.is_contour
 
 
-def slope_operators(V2: np.ndarray, F: np.ndarray) -> tuple[sp.csr_matrix, sp.csr_matrix]:
-    """Sparse Gp, Gq (n, n) with (Gp z, Gq z) = slopes of the area-weighted vertex normals.
-
-    For a height field, a face's unnormalised normal (b − a) × (c − a) is 2A·(−p_f, −q_f, 1)
-    with A its signed area in the plane and (p_f, q_f) the gradient of the linear z on it. The
-    area-weighted vertex normal (:func:`sketchforge.geometry.normals.vertex_normals`) sums
-    these, so its slopes are the plane-area-weighted mean of the face gradients: exactly linear
-    in z. The solver can thus work on the very shading the person sees.
-
-    Parameters
-    ----------
-    V2 : (n, 2) float64
-    F : (m, 3) int64, counter-clockwise
-
-    Returns
-    -------
-    Gp, Gq : (n, n) scipy.sparse.csr_matrix float64
-    """
-    n, m = len(V2), len(F)
-    a, b, c = V2[F[:, 0]], V2[F[:, 1]], V2[F[:, 2]]
-    A2 = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
-    rows = np.repeat(np.arange(m), 3)
-    gx, gy = np.empty((m, 3)), np.empty((m, 3))
-    for k in range(3):
-        e = V2[F[:, (k + 2) % 3]] - V2[F[:, (k + 1) % 3]]  # the edge opposite corner k
-        gx[:, k] = -e[:, 1] / A2
-        gy[:, k] = e[:, 0] / A2
-    Dx = sp.csr_matrix((gx.ravel(), (rows, F.ravel())), shape=(m, n))
-    Dy = sp.csr_matrix((gy.ravel(), (rows, F.ravel())), shape=(m, n))
-    avg = sp.csr_matrix((np.repeat(0.5 * A2, 3), (F.ravel(), rows)), shape=(n, m))
-    total = np.asarray(avg.sum(axis=1)).ravel()
-    avg = sp.diags(np.divide(1.0, total, out=np.zeros(n), where=total != 0)) @ avg
-    return (avg @ Dx).tocsr(), (avg @ Dy).tocsr()
-
-
 def local_margin(width_grid: tuple, margin: float, P: np.ndarray) -> np.ndarray:
     """The rim margin (k,) at points P (k, 2): ``margin``, or RIM_WIDTH_FRACTION of the local
     half-width where that is less; bilinear in the width grid, so continuous in P."""
@@ -228,7 +195,7 @@ def _planar(mesh: Mesh) -> PlanarData:
     h = float(np.linalg.norm(V2[e[:, 0]] - V2[e[:, 1]], axis=1).mean())
     # First: its guard refuses non-finite positions and zero-area faces before anything divides.
     L, M = laplacian_and_mass(V2, F, what="the layer's mesh")
-    Gp, Gq = slope_operators(V2, F)
+    Gp, Gq = gradient_operators(V2, F)  # = the vertex-normal slopes, linear in z
     outline = outline_polygon(mesh)
     is_contour = np.zeros(len(V2), bool)
     is_contour[mesh.boundary] = True
