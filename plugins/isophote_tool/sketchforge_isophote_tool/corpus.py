@@ -158,8 +158,7 @@ def random_edit(shape: str, ld, light, rng: np.random.Generator, kind: str | Non
 
     h = ld.h
     kind = kind or str(rng.choice(KINDS))
-    pts = shapely.points(ld.V2)
-    d = shapely.distance(pts, ld.outline.exterior)
+    d = ld.planar.d_rim
     inradius = float(d.max())
     if band is None:
         band = float(np.clip(inradius / 1.5, 3 * h, 0.3))

@@ -36,7 +36,7 @@ def honoured_samples(pd: PlanarData, pieces: list[np.ndarray], band) -> np.ndarr
     if len(P) == 0:
         return P
     inside = shapely.contains_xy(band, P[:, 0], P[:, 1])
-    d = shapely.distance(shapely.points(P), pd.outline.exterior)
+    d = pd.rim_distance(P)
     return P[inside & (d >= pd.margin_at(P))]
 
 

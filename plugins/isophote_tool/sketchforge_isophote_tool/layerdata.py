@@ -88,6 +88,10 @@ class PlanarData:
     margin_v: np.ndarray
     width_grid: tuple
 
+    def rim_distance(self, P: np.ndarray) -> np.ndarray:
+        """Distance (k,) from points P (k, 2) to the outline (see :func:`distance_to_ring`)."""
+        return distance_to_ring(np.asarray(P, np.float64).reshape(-1, 2), np.asarray(self.outline.exterior.coords))
+
     def margin_at(self, P: np.ndarray) -> np.ndarray:
         """The rim margin (k,) at points P (k, 2) (see :func:`local_margin`)."""
         return local_margin(self.width_grid, self.margin, P)

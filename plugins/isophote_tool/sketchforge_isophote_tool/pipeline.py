@@ -293,7 +293,7 @@ def sculpt(
     w0 = float(opts["ring_weight"])
     w = rim * (w0 + (1.0 - w0) * (1.0 - _smoothstep((d_s - r) / max(ring, 1e-300))))
     samples = stroke_samples(pieces)
-    ds_rim = shapely.distance(shapely.points(samples.P), pd.outline.exterior)
+    ds_rim = pd.rim_distance(samples.P)
     m_s = np.minimum(pd.margin_at(samples.P), margin)
     w_s = _smoothstep(ds_rim / np.maximum(m_s, 1e-300)) if margin > 0 else np.ones(len(ds_rim))
     T["zones"] = time.perf_counter() - t
