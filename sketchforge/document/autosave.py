@@ -3,8 +3,8 @@
 Autosaves live in the user's data folder (``$SKETCHFORGE_DATA_DIR``, else
 ``$XDG_DATA_HOME/sketchforge``, else ``~/.local/share/sketchforge``) under ``autosave/``, one
 file per open document, written with the same atomic save as a normal file. A clean save or a
-normal close removes the autosave, so whatever is left there at start-up is unsaved work from
-a session that ended abnormally: the app offers to recover it.
+normal close removes the autosave, so what a session that is no longer running left there
+is unsaved work from a session that ended abnormally: the app offers to recover it.
 
 Crashes inside native solvers (Triangle, libigl, OSQP, XLA) cannot be caught: they end the
 process. So before a solve starts, :meth:`Autosaver.begin_solve` flushes the document as it is
@@ -12,21 +12,35 @@ process. So before a solve starts, :meth:`Autosaver.begin_solve` flushes the doc
 side file, ``<autosave>.pending``, naming the action (its journal dict, its text, its layer).
 :meth:`Autosaver.end_solve` removes that record once the solver has returned (success, error or
 cancel). A ``.pending`` file found at start-up therefore names the step that was running when
-the process died; the autosave next to it never contains that step (its result had not been
+the process died; the autosave it names never contains that step (its result had not been
 pushed), so recovering it does not replay the crash.
 
-Every Autosaver writes to a file name of its own (the original path, the process and a
-counter are hashed), and only ever removes the files it wrote itself: an autosave left by an
-earlier session stays until the user recovers it, whatever this session does.
+A record lives until its solve really ends, across a save or an open: the document then gets a
+new Autosaver (:meth:`Autosaver.hand_over`), which takes over the records of the solves still
+running (a cancelled one still in native code, a sculpt preview, an assembly) in the same
+record file, now naming the new autosave; ``end_solve`` on the old Autosaver passes them on.
+
+Every Autosaver writes to file names of its own (a random uuid), and only ever removes the
+files it wrote itself: an autosave left by an earlier session stays until the user recovers
+it, whatever this session does. Both files also record their writer (process id and host
+name), and :func:`find_recoverable` skips the files of another process that is still running
+on this host (``os.kill(pid, 0)``): a second sketchforge started while the first one runs,
+even in the middle of a solve, neither offers nor deletes the first one's files. Limits of
+that check: a crashed session's process id may be reused by an unrelated live process; its
+files are then kept but not offered until that process has ended (they are offered at a later
+start). Files written on another host (a shared home folder) cannot be checked: they are
+offered. This process's own files are listed: it knows which of them it still writes (the app
+asks once, at start, before it has written any).
 """
 
 from __future__ import annotations
 
-import hashlib
 import itertools
 import json
 import os
+import socket
 import time
+import uuid
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -38,7 +52,8 @@ DEFAULT_INTERVAL_S = 60.0
 #: Suffix of the side file that names the solve running when the autosave was flushed.
 PENDING_SUFFIX = ".pending"
 
-_instances = itertools.count(1)
+#: end_solve tokens, unique in the process: a token stays valid across a hand-over
+_tokens = itertools.count(1)
 
 
 def autosave_interval(setting=None) -> float:
@@ -70,6 +85,32 @@ def pending_path_for(autosave_path: Path) -> Path:
     return Path(autosave_path).with_suffix(PENDING_SUFFIX)
 
 
+def this_writer() -> dict:
+    """Who writes a file: recorded in autosaves and records for :func:`writer_alive`."""
+    return {"pid": os.getpid(), "host": socket.gethostname()}
+
+
+def writer_alive(meta) -> bool:
+    """True when ``meta`` (a file's ``pid`` and ``host``) names another process that is still
+    running on this host: that session's files are not this one's to offer or remove. False
+    for this process (it knows its own files), another host (it cannot be checked), files
+    without a writer and platforms without ``os.kill(pid, 0)``."""
+    if os.name != "posix" or not isinstance(meta, dict):
+        return False
+    pid = meta.get("pid")
+    if type(pid) is not int or pid <= 0 or pid == os.getpid() or meta.get("host") != socket.gethostname():
+        return False
+    try:
+        os.kill(pid, 0)  # signal 0: only asks whether the process exists
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True  # it exists (another user's process: a reused pid)
+    except OSError:
+        return False
+    return True
+
+
 @dataclass(frozen=True)
 class Recoverable:
     path: Path  # the autosave file (absent when ``has_document`` is False)
@@ -81,21 +122,15 @@ class Recoverable:
     #: False for a crash during a solve on a document without unsaved changes: there is no
     #: work to recover, only the report of which step was running
     has_document: bool = True
-
-    @property
-    def pending(self) -> dict | None:
-        """The solve that was running when the session stopped (the newest, if several)."""
-        return self.running[-1] if self.running else None
-
-    @property
-    def pending_path(self) -> Path:
-        return pending_path_for(self.path)
+    #: the record file of ``running`` (None when there is none)
+    pending_path: Path | None = None
 
 
 class Autosaver:
     """Call :meth:`tick` periodically (or :meth:`save_now`); it writes only when the document
     has unsaved changes it has not autosaved yet. Wrap every solve that runs native code in
-    :meth:`begin_solve` / :meth:`end_solve`."""
+    :meth:`begin_solve` / :meth:`end_solve`. When the document is saved or replaced, use the
+    Autosaver that :meth:`hand_over` returns; at a normal close, :meth:`discard`."""
 
     def __init__(self, doc, original_path=None, interval_s: float = DEFAULT_INTERVAL_S, folder: Path | None = None) -> None:
         self.doc = doc
@@ -105,19 +140,11 @@ class Autosaver:
         self._last_revision = -1
         self._last_time = time.monotonic()
         self._running: dict[int, dict] = {}
-        self._tokens = itertools.count(1)
-        #: seconds the last :meth:`begin_solve` spent writing (for the app's diagnostics/tests)
-        self.last_flush_s = 0.0
+        self._successor: Autosaver | None = None
         # A name of its own: two sessions (or a crashed one and this one) editing the same file
         # never write to, or remove, each other's autosave.
-        key = f"{self.original_path or 'untitled'}\0{os.getpid()}\0{time.time_ns()}\0{next(_instances)}"
-        self.path = self.folder / f"{hashlib.sha1(key.encode()).hexdigest()[:16]}.json"
+        self.path = self.folder / f"{uuid.uuid4().hex}.json"
         self.pending_path = pending_path_for(self.path)
-
-    @property
-    def running(self) -> list[dict]:
-        """Records of the solves started with :meth:`begin_solve` and not yet ended."""
-        return list(self._running.values())
 
     def tick(self) -> bool:
         now = time.monotonic()
@@ -129,6 +156,8 @@ class Autosaver:
         return self.save_now()
 
     def save_now(self) -> bool:
+        if self._successor is not None:
+            return False  # handed over: the new Autosaver writes
         stack = self.doc.undo_stack
         if stack.in_macro():
             # Half a macro (e.g. "Draw layer": its new layer is in, its contour is being
@@ -142,7 +171,7 @@ class Autosaver:
             return False
         self.folder.mkdir(parents=True, exist_ok=True)
         data = ff.document_to_dict(self.doc)
-        data["autosave"] = {"original": self.original_path, "saved_at": time.time()}
+        data["autosave"] = {"original": self.original_path, "saved_at": time.time(), **this_writer()}
         write_bytes_atomic(self.path, json.dumps(data, separators=(",", ":")).encode("utf-8"))
         self._last_revision = self.doc.revision
         return True
@@ -154,61 +183,58 @@ class Autosaver:
         the autosave holds the document as it is now (a clean document has none: the saved
         file is the state) and writes the pending record, both fsynced. Returns a token for
         :meth:`end_solve`. Raises ExportError (nothing recorded) when the disk refuses."""
-        t0 = time.perf_counter()
         record = self._describe(cmd, text, macro, before)
         self.save_now()
-        token = next(self._tokens)
+        token = next(_tokens)
         self._running[token] = record
         try:
             self._write_pending()
         except BaseException:
             del self._running[token]
             raise
-        self.last_flush_s = time.perf_counter() - t0
         return token
 
     def end_solve(self, token) -> None:
-        """The solve's native code has returned (whatever the outcome): forget its record."""
+        """The solve's native code has returned (whatever the outcome): forget its record. A
+        token of a solve handed over (:meth:`hand_over`) is passed on to the new Autosaver."""
+        if self._successor is not None:
+            self._successor.end_solve(token)
+            return
         if self._running.pop(token, None) is None:
             return
         if self._running:
             self._write_pending()
         else:
-            self._remove(self.pending_path)
+            self.pending_path.unlink(missing_ok=True)
         if self.doc.undo_stack.is_clean():
             self._remove_document()  # the usual rule: a clean document has no autosave
 
+    @staticmethod
+    def _entry(cmd) -> dict | None:
+        """A command's journal dict, or None when a plugin's odd command has none (that must
+        not block the solve)."""
+        try:
+            entry = cmd.to_dict()
+            json.dumps(entry)
+        except Exception:  # noqa: BLE001
+            return None
+        return entry if isinstance(entry, dict) else None
+
     def _describe(self, cmd, text, macro, before) -> dict:
-        entry = None
-        if cmd is not None:
-            try:
-                entry = cmd.to_dict()
-                json.dumps(entry)
-            except Exception:  # noqa: BLE001 - a plugin's odd command must not block the solve
-                entry = None
-        layer = entry.get("layer") if isinstance(entry, dict) and isinstance(entry.get("layer"), str) else None
+        entry = self._entry(cmd) if cmd is not None else None
+        before_entries = [d for d in map(self._entry, before) if d is not None]
+        layer = entry.get("layer") if entry is not None and isinstance(entry.get("layer"), str) else None
         layer_name = None
         new_layer = layer is not None and layer not in self.doc.layer_ids()
         if layer is not None:
             if not new_layer:
                 layer_name = self.doc.layer(layer).name
             else:  # a layer the macro is about to add
-                for c in before:
-                    try:
-                        d = c.to_dict()
-                    except Exception:  # noqa: BLE001
-                        continue
+                for d in before_entries:
                     if d.get("command") == "add_layer" and d.get("id") == layer and isinstance(d.get("name"), str):
                         layer_name = d["name"]
-        before_entries = []
-        for c in before:
-            try:
-                before_entries.append(c.to_dict())
-            except Exception:  # noqa: BLE001
-                pass
         return {
             "text": macro or text or (cmd.text() if cmd is not None else "a computation"),
-            "command_text": cmd.text() if cmd is not None else None,
             "command": entry,
             "macro": macro,
             "before": before_entries,
@@ -217,7 +243,6 @@ class Autosaver:
             "new_layer": new_layer,
             # False: the saved file was the state (no autosave is needed to recover it)
             "unsaved": not self.doc.undo_stack.is_clean(),
-            "started_at": time.time(),
         }
 
     def _write_pending(self) -> None:
@@ -225,29 +250,47 @@ class Autosaver:
         data = {
             "format": "sketchforge-pending",
             "original": self.original_path,
-            "autosave": self.path.name,
+            "autosave": self.path.name,  # the autosave these solves started from
             "saved_at": time.time(),
+            **this_writer(),
             "running": list(self._running.values()),
         }
         write_bytes_atomic(self.pending_path, json.dumps(data, separators=(",", ":")).encode("utf-8"))
 
-    # --- removing ---------------------------------------------------------------------------------
-    @staticmethod
-    def _remove(path: Path) -> None:
-        try:
-            path.unlink()
-        except FileNotFoundError:
-            pass
+    # --- saved, replaced, closed ------------------------------------------------------------------
+    def hand_over(self, original_path=None) -> "Autosaver":
+        """The document was saved (to ``original_path``) or replaced (opened, new, recovered):
+        returns its new Autosaver (a new file name) and removes this one's autosave. The solves
+        still running keep their record until they end: the new Autosaver takes them over, in
+        the same record file, and :meth:`end_solve` on this one passes their tokens on. If that
+        file cannot be rewritten (the disk), it keeps naming them beside the old autosave's
+        name, and still goes when the last of them ends."""
+        new = Autosaver(self.doc, original_path, self.interval_s, self.folder)
+        new.pending_path = self.pending_path
+        clean = self.doc.undo_stack.is_clean()
+        # Saved, or replaced at the person's choice: no unsaved changes of theirs are at stake.
+        new._running = {t: dict(r, unsaved=bool(r.get("unsaved")) and not clean) for t, r in self._running.items()}
+        self._running = {}
+        self._successor = new
+        if new._running:
+            try:
+                new._write_pending()
+            except OSError:
+                pass
+        self._remove_document()
+        return new
 
     def _remove_document(self) -> None:
-        self._remove(self.path)
+        self.path.unlink(missing_ok=True)
         self._last_revision = -1
 
     def discard(self) -> None:
-        """The document was saved, closed or replaced: remove this autosaver's files (never
-        anyone else's) and forget running solves."""
-        self._running.clear()
-        self._remove(self.pending_path)
+        """A normal close: remove this autosaver's files (never anyone else's), the records of
+        solves still running included (nothing will end them: the window is gone and the
+        session is ending normally). A save or an open uses :meth:`hand_over` instead."""
+        if self._successor is None:
+            self._running.clear()
+            self.pending_path.unlink(missing_ok=True)
         self._remove_document()
 
 
@@ -268,39 +311,50 @@ def find_recoverable(folder: Path | None = None) -> list[Recoverable]:
     """Autosaves left by sessions that did not end normally, newest first, each with the solves
     that were running when it stopped (``running``; see :meth:`Autosaver.begin_solve`). A
     ``.pending`` record without an autosave (the document had no unsaved changes) is listed
-    with ``has_document=False``. Unreadable files are skipped (never deleted: the user may
-    want them)."""
+    with ``has_document=False``. The files of another sketchforge still running on this host
+    are left out (:func:`writer_alive`). Unreadable files are skipped (never deleted: the user
+    may want them)."""
     folder = Path(folder) if folder is not None else autosave_dir()
     if not folder.is_dir():
         return []
+    records: dict[str, tuple[Path, dict]] = {}  # autosave name -> (record file, its contents)
+    for q in sorted(folder.glob("*" + PENDING_SUFFIX)):
+        try:
+            data = _read_json_dict(q)
+        except (OSError, ValueError):
+            continue
+        if writer_alive(data):
+            continue
+        name = data.get("autosave")
+        if not (isinstance(name, str) and name.endswith(".json") and Path(name).name == name):
+            name = q.with_suffix(".json").name
+        records[name] = (q, data)
     out = []
     for p in sorted(folder.glob("*.json")):
         try:
             meta = _read_json_dict(p).get("autosave", {})
+            if writer_alive(meta):
+                continue
             original, saved_at = meta.get("original"), float(meta.get("saved_at", p.stat().st_mtime))
         except (OSError, ValueError, AttributeError, TypeError):
             continue
-        running: tuple = ()
-        pending = pending_path_for(p)
-        if pending.exists():
-            try:
-                running = _running_records(_read_json_dict(pending).get("running"))
-            except (OSError, ValueError):
-                running = ()
-        out.append(Recoverable(p, original, saved_at, running))
-    for q in sorted(folder.glob("*" + PENDING_SUFFIX)):
-        doc_path = q.with_suffix(".json")
+        q, data = records.pop(p.name, (None, {}))
+        out.append(Recoverable(p, original, saved_at, _running_records(data.get("running")), pending_path=q))
+    for name, (q, data) in records.items():
+        doc_path = folder / name
         if doc_path.exists():
-            continue  # listed above with its autosave
+            continue  # an autosave that is unreadable or still being written: leave both alone
+        running = _running_records(data.get("running"))
+        original = data.get("original")
         try:
-            data = _read_json_dict(q)
-            running = _running_records(data.get("running"))
-            original = data.get("original")
             saved_at = float(data.get("saved_at", q.stat().st_mtime))
-        except (OSError, ValueError, AttributeError, TypeError):
+        except (OSError, ValueError, TypeError):
             continue
         if running:
-            out.append(Recoverable(doc_path, original if isinstance(original, str) else None, saved_at, running, has_document=False))
+            out.append(
+                Recoverable(doc_path, original if isinstance(original, str) else None, saved_at, running,
+                            has_document=False, pending_path=q)
+            )
     return sorted(out, key=lambda r: -r.saved_at)
 
 
@@ -335,8 +389,6 @@ def recover(item: Recoverable, host=None):
 
 def forget(item: Recoverable) -> None:
     """Remove a recovered (or reported) autosave and its pending record."""
-    for p in (item.path, item.pending_path):
-        try:
-            p.unlink()
-        except FileNotFoundError:
-            pass
+    item.path.unlink(missing_ok=True)
+    if item.pending_path is not None:
+        item.pending_path.unlink(missing_ok=True)

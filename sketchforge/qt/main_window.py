@@ -57,7 +57,9 @@ MAX_RECENT = 8
 class _AutosaveGuard:
     """The CommandRunner's (and the assembly's) guard: the window's current Autosaver writes
     the state before the solve and names it (``Autosaver.begin_solve``), and forgets the record
-    when the solver has returned. A failing disk is reported but never blocks the solve."""
+    when the solver has returned, even after a save or an open in between (the record was
+    handed over to the new Autosaver, ``Autosaver.hand_over``). A failing disk is reported but
+    never blocks the solve."""
 
     def __init__(self, window) -> None:
         self.window = window
@@ -75,7 +77,7 @@ class _AutosaveGuard:
     def after(self, token) -> None:
         saver, inner = token
         try:
-            saver.end_solve(inner)  # the autosaver that started it, even if the window has a new one
+            saver.end_solve(inner)  # the autosaver that started it passes it on if it was handed over
         except (SketchforgeError, OSError) as exc:
             self.window.show_message(f"autosave failed: {error_text(exc)}")
 
@@ -118,7 +120,8 @@ class MainWindow(QMainWindow):
         """At start: offer the newest autosave left by a session that did not end normally,
         naming the step that was running if a solver crashed (that step is not in the
         autosave, so it is not replayed). Returns True when one was recovered (it opens as
-        unsaved changes). Declining keeps the autosave: it is offered again next time."""
+        unsaved changes). Declining keeps the autosave: it is offered again next time. The files
+        of another sketchforge still running are never offered, reported or removed."""
         items = find_recoverable()
         reports = [i for i in items if not i.has_document]
         if reports:
@@ -567,8 +570,9 @@ class MainWindow(QMainWindow):
         self.runner.cancel()
         self.doc.adopt(loaded)
         self.path = path
-        self.autosaver.discard()
-        self.autosaver = Autosaver(self.doc, original_path=path, interval_s=self.autosaver.interval_s)
+        # A new autosave file; the records of solves still running (a cancelled one, the
+        # assembly) go on until those solves end.
+        self.autosaver = self.autosaver.hand_over(path)
         self.current_layer = None
         self.canvas.rebuild()
         self._sync_all()
@@ -626,8 +630,7 @@ class MainWindow(QMainWindow):
             show_error(self, "Cannot save the document", exc)
             return False
         self.path = Path(path)
-        self.autosaver.discard()
-        self.autosaver = Autosaver(self.doc, original_path=self.path, interval_s=self.autosaver.interval_s)
+        self.autosaver = self.autosaver.hand_over(self.path)  # running solves keep their record
         self._add_recent(path)
         self._sync_title()
         self.history_panel.rebuild()

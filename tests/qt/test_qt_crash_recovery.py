@@ -10,8 +10,9 @@ from dataclasses import dataclass
 from typing import ClassVar
 
 import pytest
-from PySide6.QtWidgets import QMessageBox
+from PySide6.QtWidgets import QApplication, QMessageBox
 
+from crash_plugin import live_session
 from qt_helpers import wait_idle
 from sketchforge.document import commands as C
 from sketchforge.document import fileformat as ff
@@ -100,8 +101,10 @@ def test_a_cancelled_solve_keeps_its_record_until_its_native_code_returns(qtbot,
     qtbot.waitUntil(lambda: seen == ["started"])
     runner.cancel()
     assert not runner.busy
-    qtbot.wait(50)
-    assert [e[0] for e in guard.events] == ["before"]  # still running: the record stays
+    # Whatever the cancel queued is delivered now; the solve itself cannot return before the
+    # gate opens, so its record must still be there.
+    QApplication.processEvents()
+    assert [e[0] for e in guard.events] == ["before"] and not gate.is_set()
     gate.set()
     jobs.wait(30_000)
     qtbot.waitUntil(lambda: len(guard.events) == 2)
@@ -139,8 +142,8 @@ def test_the_window_flushes_before_a_solve_and_clears_the_record_after(make_wind
     w.runner.run(Blocking(layer="a", gate=gate, seen=seen))
     qtbot.waitUntil(lambda: seen == ["started"])
     [item] = find_recoverable()
-    assert item.path == w.autosaver.path and item.pending["text"] == "Blocking solve"
-    assert item.pending["layer_name"] == "Alpha"
+    assert item.path == w.autosaver.path and item.running[-1]["text"] == "Blocking solve"
+    assert item.running[-1]["layer_name"] == "Alpha"
     gate.set()
     wait_idle(qtbot, w)
     qtbot.waitUntil(lambda: not w.autosaver.pending_path.exists())
@@ -154,7 +157,7 @@ def test_the_assembly_in_observation_is_guarded(make_window, qtbot, monkeypatch,
     class PeekingAssembler:
         @hookimpl
         def sketchforge_assemble(self, layers, params):
-            seen.extend(r.pending["text"] for r in find_recoverable())
+            seen.extend(r.running[-1]["text"] for r in find_recoverable())
             return layers[0].mesh
 
     host = make_test_host(FanInflater(), PeekingAssembler())
@@ -200,7 +203,7 @@ def test_declining_recovery_keeps_the_autosave(make_window, dialogs, monkeypatch
     w.close_now()
     assert {p: p.read_bytes() for p in kept} == kept
     [item] = find_recoverable()
-    assert item.path == saver.path and item.pending["layer"] == "a"
+    assert item.path == saver.path and item.running[-1]["layer"] == "a"
 
 
 def test_a_crash_without_unsaved_work_is_reported_once(make_window, dialogs, monkeypatch, tmp_path):
@@ -221,3 +224,55 @@ def test_a_crash_without_unsaved_work_is_reported_once(make_window, dialogs, mon
     assert "no unsaved changes" in text and dialogs.of("question") == []
     assert find_recoverable() == [] and not saver.pending_path.exists()
     assert w.offer_recovery() is False and len(dialogs.of("information")) == 1
+
+
+def test_a_cancelled_solve_keeps_its_record_across_a_save_and_an_open(make_window, qtbot, monkeypatch, tmp_path):
+    """Saving or opening while a cancelled solve is still in native code: the window gets a
+    new Autosaver, and the record stays until that solve really returns."""
+    monkeypatch.setenv("SKETCHFORGE_DATA_DIR", str(tmp_path / "data"))
+    folder, mine = tmp_path / "data" / "autosave", tmp_path / "mine.json"
+    host = make_test_host(FanInflater())
+    w = make_window(Document(host=host))
+    w.autosaver = Autosaver(w.doc, interval_s=3600)  # in the patched data folder
+    w.doc.execute({"command": "add_layer", "id": "a", "name": "Alpha"})
+    w.doc.execute({"command": "set_contour", "layer": "a", "points": TRIANGLE})
+    gate, seen = threading.Event(), []
+    w.runner.run(Blocking(layer="a", gate=gate, seen=seen))
+    qtbot.waitUntil(lambda: seen == ["started"])
+    w.runner.cancel()  # its native code runs on
+    first = w.autosaver
+    assert w.save_to(mine)
+    assert w.autosaver is not first and not first.path.exists()
+    [item] = find_recoverable()  # a crash now: the step is still reported
+    assert not item.has_document and item.running[-1]["text"] == "Blocking solve"
+    assert w.open_path(mine, ask=False)
+    [item] = find_recoverable()
+    assert not item.has_document and item.running[-1]["layer_name"] == "Alpha"
+    gate.set()  # the solve returns: its record goes, whichever autosaver the window has now
+    w.jobs.wait(30_000)
+    qtbot.waitUntil(lambda: not w.autosaver.pending_path.exists())
+    assert find_recoverable() == [] and list(folder.iterdir()) == []
+    assert w.doc.layer("a").name == "Alpha"  # the cancelled result was dropped
+
+
+def test_a_second_window_leaves_a_running_session_alone(make_window, dialogs, monkeypatch, tmp_path):
+    """Another sketchforge still running (in the middle of a solve): nothing is reported,
+    offered or deleted; once it has crashed, both its step and its work are."""
+    monkeypatch.setenv("SKETCHFORGE_DATA_DIR", str(tmp_path / "data"))
+    folder = tmp_path / "data" / "autosave"
+    w = make_window(Document(host=make_test_host(FanInflater())))
+    with live_session(folder) as proc:
+        files = {p: p.read_bytes() for p in folder.iterdir()}
+        dialogs.answers = [QMessageBox.StandardButton.Yes]
+        assert w.offer_recovery() is False
+        assert dialogs.calls == []
+        assert {p: p.read_bytes() for p in folder.iterdir()} == files
+        proc.kill()  # now it crashes
+        proc.wait()
+        assert w.offer_recovery() is True
+    [(_, _, report)] = dialogs.of("information")
+    assert "sketchforge stopped while computing 'Draw contour' on layer 'Beta'." in report
+    [(_, _, question)] = dialogs.of("question")
+    assert "sketchforge stopped while computing 'Draw contour' on layer 'Alpha'." in question
+    assert w.doc.layer("a").name == "Alpha" and w.is_modified()
+    assert [p for p in folder.iterdir() if p in files] == []  # the crashed session's files are gone
