@@ -9,7 +9,8 @@ from meshes import disk
 from sketchforge.geometry.contour import signed_area
 from sketchforge.geometry.dirichlet import DirichletSolver
 from sketchforge.geometry.fairing import FairingSolver, fair_heights, fairing_weight, squared_laplacian_matrix
-from sketchforge.geometry.laplacian import as_faces, laplacian_and_mass
+from sketchforge.geometry import guard
+from sketchforge.geometry.laplacian import laplacian_and_mass
 
 
 def test_one_right_triangle_by_hand():
@@ -22,8 +23,11 @@ def test_one_right_triangle_by_hand():
     assert M.diagonal().sum() == pytest.approx(0.5, rel=1e-14)
 
 
-def test_faces_coerced_to_int64():
-    assert as_faces(np.array([[0, 1, 2]], dtype=np.int32)).dtype == np.int64
+def test_one_check_or_none_the_operators_are_the_same():
+    V2, F, _ = disk(1.0, 0.2)
+    L, M = laplacian_and_mass(V2, F.astype(np.int32))
+    L2, M2 = laplacian_and_mass(*guard.mesh(V2, F), checked=True)  # already through the guard
+    assert (L2 != L).nnz == 0 and (M2 != M).nnz == 0
 
 
 def test_rows_sum_to_zero_and_linear_functions_are_harmonic():

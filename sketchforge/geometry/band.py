@@ -8,7 +8,7 @@ import numpy as np
 import shapely
 from shapely.geometry import LineString
 
-from sketchforge.errors import SculptError
+from sketchforge.errors import GeometryError, SculptError
 from sketchforge.geometry import guard
 
 
@@ -49,10 +49,15 @@ def band(polyline: np.ndarray, radius: float, outline: np.ndarray):
     line = guard.points(np.asarray(polyline, dtype=np.float64)[:, :2], "the selected isophote")
     if len(line) < 2 or not np.any(line != line[0]):
         raise SculptError("the selected isophote is a single point; pick another isophote")
-    out = guard.points(np.asarray(outline, dtype=np.float64)[:, :2], "the layer's outline")
-    if len(np.unique(out, axis=0)) < 3:
-        raise SculptError("the layer has no outline to clip the band to")
-    region = guard.polygon(out, "the layer's outline")
+    out = np.asarray(outline, dtype=np.float64)[:, :2]
+    try:
+        region = guard.polygon(out, "the layer's outline")
+    except GeometryError:
+        # Only a refused outline is looked at again: with finite coordinates it was refused
+        # for having fewer than 3 distinct points, which is a layer with nothing to clip to.
+        if len(np.unique(guard.points(out, "the layer's outline"), axis=0)) < 3:
+            raise SculptError("the layer has no outline to clip the band to") from None
+        raise
     # Round joins and caps make the buffer the exact Minkowski sum with a disk (up to the
     # polygonal approximation of the arcs, 16 segments per quarter circle). A radius near
     # MAX_COORDINATE would put the disk's arcs beyond what GEOS computes reliably.

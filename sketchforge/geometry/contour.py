@@ -97,7 +97,8 @@ def _arclength(P) -> np.ndarray:
     return np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(P, axis=0), axis=1))])
 
 
-def _fmt(p) -> str:
+def format_point(p) -> str:
+    """A point (2,) as "(x, y)" with 4 significant digits, for messages."""
     return f"({p[0]:.4g}, {p[1]:.4g})"
 
 
@@ -250,9 +251,9 @@ def prepare_outline(points, resolution: float, closed: bool = False) -> Outline:
         if not trimmed and j == len(P) - 1 and not closed:
             raise ContourError(
                 f"the straight line closing the stroke (from its end back to its start) crosses the "
-                f"stroke near {_fmt(x)}; draw the stroke so that its ends face each other"
+                f"stroke near {format_point(x)}; draw the stroke so that its ends face each other"
             )
-        raise ContourError(f"the outline crosses itself near {_fmt(x)} (a figure eight cannot be inflated)")
+        raise ContourError(f"the outline crosses itself near {format_point(x)} (a figure eight cannot be inflated)")
 
     gap = float(np.linalg.norm(P[-1] - P[0]))
     is_open = (not closed) and (not trimmed) and gap > JUNCTION_GAP_EDGES * h
@@ -431,7 +432,7 @@ def resample_outline(outline: Outline, smooth: bool = True) -> Contour:
         i = crossings[0, 0]
         raise ContourError(
             f"parts of the outline come closer to each other than the resolution {h:.3g} near "
-            f"{_fmt(Q[i])}; use a finer resolution"
+            f"{format_point(Q[i])}; use a finer resolution"
         )
     return Contour(Q, junction, np.asarray(corner_idx, dtype=np.int64), h)
 

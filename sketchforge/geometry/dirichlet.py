@@ -43,7 +43,7 @@ class DirichletSolver:
     """
 
     def __init__(self, A, fixed, what: str = "the linear system") -> None:
-        A, _, self.fixed = guard.sparse_system(A, None, what, fixed=fixed)
+        A, self.fixed = guard.sparse_system(A, what, fixed=fixed)
         n = A.shape[0]
         self.n = n
         self.what = what

@@ -14,8 +14,10 @@ native call                                guard
 ``triangle.triangulate``                   :func:`pslg`
 ``igl.cotmatrix``, ``igl.massmatrix``      :func:`mesh`
 ``igl.min_quad_with_fixed_*``, scipy       :func:`sparse_system` (:func:`finite` for
-sparse solves                              each later right-hand side)
+sparse solves                              each right-hand side)
 ``osqp.OSQP.setup``                        :func:`qp`
+scipy ``splu`` and LAPACK of a QP solved   :func:`objective`, :func:`constraints`
+row by row (the dual active-set method)
 shapely / GEOS                             :func:`polygon`, :func:`linestring` (build from
                                            coordinates), :func:`geometry` (check a built
                                            geometry), :func:`points` (raw coordinates)
@@ -23,7 +25,7 @@ shapely / GEOS                             :func:`polygon`, :func:`linestring` (
 
 Conventions shared by every function:
 
-- Inputs are array-likes; outputs are plain numpy arrays (or scipy CSC matrices, shapely
+- Inputs are array-likes; outputs are plain numpy arrays (or scipy sparse matrices, shapely
   geometries) in the dtype and memory layout the library wants, so the caller never casts
   again and passes exactly what was checked.
 - ``what`` is a noun phrase naming the input for the message (``"the outline"``, ``"the
@@ -31,8 +33,8 @@ Conventions shared by every function:
   (a :class:`~sketchforge.errors.SketchforgeError`, so the CLI and the app show it as one
   sentence) raised before anything native runs.
 - Valid input passes through bit for bit: the only repairs are the documented ones (merging
-  near-duplicate PSLG vertices, dropping degenerate and repeated segments and misplaced hole
-  points, ``make_valid`` on polygons), so guarding a call never changes a result on clean data.
+  near-duplicate PSLG vertices, dropping degenerate and repeated segments, ``make_valid`` on
+  polygons), so guarding a call never changes a result on clean data.
 - Cost is O(n log n) with numpy and GEOS doing the loops (an R-tree over segments, a k-d tree
   over vertices): a few milliseconds on the 10k-vertex meshes of the inflate pipeline.
 """
@@ -47,7 +49,7 @@ import shapely
 from scipy.spatial import cKDTree
 
 from sketchforge.errors import GeometryError
-from sketchforge.geometry.contour import MAX_COORDINATE
+from sketchforge.geometry.contour import MAX_COORDINATE, format_point
 
 #: Default merge tolerance of :func:`pslg`, relative to the extent of its vertices. Far below
 #: any resolution the inflate pipeline accepts, far above double rounding (1e-16): points
@@ -56,10 +58,6 @@ REL_TOL = 1e-9
 #: A triangle counts as degenerate when twice its area is at most this times its longest
 #: edge squared (its smallest angle is then below ~1e-12 rad and a cotangent above ~1e12).
 AREA_TOL = 1e-12
-
-
-def _fmt(p) -> str:
-    return f"({p[0]:.4g}, {p[1]:.4g})"
 
 
 def _coords(P, what: str, ncols: tuple[int, ...]) -> np.ndarray:
@@ -180,30 +178,6 @@ def tolerance(P, rel: float = REL_TOL) -> float:
     return float(rel) * float(np.max(P.max(axis=0) - P.min(axis=0)))
 
 
-def merge_points(P, tol: float, what: str = "the points") -> tuple[np.ndarray, np.ndarray]:
-    """Merge points closer than ``tol``, deterministically, keeping the first of each group.
-
-    Points are visited in input order; a point that no earlier kept point lies within ``tol``
-    of is kept, and takes every later unmerged point within ``tol`` of it. So kept points are
-    more than ``tol`` apart, every merged point is within ``tol`` of the point it became (no
-    chain of close points drifts further), and a kept point keeps its exact coordinates.
-
-    Parameters
-    ----------
-    P : (n, 2) array-like of float
-    tol : float
-        >= 0; 0 merges exactly equal points only.
-    what : str
-
-    Returns
-    -------
-    Q : (k, 2) float64, the kept points in input order.
-    index : (n,) int64, ``Q[index[i]]`` is what point i became.
-    """
-    P = points(P, what)
-    return _merge(P, _check_tol(tol, what))
-
-
 def _check_tol(tol, what: str) -> float:
     try:
         t = float(tol)
@@ -215,6 +189,9 @@ def _check_tol(tol, what: str) -> float:
 
 
 def _merge(P: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
+    """Merge the checked points P (n, 2) closer than ``tol`` (greedy in input order, see
+    :func:`pslg`): returns the kept points Q (k, 2) in input order and ``index`` (n,) int64,
+    ``Q[index[i]]`` being what point i became."""
     n = len(P)
     if n == 0:
         return P, np.zeros(0, np.int64)
@@ -254,7 +231,32 @@ def _merge(P: np.ndarray, tol: float) -> tuple[np.ndarray, np.ndarray]:
     return np.ascontiguousarray(P[keep]), new[rep].astype(np.int64)
 
 
-def pslg(vertices, segments, tol, holes=None, *, what: str = "the outline", return_index: bool = False):
+class PslgError(GeometryError):
+    """A :func:`pslg` refusal that also says which input is at fault, so that a caller that
+    put the graph together from several sources (an outline and the junctions cut into it)
+    can name the right one.
+
+    Attributes
+    ----------
+    points : tuple of int
+        Indices into the ``vertices`` given of the stray points (a point on a segment that
+        does not end there); empty otherwise. A point that absorbed near-duplicates is named
+        by the first of them.
+    segments : tuple of int
+        Rows of the ``segments`` given that the message is about (the segment a point lies
+        on; the two segments that cross); empty when the graph as a whole is refused.
+    at : (2,) float64 or None
+        Where, in drawing units (the point that the message names).
+    """
+
+    def __init__(self, message: str, points=(), segments=(), at=None):
+        super().__init__(message)
+        self.points = tuple(int(i) for i in points)
+        self.segments = tuple(int(i) for i in segments)
+        self.at = None if at is None else np.array(at, dtype=np.float64)
+
+
+def pslg(vertices, segments, tol, *, what: str = "the outline", return_index: bool = False):
     """A planar straight-line graph that Triangle can take without undefined behaviour.
 
     Triangle's behaviour on an invalid PSLG is undefined: segments that use a duplicated vertex
@@ -269,27 +271,25 @@ def pslg(vertices, segments, tol, holes=None, *, what: str = "the outline", retu
     segments : (s, 2) array-like of int, or None
         Constrained segments, indices into ``vertices``.
     tol : float or None
-        Merge distance (drawing units): vertices closer than this become one (the first, in
-        input order, see :func:`merge_points`), and no vertex may lie closer than this to a
-        segment it is not an end of. None: :func:`tolerance` of the vertices (1e-9 of the
-        extent). 0 merges exactly equal vertices only.
-    holes : (h, 2) array-like of float, optional
-        Hole points. Those not strictly inside the region enclosed by the segments (more than
-        ``tol`` from every segment) are dropped: Triangle would eat the wrong side of a
-        segment a hole point sits on.
+        Merge distance (drawing units): vertices closer than this become one (see below), and
+        no vertex may lie closer than this to a segment it is not an end of. None:
+        :func:`tolerance` of the vertices (1e-9 of the extent). 0 merges exactly equal
+        vertices only.
     what : str
         Names the input in messages.
     return_index : bool
-        Also return ``index`` (n,) int64: input vertex i is output vertex ``index[i]``.
+        Also return ``index`` (n,) int64: input vertex i is output vertex ``index[i]``. A
+        caller whose vertices must all survive (Triangle's output numbered like its input)
+        compares ``len(tri["vertices"])`` with n and finds the merged ones here.
 
     Returns
     -------
     tri : dict
         ``vertices`` (k, 2) float64 C-contiguous, the kept vertices in input order with their
         exact input coordinates; ``segments`` (s', 2) int32 C-contiguous (only when there is
-        one: Triangle rejects an empty segment list); ``holes`` (h', 2) float64 (only when one
-        is kept). Pass it to ``triangle.triangulate`` as is. With ``p`` and segments that
-        enclose nothing, Triangle returns no ``triangles`` key: check for it.
+        one: Triangle rejects an empty segment list). Pass it to ``triangle.triangulate`` as
+        is. With ``p`` and segments that enclose nothing, Triangle returns no ``triangles``
+        key: check for it.
     index : (n,) int64
         Only with ``return_index``.
 
@@ -297,33 +297,38 @@ def pslg(vertices, segments, tol, holes=None, *, what: str = "the outline", retu
     ------
     GeometryError
         Non-finite or huge coordinates; segment indices that are not integers or out of range;
-        fewer than 3 distinct vertices or all on one line (Triangle fails or returns nothing);
-        two segments that cross or overlap; a vertex within ``tol`` of the inside of a segment
-        it does not end.
+        fewer than 3 distinct vertices or all on one line (Triangle fails or returns nothing).
+    PslgError
+        Two segments that cross or overlap; a vertex within ``tol`` of the inside of a segment
+        it does not end (the error names them, see :class:`PslgError`).
+
+    Notes
+    -----
+    Merging is greedy in input order: a vertex that no earlier kept vertex lies within ``tol``
+    of is kept, and takes every later unmerged vertex within ``tol`` of it. So kept vertices
+    are more than ``tol`` apart, every merged vertex is within ``tol`` of the vertex it became
+    (no chain of close vertices drifts further), and the kept one is the first of its group.
     """
     V = points(vertices, f"{what}")
-    S = _indices(np.zeros((0, 2), np.int64) if segments is None else segments, len(V), 2, what, "segment indices")
+    S0 = _indices(np.zeros((0, 2), np.int64) if segments is None else segments, len(V), 2, what, "segment indices")
     tol = tolerance(V) if tol is None else _check_tol(tol, what)
     Q, index = _merge(V, tol)
     if len(Q) < 3:
         raise GeometryError(f"{what} has {len(Q)} distinct points; triangulating needs at least 3")
     _check_not_collinear(Q, tol, what)
 
-    S = index[S]
-    S = S[S[:, 0] != S[:, 1]]  # became zero-length when their ends merged
-    if len(S):
+    S = index[S0]
+    rows = np.flatnonzero(S[:, 0] != S[:, 1])  # the others became zero-length when their ends merged
+    if len(rows):
         # A segment given twice (either direction) constrains nothing more; keep the first.
-        _, first = np.unique(np.sort(S, axis=1), axis=0, return_index=True)
-        S = S[np.sort(first)]
-    lines = _check_segments(Q, S, tol, what)
+        _, first = np.unique(np.sort(S[rows], axis=1), axis=0, return_index=True)
+        rows = rows[np.sort(first)]
+    S = S[rows]
+    _check_segments(Q, S, tol, what, index, rows)
 
     out = {"vertices": Q}
     if len(S):
         out["segments"] = np.ascontiguousarray(S, dtype=np.int32)
-    if holes is not None:
-        H = _inside_holes(points(holes, f"the hole points of {what}"), lines, tol)
-        if len(H):
-            out["holes"] = H
     return (out, index) if return_index else out
 
 
@@ -338,11 +343,12 @@ def _check_not_collinear(Q: np.ndarray, tol: float, what: str) -> None:
         raise GeometryError(f"{what}: all its points lie on one straight line, so it encloses no area")
 
 
-def _check_segments(Q: np.ndarray, S: np.ndarray, tol: float, what: str):
-    """Refuse touching, overlapping and crossing segments; returns the segments as shapely
-    LineStrings (for the hole test) or None."""
+def _check_segments(Q: np.ndarray, S: np.ndarray, tol: float, what: str, index: np.ndarray,
+                    rows: np.ndarray) -> None:
+    """Refuse touching, overlapping and crossing segments. ``index`` (input vertex -> Q) and
+    ``rows`` (S -> input segment row) translate what is refused back to the caller's input."""
     if len(S) == 0:
-        return None
+        return
     lines = shapely.linestrings(np.stack([Q[S[:, 0]], Q[S[:, 1]]], axis=1))
     tree = shapely.STRtree(lines)
     # Vertex on a segment it does not end. Merged vertices are more than tol apart, so a
@@ -359,9 +365,11 @@ def _check_segments(Q: np.ndarray, S: np.ndarray, tol: float, what: str):
     if bad.any():
         k = int(np.argmax(bad))
         a, b = Q[S[sj[k], 0]], Q[S[sj[k], 1]]
-        raise GeometryError(
-            f"{what} has a point at {_fmt(Q[vi[k]])} on the segment from {_fmt(a)} to {_fmt(b)}, which does not "
-            f"end there (closer than {tol:.3g})"
+        first = int(np.argmax(index == vi[k]))  # the kept vertex is the first of its group
+        raise PslgError(
+            f"{what} has a point at {format_point(Q[vi[k]])} on the segment from {format_point(a)} to {format_point(b)}, which does not "
+            f"end there (closer than {tol:.3g})",
+            points=(first,), segments=(rows[sj[k]],), at=Q[vi[k]],
         )
     # Proper crossings: segments that share no vertex and intersect.
     i, j = tree.query(lines, predicate="intersects")
@@ -371,33 +379,14 @@ def _check_segments(Q: np.ndarray, S: np.ndarray, tol: float, what: str):
     i, j = i[~share], j[~share]
     if len(i):
         x = shapely.get_coordinates(shapely.intersection(lines[i[0]], lines[j[0]])).mean(axis=0)
-        raise GeometryError(f"{what} has two segments that cross near {_fmt(x)}")
-    return lines
-
-
-def _inside_holes(H: np.ndarray, lines, tol: float) -> np.ndarray:
-    if len(H) == 0 or lines is None:
-        return np.zeros((0, 2))
-    # The segments are noded (no crossings, checked above), so polygonize finds exactly the
-    # faces they enclose: the region Triangle keeps before eating holes.
-    region = shapely.union_all(shapely.get_parts(shapely.polygonize(lines)))
-    inside = shapely.contains_xy(region, H[:, 0], H[:, 1])
-    if inside.any():
-        # On (or within tol of) a segment inside the region, e.g. a hole loop's own edge:
-        # contains_xy says inside, but Triangle would pick a side arbitrarily.
-        tree, pts = shapely.STRtree(lines), shapely.points(H)
-        if tol > 0.0:
-            near = tree.query(pts, predicate="dwithin", distance=tol)[0]
-        else:
-            near = tree.query(pts, predicate="intersects")[0]
-        inside[near] = False
-    return np.ascontiguousarray(H[inside])
+        raise PslgError(f"{what} has two segments that cross near {format_point(x)}", segments=(rows[i[0]], rows[j[0]]),
+                        at=x)
 
 
 # --- libigl -----------------------------------------------------------------------------------
 
 
-def mesh(V, F, what: str = "the mesh") -> tuple[np.ndarray, np.ndarray]:
+def mesh(V, F, what: str = "the mesh", *, planar: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """A triangle mesh that libigl's cotangent Laplacian and mass matrix can take.
 
     Parameters
@@ -406,6 +395,10 @@ def mesh(V, F, what: str = "the mesh") -> tuple[np.ndarray, np.ndarray]:
         A planar mesh (the drawing plane) or a surface.
     F : (m, 3) array-like of int
     what : str
+    planar : bool
+        Measure areas in the drawing plane (the first two columns) also for an (n, 3) V: a
+        height field z(x, y), whose operators are built on its planar mesh, must have no
+        triangle that is flat *in the plane* (a vertical one has a fine 3D area).
 
     Returns
     -------
@@ -417,20 +410,21 @@ def mesh(V, F, what: str = "the mesh") -> tuple[np.ndarray, np.ndarray]:
     GeometryError
         Non-finite or huge coordinates; F not integer, not (m, 3) or out of range (igl reads
         out of bounds: a segfault); a triangle of zero area, measured where V lives (in the
-        drawing plane for (n, 2): cotangents there are infinite).
+        drawing plane for (n, 2) or with ``planar``: cotangents there are infinite).
     """
     V = _coords(V, f"{what}", (2, 3))
     F = _indices(F, len(V), 3, what, "triangle indices")
+    dims = 2 if planar else V.shape[1]
     if len(F):
         # One gather per coordinate into (m, 3) blocks, corners taken relative to corner 0:
         # a third of the time of gathering (m, 3)-row blocks per corner on a 40k-vertex mesh.
         u, w = [], []
-        for d in range(V.shape[1]):
+        for d in range(dims):
             X = np.take(np.ascontiguousarray(V[:, d]), F)
             X -= X[:, :1]
             u.append(X[:, 1])
             w.append(X[:, 2])
-        if V.shape[1] == 2:
+        if dims == 2:
             area2 = np.abs(u[0] * w[1] - u[1] * w[0])
         else:
             area2 = np.sqrt((u[1] * w[2] - u[2] * w[1]) ** 2 + (u[2] * w[0] - u[0] * w[2]) ** 2
@@ -440,9 +434,9 @@ def mesh(V, F, what: str = "the mesh") -> tuple[np.ndarray, np.ndarray]:
         flat = area2 <= AREA_TOL * longest
         if flat.any():
             k = int(np.argmax(flat))
-            where = "in the drawing plane " if V.shape[1] == 2 else ""
+            where = "in the drawing plane " if dims == 2 else ""
             raise GeometryError(
-                f"{what} has a triangle of zero area {where}(triangle {k}, near {_fmt(V[F[k, 0]])}); "
+                f"{what} has a triangle of zero area {where}(triangle {k}, near {format_point(V[F[k, 0]])}); "
                 "its cotangent weights would be infinite"
             )
     return V, F
@@ -452,19 +446,18 @@ class System(NamedTuple):
     """Output of :func:`sparse_system`.
 
     A : (n, n) scipy.sparse.csc_matrix float64
-    b : (n,) or (n, k) float64, or None
     fixed : (f,) int64 sorted unique, or None
     """
 
     A: sp.csc_matrix
-    b: np.ndarray | None
     fixed: np.ndarray | None
 
 
-def _finite_csc(A, what: str, role: str) -> sp.csc_matrix:
-    """A as CSC float64 with finite entries, or GeometryError naming ``role`` of ``what``."""
+def _finite_sparse(A, what: str, role: str, fmt: str = "csc"):
+    """A as a float64 sparse matrix in format ``fmt`` ("csc" or "csr") with finite entries, or
+    GeometryError naming ``role`` of ``what``."""
     try:
-        M = sp.csc_matrix(A, dtype=np.float64)
+        M = (sp.csr_matrix if fmt == "csr" else sp.csc_matrix)(A, dtype=np.float64)
     except (TypeError, ValueError) as exc:
         raise GeometryError(f"{what}: {role} is not a numeric 2-D array ({exc})") from None
     if not np.isfinite(M.data).all():
@@ -472,13 +465,14 @@ def _finite_csc(A, what: str, role: str) -> sp.csc_matrix:
     return M
 
 
-def sparse_system(A, b=None, what: str = "the linear system", *, fixed=None) -> System:
-    """A sparse linear system that igl.min_quad_with_fixed or a scipy solver can take.
+def sparse_system(A, what: str = "the linear system", *, fixed=None) -> System:
+    """A sparse system matrix that igl.min_quad_with_fixed or a scipy solver can take.
+
+    Each right-hand side is checked where it is used, with :func:`finite`.
 
     Parameters
     ----------
     A : (n, n) sparse or dense array-like of float
-    b : (n,) or (n, k) array-like of float, optional
     what : str
     fixed : (f,) array-like of int, optional
         Rows/columns whose values are prescribed (``min_quad_with_fixed``'s ``known``); they
@@ -487,22 +481,19 @@ def sparse_system(A, b=None, what: str = "the linear system", *, fixed=None) -> 
     Returns
     -------
     System
-        ``(A, b, fixed)`` as CSC float64, float64 and sorted unique int64 (or None).
+        ``(A, fixed)`` as CSC float64 and sorted unique int64 (or None).
 
     Raises
     ------
     GeometryError
-        A not square or with a non-finite entry; b of the wrong length or non-finite; fixed
-        indices out of range (igl reads out of bounds); a free row of A that is all zeros (a
-        vertex no triangle uses, e.g. a duplicate Triangle dropped): the system is singular.
+        A not square or with a non-finite entry; fixed indices out of range (igl reads out of
+        bounds); a free row of A that is all zeros (a vertex no triangle uses, e.g. a duplicate
+        Triangle dropped): the system is singular.
     """
-    M = _finite_csc(A, what, "the matrix")
+    M = _finite_sparse(A, what, "the matrix")
     n = M.shape[0]
     if M.shape != (n, n):
         raise GeometryError(f"{what}: the matrix must be square, got shape {M.shape}")
-    if b is not None:
-        B = np.asarray(b, dtype=np.float64)
-        b = finite(B, (n,) if B.ndim <= 1 else (n, B.shape[1]), f"the right-hand side of {what}")
     free = np.ones(n, bool)
     if fixed is not None:
         fixed = np.unique(_indices(np.asarray(fixed).ravel(), n, None, what, "fixed indices"))
@@ -515,7 +506,7 @@ def sparse_system(A, b=None, what: str = "the linear system", *, fixed=None) -> 
                 f"{what}: row {int(np.argmax(empty))} of the matrix is all zeros (a vertex no triangle uses?), "
                 "so the system is singular"
             )
-    return System(M, b, fixed)
+    return System(M, fixed)
 
 
 # --- OSQP -------------------------------------------------------------------------------------
@@ -523,6 +514,9 @@ def sparse_system(A, b=None, what: str = "the linear system", *, fixed=None) -> 
 
 def qp(P, q, A, l, u, what: str = "the quadratic program"):
     """A QP  min ½xᵀPx + qᵀx  s.t.  l <= Ax <= u  that OSQP can take.
+
+    :func:`objective` and :func:`constraints` together, for a solver that takes all rows as
+    one matrix (OSQP).
 
     Parameters
     ----------
@@ -544,33 +538,69 @@ def qp(P, q, A, l, u, what: str = "the quadratic program"):
         Shapes that do not match; NaN anywhere; infinity outside the bounds (or +inf as a
         lower bound, -inf as an upper one: no x satisfies them); some l > u.
     """
-    P = _finite_csc(P, what, "the objective matrix")
-    A = _finite_csc(A, what, "the constraint matrix")
+    P, q = objective(P, q, what)
+    A, l, u = constraints(A, l, u, P.shape[0], what)
+    return P, q, A, l, u
+
+
+def objective(P, q, what: str = "the quadratic program"):
+    """The objective ½xᵀPx + qᵀx of a QP: P (N, N) square with finite entries (returned as
+    CSC float64, what SuperLU and OSQP take), q (N,) finite float64. Raises GeometryError."""
+    P = _finite_sparse(P, what, "the objective matrix")
     N = P.shape[0]
     if P.shape != (N, N):
         raise GeometryError(f"{what}: the objective matrix must be square, got shape {P.shape}")
-    if A.shape[1] != N:
-        raise GeometryError(f"{what}: the constraint matrix has {A.shape[1]} columns for {N} unknowns")
-    q = finite(q, (N,), f"the linear term of {what}")
+    return P, finite(q, (N,), f"the linear term of {what}")
+
+
+def constraints(A, l, u, n: int, what: str = "the quadratic program", *, fmt: str = "csc"):
+    """Constraint rows  l <= Ax <= u  over ``n`` unknowns.
+
+    Parameters
+    ----------
+    A : (m, n) sparse or dense array-like of float
+    l, u : (m,) array-like of float, or None for no bound on that side
+        -inf in ``l`` and +inf in ``u`` mean no bound on that row.
+    n : int
+    what : str
+    fmt : {"csc", "csr"}
+        Sparse format of the returned A: CSC for OSQP, CSR for a method that reads rows.
+
+    Returns
+    -------
+    A : (m, n) float64 in ``fmt``, l, u : (m,) float64 (None where None was given)
+
+    Raises
+    ------
+    GeometryError
+        A with a non-finite entry or not n columns; bounds of the wrong length, NaN, +inf as a
+        lower bound or -inf as an upper one (no x satisfies them), some l > u.
+    """
+    A = _finite_sparse(A, what, "the constraint matrix", fmt)
+    if A.shape[1] != n:
+        raise GeometryError(f"{what}: the constraint matrix has {A.shape[1]} columns for {n} unknowns")
     m = A.shape[0]
     bounds = []
     for name, x in (("lower", l), ("upper", u)):
+        if x is None:
+            bounds.append(None)
+            continue
         try:
             x = np.ascontiguousarray(np.asarray(x, dtype=np.float64).reshape(-1))
         except (TypeError, ValueError):
             raise GeometryError(f"{what}: the {name} bounds must be numbers") from None
         if len(x) != m:
             raise GeometryError(f"{what}: {len(x)} {name} bounds for {m} constraint rows")
+        if np.isnan(x).any():
+            raise GeometryError(f"{what}: a bound is not a number (NaN)")
         bounds.append(x)
     l, u = bounds
-    if np.isnan(l).any() or np.isnan(u).any():
-        raise GeometryError(f"{what}: a bound is not a number (NaN)")
-    if np.isposinf(l).any() or np.isneginf(u).any():
+    if (l is not None and np.isposinf(l).any()) or (u is not None and np.isneginf(u).any()):
         raise GeometryError(f"{what}: a lower bound is +inf or an upper bound is -inf, so no point satisfies it")
-    if (l > u).any():
+    if l is not None and u is not None and (l > u).any():
         k = int(np.argmax(l > u))
         raise GeometryError(f"{what}: row {k} has lower bound {l[k]:.6g} above its upper bound {u[k]:.6g}")
-    return P, q, A, l, u
+    return A, l, u
 
 
 # --- GEOS (shapely) ---------------------------------------------------------------------------

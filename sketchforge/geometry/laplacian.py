@@ -15,69 +15,40 @@ import scipy.sparse as sp
 from sketchforge.geometry import guard
 
 
-def as_faces(F) -> np.ndarray:
-    """F as a C-contiguous (m, 3) int64 array (the only index dtype the igl bindings accept)."""
-    F = np.ascontiguousarray(F, dtype=np.int64)
-    if F.ndim != 2 or F.shape[1] != 3:
-        raise ValueError(f"F must be (m, 3), got shape {F.shape}")
-    return F
-
-
-def as_vertices(V) -> np.ndarray:
-    """V as a C-contiguous (n, 3) float64 array; a planar (n, 2) V gets z = 0."""
-    V = np.asarray(V, dtype=np.float64)
-    if V.ndim != 2 or V.shape[1] not in (2, 3):
-        raise ValueError(f"V must be (n, 2) or (n, 3), got shape {V.shape}")
-    if V.shape[1] == 2:
-        V = np.column_stack([V, np.zeros(len(V))])
-    return np.ascontiguousarray(V)
-
-
 def _checked(V, F, what: str) -> tuple[np.ndarray, np.ndarray]:
-    V, F = guard.mesh(V, F, what)
-    return as_vertices(V), F
+    """(V as (n, 3) float64 C-contiguous, F (m, 3) int64 C-contiguous), after guard.mesh."""
+    return _xyz(*guard.mesh(V, F, what))
 
 
-def cotangent_laplacian(V, F, what: str = "the mesh") -> sp.csc_matrix:
-    """Cotangent Laplacian.
+def _xyz(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    # igl's bindings want (n, 3): a planar mesh gets z = 0.
+    if V.shape[1] == 2:
+        V = np.ascontiguousarray(np.column_stack([V, np.zeros(len(V))]))
+    return V, F
+
+
+def laplacian_and_mass(V, F, what: str = "the mesh", *, checked: bool = False) -> tuple[sp.csc_matrix, sp.csc_matrix]:
+    """Cotangent Laplacian L and lumped (Voronoi-hybrid) mass matrix M, one check and coercion.
 
     Parameters
     ----------
     V : (n, 2) or (n, 3) float64
     F : (m, 3) int64
     what : str
-        Names the mesh in a :class:`~sketchforge.errors.GeometryError` (see
-        :func:`guard.mesh`).
+        Names the mesh in a :class:`~sketchforge.errors.GeometryError` (see :func:`guard.mesh`).
 
     Returns
     -------
     L : (n, n) scipy.sparse.csc_matrix float64
         Symmetric, negative semi-definite (libigl's sign: L_ij = ½(cot α_ij + cot β_ij) off the
-        diagonal, rows sum to 0). Not divided by the mass: it is the stiffness matrix of
+        diagonal, rows sum to 0). Not divided by the mass: the stiffness matrix of
         piecewise-linear finite elements.
-    """
-    return sp.csc_matrix(igl.cotmatrix(*_checked(V, F, what)))
-
-
-def mass_matrix(V, F, what: str = "the mesh") -> sp.csc_matrix:
-    """Lumped (Voronoi-hybrid) mass matrix.
-
-    Parameters
-    ----------
-    V : (n, 2) or (n, 3) float64
-    F : (m, 3) int64
-    what : str
-
-    Returns
-    -------
     M : (n, n) scipy.sparse.csc_matrix float64
         Diagonal, positive for every vertex used by a face; the diagonal sums to the mesh area.
+
+    ``checked=True``: V and F are exactly the arrays :func:`guard.mesh` returned for this
+    mesh (float64 and int64, C-contiguous, F in range, no zero-area triangle where V lives),
+    so they are not checked again; anything else must go through the check.
     """
-    return sp.csc_matrix(igl.massmatrix(*_checked(V, F, what), igl.MASSMATRIX_TYPE_VORONOI))
-
-
-def laplacian_and_mass(V, F, what: str = "the mesh") -> tuple[sp.csc_matrix, sp.csc_matrix]:
-    """``(cotangent_laplacian(V, F), mass_matrix(V, F))`` with a single check and coercion."""
-    V3, F = _checked(V, F, what)
-    return (sp.csc_matrix(igl.cotmatrix(V3, F)),
-            sp.csc_matrix(igl.massmatrix(V3, F, igl.MASSMATRIX_TYPE_VORONOI)))
+    V3, F = _xyz(V, F) if checked else _checked(V, F, what)
+    return sp.csc_matrix(igl.cotmatrix(V3, F)), sp.csc_matrix(igl.massmatrix(V3, F, igl.MASSMATRIX_TYPE_VORONOI))

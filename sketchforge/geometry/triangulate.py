@@ -17,6 +17,7 @@ import triangle
 
 from sketchforge.errors import GeometryError, LimitError
 from sketchforge.geometry import guard
+from sketchforge.geometry.contour import format_point
 
 #: Largest mesh the inflate pipeline will build. A 200k-vertex blob takes about 4 s and
 #: ~1 GB (the fairing factorisation dominates); anything larger is almost surely a typo in
@@ -70,8 +71,10 @@ def _format_area(a: float) -> str:
     # Triangle parses its switches character by character: "a3.6e-05" would read "e" as a
     # switch. Positional notation avoids the exponent.
     a = float(a)
-    if not (math.isfinite(a) and a > 0.0):
-        raise GeometryError(f"the maximum triangle area {a:.3g} is not a positive number; the resolution is too fine")
+    if not (math.isfinite(a) and a >= 0.0):
+        raise GeometryError(f"the maximum triangle area {a:.3g} is not a finite positive number")
+    if a == 0.0:
+        raise GeometryError("the maximum triangle area is 0, so the resolution is too fine")
     s = np.format_float_positional(a, precision=17, unique=True, trim="-")
     # 17 digits after the point print areas below ~1e-8 with few significant digits, and
     # below 1e-17 as "0", which Triangle rejects (a drawing 1e-9 units across): those get the
@@ -107,14 +110,19 @@ def triangulate_polygon(P, max_edge: float, min_angle: float = MIN_ANGLE) -> Tri
         coordinates, crossing or touching edges, or two vertices closer than 1e-9 of its
         extent (merging them would renumber the boundary the caller relies on).
     """
-    P = guard.points(P, "the outline")
-    k = len(P)
+    # The ring's segments need only its length; guard.pslg checks the points themselves.
+    try:
+        k = len(P)
+    except TypeError:  # not a sequence: pslg says so
+        k = 0
     seg = np.column_stack([np.arange(k), (np.arange(k) + 1) % k])
-    data = guard.pslg(P, seg, None, what="the outline")
-    if len(data["vertices"]) != k:
+    data, index = guard.pslg(P, seg, None, what="the outline", return_index=True)
+    P = data["vertices"]  # the input, checked, when nothing merged
+    if len(P) != k:
+        i = int(np.flatnonzero(index != np.arange(k))[0])  # the first point that merged into an earlier one
         raise GeometryError(
-            f"the outline has two points closer than {guard.tolerance(P):.3g} drawing units; "
-            "they cannot both be mesh vertices"
+            f"the outline has two points closer than {guard.tolerance(P):.3g} drawing units near "
+            f"{format_point(P[index[i]])}; they cannot both be mesh vertices"
         )
     # p: planar straight-line graph; q: quality; a: max area; Y: no Steiner points on the
     # boundary; Q: quiet. Triangle keeps the input vertices first and in order.

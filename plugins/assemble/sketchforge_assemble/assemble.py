@@ -125,7 +125,7 @@ def assemble_detailed(meshes: Sequence[Mesh | None], closed: Sequence[bool] | No
     if not keep:
         raise ParameterError("there is no layer with a mesh to assemble")
     knames = [names[i] for i in keep]
-    sheets = [sheet_from_mesh(k, meshes[i], bool(closed[i])) for k, i in enumerate(keep)]
+    sheets = [sheet_from_mesh(k, knames[k], meshes[i], bool(closed[i])) for k, i in enumerate(keep)]
 
     attachments, warnings = find_attachments(sheets, knames, p["on_bad_junction"])
     attached = {a.upper for a in attachments}

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from sketchforge.errors import GeometryError
 from sketchforge.geometry import guard
 
 from .errors import AttachmentError
@@ -54,9 +55,10 @@ def find_attachments(sheets: list[Sheet], names: list[str], on_bad_junction: str
     names : list of str
         Layer names for messages.
     on_bad_junction : {"raise", "free"}
-        What to do with a junction that spans two layers or runs partly outside the layer
-        below: raise :class:`AttachmentError` (default: the person sees why the part did not
-        attach and can fix the stroke), or make the part free and report it.
+        What to do with a junction that spans two layers, runs partly outside the layer below
+        or has fewer than 2 distinct points: raise :class:`AttachmentError` (default: the
+        person sees why the part did not attach and can fix the stroke), or make the part
+        free and report it.
 
     Returns
     -------
@@ -65,13 +67,26 @@ def find_attachments(sheets: list[Sheet], names: list[str], on_bad_junction: str
         One per junction made free (``on_bad_junction="free"``); a part not in
         ``attachments`` is free.
     """
-    polys = [s.polygon(f"the outline of layer '{names[i]}'") for i, s in enumerate(sheets)]
+    polys = [s.polygon() for s in sheets]
     attachments: list[Attachment] = []
     warnings: list[str] = []
+
+    def bad_junction(problem: str) -> None:
+        if on_bad_junction == "raise":
+            raise AttachmentError(problem[0].upper() + problem[1:] + ".")
+        warnings.append(problem + " (assembled as a free part)")
+
     for u, s in enumerate(sheets):
         if len(s.junction) == 0:
             continue
-        line = guard.linestring(s.xy[s.junction], f"the junction of layer '{names[u]}'")
+        try:
+            # The sheet's coordinates are checked (sheet_from_mesh), so this refuses only a
+            # junction whose points all coincide (a hand-edited snapshot): a junction problem
+            # like the others, not a reason to stop the whole assembly.
+            line = guard.linestring(s.xy[s.junction], f"the junction of layer '{names[u]}'")
+        except GeometryError as exc:
+            bad_junction(f"{exc}, so it cannot be glued to a layer; redraw the part")
+            continue
         tol = 1e-6 * max(line.length, s.h)
         problem = None
         attached = False
@@ -108,7 +123,5 @@ def find_attachments(sheets: list[Sheet], names: list[str], on_bad_junction: str
         if attached:
             continue
         if problem is not None:
-            if on_bad_junction == "raise":
-                raise AttachmentError(problem[0].upper() + problem[1:] + ".")
-            warnings.append(problem + " (assembled as a free part)")
+            bad_junction(problem)
     return attachments, warnings

@@ -120,7 +120,9 @@ def build_problem(sheets, offsets, front_off, back_off, attachments: list[Attach
     w = reg / diag**2
     blocks, blocks_m = [], []
     for s in sheets:
-        L, M = laplacian_and_mass(s.xy, s.F, f"the mesh of layer {s.layer}")
+        # Every sheet's xy and F passed guard.mesh in the plane once, where they were made
+        # (sheet_from_mesh, or insert_chains for a sheet with junctions cut in): not again.
+        L, M = laplacian_and_mass(s.xy, s.F, checked=True)
         k = 1.0 + (stiffness if s.chains else 0.0)
         blocks.append((k * (-L) + w * M).tocsc())
         blocks_m.append(M)
@@ -305,20 +307,21 @@ def solve_depth(P, q, Aeq, beq, Ain, bin_, method: str = "osqp", pad: float = 0.
     DepthOrderError
         The rows cannot all be satisfied (or the active-set method did not finish).
     GeometryError
-        The problem has a NaN, an infinity outside the bounds or inconsistent shapes
-        (:func:`sketchforge.geometry.guard.qp`); checked before either solver runs.
+        The problem has a NaN, an infinity outside the bounds or inconsistent shapes; checked
+        before either solver runs, in the form that solver reads (:func:`guard.qp` for OSQP,
+        :func:`guard.objective` and :func:`guard.constraints` for the active set alone).
     """
-    Ain = sp.csr_matrix(Ain)
-    Aeq = sp.csr_matrix(Aeq)
-    # One check of the whole problem, in the form OSQP takes it; the active-set method reads
-    # the same P, q, rows and bounds.
-    P, q, A, lo, hi = guard.qp(P, q, sp.vstack([Aeq, Ain]).tocsc(), np.r_[beq, bin_ + pad],
-                               np.r_[beq, np.full(len(bin_), np.inf)], "the depth-order problem")
+    what = "the depth-order problem"
     info = {"method": method, "osqp_iterations": 0, "iterations": 0}
     warm = np.zeros(0, np.int64)
     if method == "osqp":
         import osqp
 
+        # OSQP takes the glue and depth rows as one matrix: the guard checks it in that form
+        # (the active-set fallback below reads the same rows apart, as CSR).
+        Ain, Aeq = sp.csr_matrix(Ain), sp.csr_matrix(Aeq)
+        P, q, A, lo, hi = guard.qp(P, q, sp.vstack([Aeq, Ain]).tocsc(), np.r_[beq, bin_ + pad],
+                                   np.r_[beq, np.full(len(bin_), np.inf)], what)
         solver = osqp.OSQP()
         solver.setup(P=sp.triu(P).tocsc(), q=q, A=A, l=lo, u=hi, verbose=False,
                      eps_abs=1e-4, eps_rel=1e-4, polishing=False, max_iter=20000,
@@ -336,6 +339,12 @@ def solve_depth(P, q, Aeq, beq, Ain, bin_, method: str = "osqp", pad: float = 0.
             # OSQP's multipliers of the rows >= are <= 0; strongest rows first
             warm = np.flatnonzero(y < -1e-9 * max(1.0, float(np.abs(y).max())))
             warm = warm[np.argsort(y[warm], kind="stable")]
+    else:
+        # The active-set method alone reads the glue and depth rows apart, row by row (CSR):
+        # each kind is checked in that form, and nothing is stacked for OSQP.
+        P, q = guard.objective(P, q, what)
+        Aeq, beq, _ = guard.constraints(Aeq, beq, beq, P.shape[0], what, fmt="csr")
+        Ain, bin_, _ = guard.constraints(Ain, bin_, None, P.shape[0], what, fmt="csr")
     if max_iter is None:
         max_iter = max(1000, 10 * (len(bin_) + len(beq)))
     x, it, active = _active_set(P, q, Aeq, beq, Ain, bin_, warm, tol, max_iter)

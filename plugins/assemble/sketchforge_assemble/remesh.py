@@ -14,8 +14,8 @@ import shapely
 import triangle
 from scipy.interpolate import RBFInterpolator
 
-from sketchforge.errors import GeometryError
 from sketchforge.geometry import guard
+from sketchforge.geometry.contour import format_point
 
 from .errors import AttachmentError
 from .sheet import Sheet, ccw_triangles, has_directed_edge
@@ -57,10 +57,14 @@ def insert_chains(sheet: Sheet, chains_xy: list[np.ndarray], names: list[str], o
     Raises
     ------
     AttachmentError
-        If two junctions on this layer cross or touch, or a junction crosses or touches the
-        layer's outline.
+        If the graph of the outline and the junctions is one Triangle cannot take, naming what
+        is wrong and where: two junctions on this layer cross or touch, a junction crosses or
+        touches the layer's outline, a junction crosses or touches itself or passes through
+        one point twice, or the layer's own outline crosses or touches itself or two of its
+        vertices coincide (the last two only in a hand-edited snapshot).
     GeometryError
-        A junction with non-finite or huge coordinates or fewer than 2 distinct points.
+        A junction with non-finite or huge coordinates or fewer than 2 distinct points; a
+        re-triangulation with a zero-area triangle (see :func:`guard.mesh`).
     """
     if not chains_xy:
         return sheet
@@ -71,7 +75,7 @@ def insert_chains(sheet: Sheet, chains_xy: list[np.ndarray], names: list[str], o
             if lines[a].distance(lines[b]) < 0.5 * h:
                 raise AttachmentError(
                     f"The junctions of layers '{names[owners[a]]}' and '{names[owners[b]]}' "
-                    f"cross or touch on layer '{names[sheet.layer]}'; move one of them apart."
+                    f"cross or touch on layer '{sheet.name}'; move one of them apart."
                 )
     # Drop interior vertices closer than ~half an edge to a junction: they would make slivers.
     on_boundary = np.zeros(sheet.n, bool)
@@ -93,31 +97,40 @@ def insert_chains(sheet: Sheet, chains_xy: list[np.ndarray], names: list[str], o
         chains.append(idx)
         start += len(c)
     P = np.vstack(pts)
-    lower = names[sheet.layer]
+    S = np.vstack(segs)
+    chain_names = [names[o] for o in owners]
+    # Who each vertex and segment of the graph belongs to, to name the culprit: chain c >= 0,
+    # the outline (-1), an interior vertex of the lower layer (-2).
+    part = np.r_[np.full(len(kept), -2), np.repeat(np.arange(len(chains_xy)), [len(c) for c in chains_xy])]
+    part[new_index[sheet.boundary]] = -1
+    seg_part = np.r_[np.full(len(sheet.boundary), -1),
+                     np.repeat(np.arange(len(chains_xy)), [len(c) - 1 for c in chains_xy])]
     # Triangle's behaviour on crossing segments or duplicate vertices is undefined (it
-    # segfaults), so the graph is checked first: a junction that crosses or touches the
-    # outline is the person's to fix, and is reported as such.
+    # segfaults), so the graph is checked first and what is wrong is reported with its owner.
     try:
-        data = guard.pslg(P, np.vstack(segs), None, what=f"layer '{lower}' with its junctions cut in")
-    except GeometryError as exc:
-        raise AttachmentError(
-            f"A junction crosses or touches the outline of layer '{lower}' ({exc}); redraw the part "
-            "so its ends lie inside the layer."
-        ) from None
+        data, index = guard.pslg(P, S, None, what=f"layer '{sheet.name}' with its junctions cut in",
+                                 return_index=True)
+    except guard.PslgError as exc:
+        if exc.points:  # a point on a segment that does not end there
+            a, b = seg_part[exc.segments[0]], part[exc.points[0]]
+        else:  # two segments that cross
+            a, b = seg_part[exc.segments[0]], seg_part[exc.segments[1]]
+        kind = "touch" if exc.points else "cross"
+        raise AttachmentError(_culprit(kind, a, b, exc.at, sheet.name, chain_names)) from None
     if len(data["vertices"]) != len(P):
-        raise AttachmentError(
-            f"A junction touches the outline of layer '{lower}' (two of their points coincide); redraw the "
-            "part so its ends lie inside the layer."
-        )
+        # Every vertex must survive: the chains are glued vertex by vertex to their parts.
+        i = int(np.argmax(index != np.arange(len(P))))  # the first point that merged into an earlier one
+        j = int(np.argmax(index == index[i]))  # that earlier point
+        raise AttachmentError(_culprit("merge", part[j], part[i], P[j], sheet.name, chain_names, guard.tolerance(P)))
     # 'p': constrained Delaunay of the given points and segments, no quality refinement, so no
-    # vertex is added (the segments were checked not to cross).
+    # vertex is added (the segments were checked not to cross, no vertex lies on a segment).
     out = triangle.triangulate(data, "pQ")
-    if "triangles" not in out or len(out["vertices"]) != len(P) or not np.allclose(out["vertices"], P):
+    if "triangles" not in out:  # segments that enclose nothing: Triangle eats every triangle
         raise AttachmentError(
-            f"A junction crosses the outline of layer '{lower}'; redraw the part "
-            "so its ends lie inside the layer."
+            f"The outline of layer '{sheet.name}' encloses no area once the junctions are cut in; redraw the layer."
         )
-    F = ccw_triangles(P, out["triangles"].astype(np.int64))
+    P, F = guard.mesh(P, out["triangles"], f"the mesh of layer '{sheet.name}' with its junctions cut in")
+    F = ccw_triangles(P, F)
     z = np.empty(len(P))
     z[: len(kept)] = sheet.z[kept]
     z[len(kept):] = rbf_heights(sheet.xy, sheet.z, P[len(kept):])
@@ -127,3 +140,32 @@ def insert_chains(sheet: Sheet, chains_xy: list[np.ndarray], names: list[str], o
     return sheet.evolve(
         xy=P, z=z, F=F, boundary=boundary, junction=new_index[sheet.junction], chains=tuple(chains)
     )
+
+
+def _culprit(kind: str, a: int, b: int, at, lower: str, chain_names: list[str], tol: float = 0.0) -> str:
+    """One sentence for a graph Triangle cannot take, naming who is at fault.
+
+    ``kind``: "cross" (two segments cross), "touch" (a point lies on a segment that does not
+    end there) or "merge" (two points coincide); ``a``, ``b``: the owners of the two things
+    involved (chain c >= 0, the outline -1, an interior vertex of the lower layer -2); ``at``:
+    where; ``tol``: the distance below which two points merge.
+    """
+    near = f" near {format_point(at)}"
+    verb = "crosses" if kind == "cross" else "touches"
+    if a >= 0 and a == b:
+        what = {"cross": "crosses itself", "touch": "touches itself",
+                "merge": f"has two points closer than {tol:.3g}"}[kind]
+        return f"The junction of layer '{chain_names[a]}' {what}{near}; redraw the part."
+    if a >= 0 and b >= 0:
+        return (f"The junctions of layers '{chain_names[a]}' and '{chain_names[b]}' "
+                f"{'cross' if kind == 'cross' else 'touch'} on layer '{lower}'{near}; move one of them apart.")
+    if a < 0 and b < 0:
+        if kind == "merge":
+            return f"Two vertices of layer '{lower}' are closer than {tol:.3g}{near}; redraw the layer."
+        if a == b == -1:
+            return f"The outline of layer '{lower}' {verb} itself{near}; redraw the layer."
+        return f"A vertex of layer '{lower}' lies on its outline{near}; redraw the layer."
+    c, other = (a, b) if a >= 0 else (b, a)
+    target = f"the outline of layer '{lower}'" if other == -1 else f"a vertex of layer '{lower}'"
+    return (f"The junction of layer '{chain_names[c]}' {verb} {target}{near}; redraw the part so its ends lie "
+            "inside the layer.")

@@ -24,6 +24,8 @@ class Sheet:
     ----------
     layer : int
         Index of the layer in the back-to-front list.
+    name : str
+        The layer's name, for messages.
     xy : (n, 2) float64
         Vertex positions in the drawing plane.
     z : (n,) float64
@@ -44,6 +46,7 @@ class Sheet:
     """
 
     layer: int
+    name: str
     xy: np.ndarray
     z: np.ndarray
     F: np.ndarray
@@ -56,10 +59,10 @@ class Sheet:
     def n(self) -> int:
         return int(len(self.xy))
 
-    def polygon(self, what: str | None = None) -> shapely.Polygon:
+    def polygon(self) -> shapely.Polygon:
         """The layer's region Ω in the drawing plane (made valid by :func:`guard.polygon` if
-        its outline touches itself). ``what`` names it in a GeometryError."""
-        return guard.polygon(self.xy[self.boundary], what or f"the outline of layer {self.layer}")
+        its outline touches itself)."""
+        return guard.polygon(self.xy[self.boundary], f"the outline of layer '{self.name}'")
 
     def evolve(self, **changes) -> "Sheet":
         return replace(self, **changes)
@@ -91,13 +94,15 @@ def ccw_triangles(xy: np.ndarray, F: np.ndarray) -> np.ndarray:
     return F
 
 
-def sheet_from_mesh(layer: int, mesh: Mesh, free: bool) -> Sheet:
+def sheet_from_mesh(layer: int, name: str, mesh: Mesh, free: bool) -> Sheet:
     """Build the sheet of one layer mesh.
 
     Parameters
     ----------
     layer : int
         Index in the back-to-front list.
+    name : str
+        The layer's name, for messages.
     mesh : Mesh
         The layer's front surface (``V`` (n,3), ``F`` (m,3), ``boundary``, ``junction``).
     free : bool
@@ -106,14 +111,16 @@ def sheet_from_mesh(layer: int, mesh: Mesh, free: bool) -> Sheet:
     Raises
     ------
     GeometryError
-        A vertex with a non-finite or huge coordinate or a zero-area triangle (a hand-edited
-        snapshot, see :func:`guard.mesh`): the sheet's coordinates go to GEOS, Triangle, libigl
-        and OSQP, so they are checked once, here.
+        A vertex with a non-finite or huge coordinate, a face index out of range, or a triangle
+        of zero area in the drawing plane (a hand-edited snapshot, see :func:`guard.mesh`):
+        the sheet's coordinates go to GEOS, Triangle, libigl and OSQP, so they are checked
+        once, here, in the plane where the sheet's operators live (every layer is a height
+        field over it); the sheet keeps the checked arrays.
     """
-    V, _ = guard.mesh(mesh.V, mesh.F, f"the mesh of layer {layer}")
-    xy = np.array(V[:, :2])
-    z = np.maximum(np.array(V[:, 2]), 0.0)
-    F = ccw_triangles(xy, mesh.F)
+    V, F = guard.mesh(mesh.V, mesh.F, f"the mesh of layer '{name}'", planar=True)
+    xy = np.ascontiguousarray(V[:, :2])
+    z = np.maximum(V[:, 2], 0.0)
+    F = ccw_triangles(xy, F)
     boundary = np.array(mesh.boundary, dtype=np.int64)
     if len(boundary) >= 2 and not has_directed_edge(F, boundary[0], boundary[1]):
         boundary = boundary[::-1].copy()
@@ -122,7 +129,7 @@ def sheet_from_mesh(layer: int, mesh: Mesh, free: bool) -> Sheet:
         junction = np.zeros(0, np.int64)
     E = directed_edges(F)
     h = float(np.median(np.linalg.norm(xy[E[:, 0]] - xy[E[:, 1]], axis=1)))
-    return Sheet(layer, xy, z, F, boundary, junction, h)
+    return Sheet(layer, name, xy, z, F, boundary, junction, h)
 
 
 def interior_on_left(sheet: Sheet) -> bool:
