@@ -131,8 +131,9 @@ def test_guarded_jobs_wrap_the_assembly_and_pass_cancelled_through(qtbot, fan_do
     assert guard.events == [("before", "Assemble model", ["a"], False), ("after", 1)]
 
 
-def test_the_window_flushes_before_a_solve_and_clears_the_record_after(make_window, qtbot, monkeypatch, tmp_path):
-    monkeypatch.setenv("SKETCHFORGE_DATA_DIR", str(tmp_path / "data"))
+def _window_mid_solve(make_window, qtbot):
+    """A window (its Autosaver in the test's data folder) with one dirty layer and a Blocking
+    solve started; returns (window, the gate that lets the solve return)."""
     host = make_test_host(FanInflater())
     w = make_window(Document(host=host))
     w.autosaver = Autosaver(w.doc, interval_s=3600)  # in the patched data folder
@@ -141,6 +142,12 @@ def test_the_window_flushes_before_a_solve_and_clears_the_record_after(make_wind
     gate, seen = threading.Event(), []
     w.runner.run(Blocking(layer="a", gate=gate, seen=seen))
     qtbot.waitUntil(lambda: seen == ["started"])
+    return w, gate
+
+
+def test_the_window_flushes_before_a_solve_and_clears_the_record_after(make_window, qtbot, monkeypatch, tmp_path):
+    monkeypatch.setenv("SKETCHFORGE_DATA_DIR", str(tmp_path / "data"))
+    w, gate = _window_mid_solve(make_window, qtbot)
     [item] = find_recoverable()
     assert item.path == w.autosaver.path and item.running[-1]["text"] == "Blocking solve"
     assert item.running[-1]["layer_name"] == "Alpha"
@@ -231,14 +238,7 @@ def test_a_cancelled_solve_keeps_its_record_across_a_save_and_an_open(make_windo
     new Autosaver, and the record stays until that solve really returns."""
     monkeypatch.setenv("SKETCHFORGE_DATA_DIR", str(tmp_path / "data"))
     folder, mine = tmp_path / "data" / "autosave", tmp_path / "mine.json"
-    host = make_test_host(FanInflater())
-    w = make_window(Document(host=host))
-    w.autosaver = Autosaver(w.doc, interval_s=3600)  # in the patched data folder
-    w.doc.execute({"command": "add_layer", "id": "a", "name": "Alpha"})
-    w.doc.execute({"command": "set_contour", "layer": "a", "points": TRIANGLE})
-    gate, seen = threading.Event(), []
-    w.runner.run(Blocking(layer="a", gate=gate, seen=seen))
-    qtbot.waitUntil(lambda: seen == ["started"])
+    w, gate = _window_mid_solve(make_window, qtbot)
     w.runner.cancel()  # its native code runs on
     first = w.autosaver
     assert w.save_to(mine)

@@ -86,11 +86,8 @@ def test_pick_and_stroke_equal_the_headless_command(make_window, mouse, qtbot, h
     assert np.array_equal(w.doc.layer("blob").mesh.V, ellipse_doc(host).layer("blob").mesh.V)
 
 
-def test_live_preview_while_drawing_then_cancel_or_apply(make_window, mouse, qtbot, host):
-    """While the stroke is drawn the picked layer shows the previewed surface (computed off the
-    GUI thread, the document untouched); cancelling drops it, releasing applies the edit."""
-    from PySide6.QtCore import QEvent
-
+def _picked(make_window, mouse, host):
+    """A window on the ellipse in SCULPTURE, band 0.15, the isophote through (0.3, 0.05) picked."""
     if COMMAND not in host.commands.names():
         pytest.skip("the isophote tool plugin is not installed")
     w = make_window(ellipse_doc(host))
@@ -99,14 +96,31 @@ def test_live_preview_while_drawing_then_cancel_or_apply(make_window, mouse, qtb
     w.sculpt_panel.spin.setValue(0.15)
     m = mouse(w.canvas)
     m.click_pixel(m.aim((0.3, 0.05))[0])
-    original = w.doc.layer("blob").mesh
-    item = w.canvas._layer_items["blob"]
-    pixels = [m.aim((0.36, y))[0] for y in np.linspace(-0.3, 0.3, 9)]
+    return w, m
+
+
+def _press_and_move(m, pixels):
+    """A stroke drawn through ``pixels`` and not released yet."""
+    from PySide6.QtCore import QEvent
+
     L, N = Qt.MouseButton.LeftButton, Qt.MouseButton.NoButton
     m._send(QEvent.Type.MouseMove, pixels[0], N, N)
     m._send(QEvent.Type.MouseButtonPress, pixels[0], L, L)
     for p in pixels[1:]:
         m._send(QEvent.Type.MouseMove, p, N, L)
+
+
+def test_live_preview_while_drawing_then_cancel_or_apply(make_window, mouse, qtbot, host):
+    """While the stroke is drawn the picked layer shows the previewed surface (computed off the
+    GUI thread, the document untouched); cancelling drops it, releasing applies the edit."""
+    from PySide6.QtCore import QEvent
+
+    w, m = _picked(make_window, mouse, host)
+    original = w.doc.layer("blob").mesh
+    item = w.canvas._layer_items["blob"]
+    pixels = [m.aim((0.36, y))[0] for y in np.linspace(-0.3, 0.3, 9)]
+    _press_and_move(m, pixels)
+    L, N = Qt.MouseButton.LeftButton, Qt.MouseButton.NoButton
     qtbot.waitUntil(lambda: w.sculpt.preview_result is not None and w.sculpt._preview_job is None, timeout=60_000)
     assert "preview" in w.sculpt.status
     assert item._mesh is not original and not np.array_equal(item._mesh.V, original.V)
@@ -129,23 +143,13 @@ def test_a_second_stroke_previews_what_its_release_applies(make_window, mouse, q
     record behind once they are over."""
     from PySide6.QtCore import QEvent
 
-    if COMMAND not in host.commands.names():
-        pytest.skip("the isophote tool plugin is not installed")
-    w = make_window(ellipse_doc(host))
-    w.canvas.fit()
-    w.modes.sculpture.setChecked(True)
-    w.sculpt_panel.spin.setValue(0.15)
-    m = mouse(w.canvas)
-    m.click_pixel(m.aim((0.3, 0.05))[0])
+    w, m = _picked(make_window, mouse, host)
     m.drag_pixels([m.aim((0.36, y))[0] for y in np.linspace(-0.3, 0.3, 9)])
     wait_idle(qtbot, w, timeout=120_000)
     assert w.doc.undo_stack.count() == 1, w.sculpt.status
     pixels = [m.aim((0.33, y))[0] for y in np.linspace(-0.3, 0.3, 9)]
+    _press_and_move(m, pixels)
     L, N = Qt.MouseButton.LeftButton, Qt.MouseButton.NoButton
-    m._send(QEvent.Type.MouseMove, pixels[0], N, N)
-    m._send(QEvent.Type.MouseButtonPress, pixels[0], L, L)
-    for p in pixels[1:]:
-        m._send(QEvent.Type.MouseMove, p, N, L)
     qtbot.waitUntil(lambda: w.sculpt._preview_job is None and w.sculpt.preview_result is not None, timeout=60_000)
     # the queued latest stroke may still be computing: wait until the preview is for all of it
     qtbot.waitUntil(lambda: w.sculpt._preview_job is None and w.sculpt._preview_pending is None, timeout=60_000)
