@@ -273,8 +273,16 @@ def _crossing_rows(rows, sheets, offsets, k, i, ek, ei, region, skip_k, skip_i, 
     rows.add(cols, coefs, rhs, (k, i))
 
 
+#: Memory the active-set method may hold (bytes): its cached columns P⁻¹cᵀ (8·N bytes per row
+#: ever probed), the working-set buffer and the Schur factors. The creature needs ~20 MB; a
+#: problem that would need more is not converging towards anything a person could use (a
+#: planted sign error in the back glue once grew the assembly to 24 GB before the kernel killed
+#: it), so it stops with a clear error instead.
+MEMORY_BUDGET = 1 << 30
+
+
 def solve_depth(P, q, Aeq, beq, Ain, bin_, method: str = "osqp", pad: float = 0.0, tol: float = 1e-10,
-                max_iter: int | None = None):
+                max_iter: int | None = None, memory_budget: int = MEMORY_BUDGET):
     """Solve  min ½δᵀPδ + qᵀδ  s.t.  Aeq δ = beq,  Ain δ >= bin_.
 
     Parameters
@@ -295,6 +303,9 @@ def solve_depth(P, q, Aeq, beq, Ain, bin_, method: str = "osqp", pad: float = 0.
         Violation of a depth row that the active-set method accepts.
     max_iter : int, optional
         Safety net on the active-set steps (default: ten per row, at least 1000).
+    memory_budget : int
+        Bytes the active-set method may hold (default :data:`MEMORY_BUDGET`); OSQP is bounded
+        by its 20000 iterations.
 
     Returns
     -------
@@ -305,7 +316,8 @@ def solve_depth(P, q, Aeq, beq, Ain, bin_, method: str = "osqp", pad: float = 0.
     Raises
     ------
     DepthOrderError
-        The rows cannot all be satisfied (or the active-set method did not finish).
+        The rows cannot all be satisfied, or the active-set method did not finish within
+        ``max_iter`` steps or ``memory_budget`` bytes.
     GeometryError
         The problem has a NaN, an infinity outside the bounds or inconsistent shapes; checked
         before either solver runs, in the form that solver reads (:func:`guard.qp` for OSQP,
@@ -347,7 +359,7 @@ def solve_depth(P, q, Aeq, beq, Ain, bin_, method: str = "osqp", pad: float = 0.
         Ain, bin_, _ = guard.constraints(Ain, bin_, None, P.shape[0], what, fmt="csr")
     if max_iter is None:
         max_iter = max(1000, 10 * (len(bin_) + len(beq)))
-    x, it, active = _active_set(P, q, Aeq, beq, Ain, bin_, warm, tol, max_iter)
+    x, it, active = _active_set(P, q, Aeq, beq, Ain, bin_, warm, tol, max_iter, memory_budget)
     info["iterations"] = it
     info["active"] = len(active)
     return x, info
@@ -365,8 +377,9 @@ class _WorkingSet:
     column, nothing is copied), so x = x0 + Z λ is one product over the buffer.
     """
 
-    def __init__(self, lu, Aeq, Ain, x0, beq, bin_):
+    def __init__(self, lu, Aeq, Ain, x0, beq, bin_, budget=MEMORY_BUDGET):
         self.lu, self.Aeq, self.Ain = lu, Aeq, Ain
+        self.budget = budget
         self.x0 = x0
         self.eq_cx0, self.in_cx0 = Aeq @ x0, Ain @ x0
         self.beq, self.bin_ = beq, bin_
@@ -383,6 +396,20 @@ class _WorkingSet:
     def m(self):
         return len(self.keys)
 
+    def check_budget(self, new_columns: int = 0, z_columns: int | None = None, m: int | None = None) -> None:
+        """Refuse to grow past the memory budget (before allocating, so nothing is ever
+        half-grown): cached and buffered columns of N floats, and the m×m factors G, L."""
+        n = len(self.x0)
+        z_columns = self.Z.shape[1] if z_columns is None else z_columns
+        m = self.m if m is None else m
+        need = 8 * n * (len(self.cache) + new_columns + z_columns) + 16 * m * m
+        if need > self.budget:
+            raise DepthOrderError(
+                f"The depth-order solve stopped: it needed {need / 2**20:.0f} MB, over its budget of "
+                f"{self.budget / 2**20:.0f} MB ({len(self.cache) + new_columns} rows in play); the layers are "
+                "glued and stacked in a way it cannot resolve. Reorder or redraw the parts."
+            )
+
     def row(self, key):
         A, r = (self.Ain, key) if key >= 0 else (self.Aeq, -1 - key)
         s, e = A.indptr[r], A.indptr[r + 1]
@@ -392,6 +419,7 @@ class _WorkingSet:
         """P⁻¹cᵀ of each row (one solve for all the missing ones)."""
         ins = [k for k in keys if k >= 0 and k not in self.cache]
         eqs = [-1 - k for k in keys if k < 0 and k not in self.cache]
+        self.check_budget(new_columns=len(ins) + len(eqs))
         for A, rows, key in ((self.Ain, ins, lambda r: r), (self.Aeq, eqs, lambda i: -1 - i)):
             if rows:
                 Zn = self.lu.solve(A[rows].T.toarray())
@@ -424,6 +452,8 @@ class _WorkingSet:
 
     def add(self, key, zp, l, g, piv):
         m = self.m
+        full = not self.free and self.used == self.Z.shape[1]
+        self.check_budget(z_columns=self.Z.shape[1] * (2 if full else 1), m=m + 1)
         if self.free:
             j = self.free.pop()
         else:
@@ -476,7 +506,7 @@ class _WorkingSet:
         return self.x0 + self.Z[:, :self.used] @ self.spread(lam), lam
 
 
-def _active_set(P, q, Aeq, beq, Ain, bin_, warm, tol, max_iter):
+def _active_set(P, q, Aeq, beq, Ain, bin_, warm, tol, max_iter, memory_budget=MEMORY_BUDGET):
     """Dual active-set method (Goldfarb & Idnani 1983) in range-space form.
 
     Why a dual method. A primal active-set method needs a feasible start, which is exactly what
@@ -504,7 +534,7 @@ def _active_set(P, q, Aeq, beq, Ain, bin_, warm, tol, max_iter):
     """
     lu = sla.splu(sp.csc_matrix(P), permc_spec="COLAMD")
     x0 = lu.solve(-q)
-    W = _WorkingSet(lu, Aeq, Ain, x0, beq, bin_)
+    W = _WorkingSet(lu, Aeq, Ain, x0, beq, bin_, memory_budget)
     dep = 1e-10  # relative pivot below which a row counts as dependent on the working set
     scale = 1.0 + float(np.abs(bin_).max(initial=0.0)) + float(np.abs(beq).max(initial=0.0))
 
