@@ -1,4 +1,4 @@
-"""Draw a layer's contour: one stroke per layer, open or closed."""
+"""Draw a layer's contour: one stroke per layer, open or closed, in front or at a given depth."""
 
 from __future__ import annotations
 
@@ -20,10 +20,15 @@ class DrawContourTool(Tool):
     name = "draw"
     label = "Draw contour"
 
-    def __init__(self, doc, target_layer: str | None = None, closed: bool = False) -> None:
+    def __init__(self, doc, target_layer: str | None = None, closed: bool = False, index: int | None = None,
+                 keep_edits: bool = False) -> None:
         super().__init__(doc)
         self.target_layer = target_layer
         self.closed = closed
+        #: where a new layer goes in the back-to-front list (None: in front of all)
+        self.index = index
+        #: a redraw re-applies the layer's sculpt edits (SetContour.keep_edits)
+        self.keep_edits = keep_edits
         self._points: list[np.ndarray] = []
 
     def press(self, pos) -> None:
@@ -41,8 +46,8 @@ class DrawContourTool(Tool):
         new layer, meant to be one macro "Draw layer"."""
         pts = np.asarray(points, dtype=np.float64)
         if self.target_layer is not None:
-            return [], SetContour(layer=self.target_layer, points=pts, closed=self.closed)
-        add = AddLayer(id=self.doc.new_layer_id())
+            return [], SetContour(layer=self.target_layer, points=pts, closed=self.closed, keep_edits=self.keep_edits)
+        add = AddLayer(id=self.doc.new_layer_id(), index=self.index)
         return [add], SetContour(layer=add.id, points=pts, closed=self.closed)
 
     def release(self, pos):
