@@ -106,3 +106,19 @@ def splice_outline(outline, closed: bool, stroke, tol: float) -> np.ndarray | No
     # replace j..i: the stroke reversed (j -> i), then the kept stretch i+1 .. j-1
     kept = P[(np.arange(i + 1, i + 1 + (j - i - 1) % n)) % n]
     return np.vstack([S[::-1], kept])
+
+
+def part_at(point, outlines: Sequence) -> int:
+    """Index of the frontmost of the ``outlines`` (back to front, each (m, 2) float64 or None)
+    whose region contains ``point`` (2,), or -1."""
+    p = shapely.Point(np.asarray(point, dtype=np.float64).reshape(2))
+    for k in range(len(outlines) - 1, -1, -1):
+        P = outlines[k]
+        if P is None or len(P) < 3:
+            continue
+        try:
+            if _region(P, "a part's outline").covers(p):
+                return k
+        except Exception:  # noqa: BLE001
+            continue
+    return -1
