@@ -413,7 +413,7 @@ class Canvas(pg.GraphicsView):
 
 
 #: A draw gesture spanning fewer screen pixels than this is refused with a message (a slip).
-MIN_STROKE_PIXELS = 4
+MIN_STROKE_PIXELS = 8
 
 
 def _stroke_kind(button, modifiers) -> str:

@@ -914,7 +914,12 @@ class MainWindow(QMainWindow):
         self.recent_menu.setEnabled(bool(files))
 
     def cancel_current(self) -> None:
-        """Esc: stop the running solve, and drop a sculpt stroke being drawn with its preview."""
+        """Esc: close the help, stop the running solve, and drop a sculpt stroke being drawn
+        with its preview."""
+        if self.help_overlay.isVisible():
+            self.help_overlay.hide()
+            self._focus_center()
+            return
         self.runner.cancel()
         if self.canvas.interaction == "sculpt":
             self.sculpt.cancel()
