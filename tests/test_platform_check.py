@@ -60,3 +60,4 @@ def test_the_app_prints_one_line_and_exits_2_without_a_display():
     lines = [l for l in out.stderr.splitlines() if l.strip()]
     assert len(lines) == 1 and lines[0].startswith("sketchforge: no display")
     assert "qt.qpa" not in out.stderr and "abort" not in out.stderr.lower()
+

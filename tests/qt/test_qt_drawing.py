@@ -234,3 +234,11 @@ def test_shortcuts_work_after_every_mode_switch_and_help_lists_them(w, mouse, qt
     assert all(k in text for k, _ in SHORTCUTS)
     key(w, qtbot, K.Key_Escape)
     assert not w.help_overlay.isVisible()
+
+
+def test_the_readme_lists_every_gesture_and_key_the_help_overlay_shows():
+    from pathlib import Path
+
+    from sketchforge.qt.shortcuts import shortcut_markdown
+
+    assert shortcut_markdown() in (Path(__file__).resolve().parents[2] / "README.md").read_text()
