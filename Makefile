@@ -46,6 +46,7 @@ bench: $(STAMP)
 # Regenerate the README's screenshots (observation needs OpenGL: Xvfb + Mesa).
 screenshots: $(STAMP)
 	QT_QPA_PLATFORM=offscreen $(BIN)/python -m sketchforge.qt.screenshots $(EXAMPLE) docs/screenshots
+	QT_QPA_PLATFORM=offscreen $(BIN)/python -m sketchforge.qt.drawing_strip docs/screenshots
 	xvfb-run -a env QT_QPA_PLATFORM=xcb $(BIN)/sketchforge --screenshot docs/screenshots/observation.png $(EXAMPLE) --mode observation
 
 clean:

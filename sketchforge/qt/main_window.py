@@ -58,8 +58,8 @@ FILE_FILTER = "sketchforge documents (*.json *.sketchforge);;All files (*)"
 MAX_RECENT = 8
 #: A redraw stroke's ends must lie this close (screen pixels) to the selected outline.
 SPLICE_PIXELS = 10
-#: Ctrl+D moves the copy this fraction of the part's width to the right and down.
-DUPLICATE_OFFSET = 0.25
+#: Ctrl+D moves the copy this fraction of the part's width to the right (a second eye, leg...).
+DUPLICATE_OFFSET = 0.6
 
 
 class _AutosaveGuard:
@@ -730,12 +730,12 @@ class MainWindow(QMainWindow):
             self.show_message(f"duplicated “{layer.name}” {'behind' if button == 'left' else 'in front of'} itself")
 
     def duplicate_aside(self, layer_id: str) -> None:
-        """Ctrl+D: a copy in front, moved right and down by a quarter of the part's width."""
+        """Ctrl+D: a copy in front, moved right by 0.6 of the part's width (beside it)."""
         layer = self.doc.layer(layer_id)
         pts = layer.points if layer.points is not None else None
         width = float(np.ptp(pts[:, 0])) if pts is not None and len(pts) else 0.0
         step = DUPLICATE_OFFSET * (width if width > 0 else 0.4)
-        cmd = C.DuplicateLayer(layer=layer_id, offset=[step, -step])
+        cmd = C.DuplicateLayer(layer=layer_id, offset=[step, 0.0])
         if self.push(cmd):
             self.layers_panel.select(cmd.new_id)
             self.show_message(f"duplicated “{layer.name}”, moved aside")
