@@ -59,7 +59,8 @@ class CanvasViewBox(pg.ViewBox):
         if ev.double() and self._canvas.handle_double_click(ev):
             ev.accept()
             return
-        if ev.button() == Qt.MouseButton.LeftButton and self._canvas.handle_click(ev):
+        selects = self._canvas.interaction == "draw" and ev.button() == Qt.MouseButton.RightButton
+        if (ev.button() == Qt.MouseButton.LeftButton or selects) and self._canvas.handle_click(ev):
             ev.accept()
             return
         super().mouseClickEvent(ev)
@@ -320,7 +321,8 @@ class Canvas(pg.GraphicsView):
     def handle_left_drag(self, ev) -> bool:
         mode = self.interaction
         if ev.isStart():
-            if self.busy and mode != "light":
+            # A stroke may be drawn while the last one inflates (the window queues it).
+            if self.busy and mode not in ("light", "draw"):
                 self.message.emit("a solve is running: wait for it or cancel it")
                 return True
             start = self._event_doc(ev, ev.buttonDownPos())

@@ -105,6 +105,8 @@ class MainWindow(QMainWindow):
         self.runner = CommandRunner(doc, self.jobs, self, guard=self.solve_guard)
         #: {layer id: {param: value}} edited while a solve ran: applied when it ends (last wins)
         self._pending_params: dict[str, dict] = {}
+        #: [(points, kind)] strokes drawn while a solve ran: drawn in order when it ends
+        self._pending_strokes: list[tuple] = []
 
         self._build_widgets()
         self._build_menus()
@@ -421,9 +423,9 @@ class MainWindow(QMainWindow):
             self.act_undo.setEnabled(True)
         else:
             self._sync_undo()
-            if self._pending_params:
+            if self._pending_params or self._pending_strokes:
                 # Queued so that the finished solve's own callbacks run first.
-                QTimer.singleShot(0, self._run_pending_params)
+                QTimer.singleShot(0, self._run_pending)
 
     def _progress(self, label: str) -> None:
         for w in (self.progress_label, self.progress, self.cancel_button):
@@ -561,6 +563,16 @@ class MainWindow(QMainWindow):
             on_error=lambda exc: self._sync_current_layer() or False,
         )
 
+    def _run_pending(self) -> None:
+        """After a solve: the strokes drawn meanwhile (in order), then the parameter edits."""
+        if self.runner.busy:
+            return
+        if self._pending_strokes:
+            pts, kind = self._pending_strokes.pop(0)
+            self.draw_stroke(pts, kind)
+            return
+        self._run_pending_params()
+
     def _run_pending_params(self) -> None:
         if self.runner.busy or not self._pending_params:
             return
@@ -599,9 +611,14 @@ class MainWindow(QMainWindow):
         """A finished stroke. ``kind`` "front": a new part in front of all; "behind": a new part
         under the backmost part it overlaps; "redraw": the selected part's whole outline. A
         "front" stroke that starts and ends on the selected outline redraws that stretch."""
-        if self._refuse_if_busy():
-            return
         pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+        if self.runner.busy:
+            # Drawn while the last part inflates: drawn as soon as it is done, so quick
+            # strokes are never lost; where it goes is decided then, on the new document.
+            self._pending_strokes.append((pts, kind))
+            n = len(self._pending_strokes)
+            self.show_message(f"{n} stroke{'s' * (n != 1)} waiting: drawn when the current inflation ends (Esc drops them)")
+            return
         if len(pts) < 2:
             self.show_message("the stroke is too short: press, drag around the shape and release")
             return
@@ -760,6 +777,7 @@ class MainWindow(QMainWindow):
         before."""
         if self.runner.busy:
             self._pending_params.clear()
+            self._pending_strokes.clear()
             self.runner.cancel()
             self._sync_current_layer()
             self.show_message("cancelled the running computation; its action was not applied")
@@ -791,6 +809,8 @@ class MainWindow(QMainWindow):
 
     def adopt(self, loaded, path: Path | None) -> None:
         """Take over the state of a freshly loaded document (history starts here)."""
+        self._pending_strokes.clear()
+        self._pending_params.clear()
         self.runner.cancel()
         self.doc.adopt(loaded)
         self.path = path
@@ -920,6 +940,9 @@ class MainWindow(QMainWindow):
             self.help_overlay.hide()
             self._focus_center()
             return
+        if self._pending_strokes:
+            self.show_message(f"dropped {len(self._pending_strokes)} waiting stroke(s)")
+        self._pending_strokes.clear()
         self.runner.cancel()
         if self.canvas.interaction == "sculpt":
             self.sculpt.cancel()

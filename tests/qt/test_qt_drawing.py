@@ -242,3 +242,52 @@ def test_the_readme_lists_every_gesture_and_key_the_help_overlay_shows():
     from sketchforge.qt.shortcuts import shortcut_markdown
 
     assert shortcut_markdown() in (Path(__file__).resolve().parents[2] / "README.md").read_text()
+
+
+def test_strokes_drawn_while_a_part_inflates_wait_and_are_all_drawn(w, mouse, qtbot, monkeypatch):
+    import threading
+
+    from sketchforge.document import commands as C
+
+    # The first inflation waits until the test lets it go, as a slow one would.
+    gate = threading.Event()
+    compute = C.SetContour.compute
+
+    def slow(self, doc, old):
+        gate.wait(30)
+        return compute(self, doc, old)
+
+    monkeypatch.setattr(C.SetContour, "compute", slow)
+    m = mouse(w.canvas)
+    m.drag(loop(0.4, (0, 0)))
+    assert w.runner.busy  # the body inflates...
+    m.drag(loop(0.2, (0.5, 0.4)))  # ...while the head and a leg behind are drawn
+    m.drag(loop(0.15, (-0.3, -0.4)), Qt.MouseButton.RightButton)
+    assert "2 strokes waiting" in status(w) and len(w.doc.layers) == 1
+    gate.set()
+    qtbot.waitUntil(lambda: len(w.doc.layers) == 3 and not w.runner.busy and not w._pending_strokes, timeout=60_000)
+    wait_idle(qtbot, w)
+    body, head = w.doc.layers[1], w.doc.layers[2]
+    assert w.doc.layers[0].id == w.current_layer  # the leg went behind the body
+    assert np.allclose(body.points.mean(axis=0), 0, atol=0.02) and head.points[:, 0].mean() > 0.4
+    assert w.doc.undo_stack.count() == 3
+    # Esc drops waiting strokes along with the running solve
+    gate.clear()
+    m.drag(loop(0.1, (0.6, -0.6)))
+    m.drag(loop(0.1, (-0.6, 0.6)))
+    assert w.runner.busy and len(w._pending_strokes) == 1
+    key(w, qtbot, K.Key_Escape)
+    gate.set()
+    wait_idle(qtbot, w)
+    assert len(w.doc.layers) == 3 and not w._pending_strokes and "dropped 1 waiting stroke" in status(w)
+
+
+def test_right_click_selects_and_question_mark_opens_the_help(w, mouse, qtbot):
+    draw(w, mouse, qtbot, loop(0.4, (0, 0)))
+    draw(w, mouse, qtbot, loop(0.2, (0.7, 0.5)))
+    mouse(w.canvas).click((0.0, 0.0), Qt.MouseButton.RightButton)
+    assert w.current_layer == w.doc.layers[0].id and len(w.doc.layers) == 2
+    key(w, qtbot, K.Key_Question)
+    assert w.help_overlay.isVisible()
+    mouse(w.canvas).click((0.5, -0.5))
+    QApplication.processEvents()
