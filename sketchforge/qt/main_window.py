@@ -459,7 +459,8 @@ class MainWindow(QMainWindow):
         """Keys go to the view after every mode switch: the widget that had focus (a mode
         button, or the canvas just hidden) would otherwise keep it or leave none."""
         widget = self.center.currentWidget()
-        target = getattr(widget, "gl", None) or widget
+        gl = getattr(widget, "gl", None)
+        target = gl if isinstance(gl, QWidget) else widget
         target.setFocusPolicy(Qt.FocusPolicy.StrongFocus)
         target.setFocus(Qt.FocusReason.OtherFocusReason)
         self.activateWindow()
@@ -636,6 +637,9 @@ class MainWindow(QMainWindow):
             if spliced is not None:
                 self._redraw(selected, spliced, selected.closed, "redrew part of the outline")
                 return
+        if kind == "front" and selected is not None and selected.points is None:
+            self._new_part(pts, behind=False, target=selected.id)  # an empty layer ("+") gets it
+            return
         self._new_part(pts, behind=(kind == "behind"))
 
     @staticmethod
@@ -650,7 +654,8 @@ class MainWindow(QMainWindow):
         """Closed as the assembly sees it: marked closed, or its mesh has no junction."""
         return bool(layer.closed) or (layer.mesh is not None and len(layer.mesh.junction) == 0)
 
-    def _new_part(self, pts, behind: bool) -> None:
+    def _new_part(self, pts, behind: bool, target: str | None = None) -> None:
+        """A new part from ``pts`` (or the contour of the empty layer ``target``)."""
         outlines = self._outlines()
         notes = []
         closed = self._stroke_closes(pts, DEFAULT_INFLATE_PARAMS)
@@ -663,7 +668,7 @@ class MainWindow(QMainWindow):
             index = int(hit[0]) if len(hit) else 0
             below = self.doc.layers[index].name if index < len(self.doc.layers) else None
             notes.insert(0, f"drawn behind “{below}”" if len(hit) else "drawn behind all parts (it overlaps none)")
-        tool = DrawContourTool(self.doc, closed=bool(closed), index=index)
+        tool = DrawContourTool(self.doc, target_layer=target, closed=bool(closed), index=index)
         before, cmd = tool.commands_for(pts)
         kind = "closed" if closed else "open"
 
@@ -671,7 +676,7 @@ class MainWindow(QMainWindow):
             self.layers_panel.select(c.layer)
             self.show_message(f"new {kind} part “{self.doc.layer(c.layer).name}”" + ("; " + "; ".join(notes) if notes else ""))
 
-        self.runner.run(cmd, label="Inflating", macro="Draw layer", before=before, on_done=done)
+        self.runner.run(cmd, label="Inflating", macro="Draw layer" if before else None, before=before, on_done=done)
 
     def _redraw(self, layer, pts, closed: bool, what: str, keep_edits: bool = True) -> None:
         """Replace ``layer``'s outline; its sculpt edits are kept when they still apply, else the

@@ -76,6 +76,22 @@ def test_right_drag_and_shift_drag_draw_behind_the_backmost_overlapped_part(w, m
     draw(w, mouse, qtbot, loop(0.15, (0.85, 0.75)), modifiers=M.ShiftModifier)
     ids = [l.id for l in w.doc.layers]
     assert ids.index(w.current_layer) == 2 and ids[3] == names[2]
+    # the journal puts them at the same depths again
+    replayed = Document(host=w.host)
+    for entry in w.doc.journal():
+        replayed.execute(entry)
+    assert [l.id for l in replayed.layers] == ids
+
+
+def test_a_stroke_fills_an_empty_layer_made_with_plus(w, mouse, qtbot):
+    draw(w, mouse, qtbot, loop(0.4, (0, 0)))
+    w.layers_panel.select(w.doc.layers[0].id)
+    w.layers_panel.add_requested.emit()  # the "+" button: an empty layer, selected
+    empty = w.current_layer
+    assert w.doc.layer(empty).points is None
+    draw(w, mouse, qtbot, loop(0.2, (0.5, 0.5)))
+    assert len(w.doc.layers) == 2 and w.doc.layer(empty).mesh is not None
+    assert w.act_undo.text() == "Undo Draw contour"
 
 
 def test_open_stroke_on_a_part_attaches_open_over_nothing_becomes_a_free_part(w, mouse, qtbot, host):
