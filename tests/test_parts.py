@@ -149,3 +149,33 @@ def test_redraw_keeps_sculpt_edits_that_apply_and_refuses_those_that_do_not(real
         doc.execute({"command": "set_contour", "layer": "body", "points": ring(0.1, (-3.0, 0.0)).tolist(),
                      "closed": True, "keep_edits": True})
     assert doc.layer("body") is kept
+
+
+# --- plan_stroke: the same decisions the window makes, headless -------------------------------
+
+
+def test_plan_stroke_decides_new_behind_stretch_whole_and_free(real_host):
+    from sketchforge.tools.draw import plan_stroke
+
+    doc = body_doc(real_host)  # one closed body, r = 0.6
+    doc.execute({"command": "add_layer", "id": "far", "name": "Far"})
+    doc.execute({"command": "set_contour", "layer": "far", "points": ring(0.2, (2.0, 0.0), n=80).tolist(), "closed": True})
+    head = ring(0.2, (0.5, 0.5), n=120)
+    plan = plan_stroke(doc, head, "front", "body", 0.01)
+    assert plan.target is None and plan.index is None and plan.closed and plan.redraw is None
+    # behind: under the backmost part it overlaps (the body, index 0), or at the back
+    assert plan_stroke(doc, ring(0.2, (2.1, 0.0), n=80), "behind", "body").index == 1
+    plan = plan_stroke(doc, ring(0.1, (0.0, 2.0), n=80), "behind", "body")
+    assert plan.index == 0 and "overlaps none" in plan.notes[0]
+    # an open U on the body stays open; the same U in empty space is made free, and says so
+    leg = u((0.0, -0.3), 0.3, 0.7, n=60)
+    assert plan_stroke(doc, leg, "front", "far").closed is False
+    plan = plan_stroke(doc, leg + [0.0, 3.0], "front", "far")
+    assert plan.closed and "touch no part" in plan.notes[0]
+    # from the body's outline back to it: that stretch; Ctrl: the whole outline; no selection: refused
+    P = doc.layer("body").points
+    bump = np.array([P[0], [0.9, 0.1], [0.8, 0.3], P[10]])
+    plan = plan_stroke(doc, bump, "front", "body", 1e-9)
+    assert plan.redraw == "stretch" and plan.target == "body" and len(plan.points) == len(P) - 11 + 4
+    assert plan_stroke(doc, head, "redraw", "body").redraw == "whole"
+    assert plan_stroke(doc, head, "redraw", None).refusal

@@ -36,9 +36,8 @@ from sketchforge.document import commands as C
 from sketchforge.document import fileformat as ff
 from sketchforge.document.autosave import Autosaver, autosave_interval, describe_stop, find_recoverable, forget, recover
 from sketchforge.document.layer import Light
-from sketchforge.errors import ContourError, EditsDoNotApplyError, SketchforgeError
-from sketchforge.geometry.inflate_params import DEFAULT_INFLATE_PARAMS
-from sketchforge.geometry.parts import chord_touches, overlapped, part_at, splice_outline, stroke_closes
+from sketchforge.errors import EditsDoNotApplyError, SketchforgeError
+from sketchforge.geometry.parts import part_at
 from sketchforge.qt.canvas import Canvas
 from sketchforge.qt.command_runner import CommandRunner, GuardedJobs
 from sketchforge.qt.errors_ui import ask_yes_no, error_text, show_error
@@ -53,6 +52,7 @@ from sketchforge.qt.shortcuts import HelpOverlay
 from sketchforge.qt.view3d import View3D
 from sketchforge.qt.workers import JobRunner
 from sketchforge.tools import DrawContourTool
+from sketchforge.tools.draw import closes, layer_outlines, plan_stroke
 
 FILE_FILTER = "sketchforge documents (*.json *.sketchforge);;All files (*)"
 MAX_RECENT = 8
@@ -596,22 +596,11 @@ class MainWindow(QMainWindow):
 
     # --- parts drawn and arranged with the mouse and keys (Monster Mash) ------------------------
     def _outlines(self) -> list:
-        """Each layer's outline (back to front) as drawn on screen: the mesh boundary, else the
-        stroke, None for an empty or hidden layer."""
-        out = []
-        for layer in self.doc.layers:
-            if not layer.visible:
-                out.append(None)
-            elif layer.mesh is not None and len(layer.mesh.boundary):
-                out.append(np.asarray(layer.mesh.V)[layer.mesh.boundary, :2])
-            else:
-                out.append(layer.points)
-        return out
+        return layer_outlines(self.doc)
 
     def draw_stroke(self, points, kind: str = "front") -> None:
-        """A finished stroke. ``kind`` "front": a new part in front of all; "behind": a new part
-        under the backmost part it overlaps; "redraw": the selected part's whole outline. A
-        "front" stroke that starts and ends on the selected outline redraws that stretch."""
+        """A finished stroke of ``kind`` "front", "behind" or "redraw" (see
+        :func:`~sketchforge.tools.draw.plan_stroke` for where it goes)."""
         pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
         if self.runner.busy:
             # Drawn while the last part inflates: drawn as soon as it is done, so quick
@@ -623,58 +612,25 @@ class MainWindow(QMainWindow):
         if len(pts) < 2:
             self.show_message("the stroke is too short: press, drag around the shape and release")
             return
-        selected = self.doc.layer(self.current_layer) if self.current_layer in self.doc.layer_ids() else None
-        if kind == "redraw":
-            if selected is None:
-                self.show_message("Ctrl + drag redraws the selected part's outline: select a part first (click it)")
-                return
-            closed = self._stroke_closes(pts, selected.params)
-            self._redraw(selected, pts, selected.closed if closed is None else closed, "redrew the outline")
-            return
-        if kind == "front" and selected is not None and selected.points is not None:
-            tol = SPLICE_PIXELS * self.canvas.pixel_size()
-            spliced = splice_outline(selected.points, self._is_closed(selected), pts, tol)
-            if spliced is not None:
-                self._redraw(selected, spliced, selected.closed, "redrew part of the outline")
-                return
-        if kind == "front" and selected is not None and selected.points is None:
-            self._new_part(pts, behind=False, target=selected.id)  # an empty layer ("+") gets it
-            return
-        self._new_part(pts, behind=(kind == "behind"))
+        plan = plan_stroke(self.doc, pts, kind, self.current_layer, SPLICE_PIXELS * self.canvas.pixel_size())
+        if plan.refusal is not None:
+            self.show_message(plan.refusal)
+        elif plan.redraw is not None:
+            what = "redrew the outline" if plan.redraw == "whole" else "redrew part of the outline"
+            self._redraw(self.doc.layer(plan.target), plan.points, plan.closed, what)
+        else:
+            self._new_part(plan)
 
-    @staticmethod
-    def _stroke_closes(pts, params) -> bool | None:
-        try:
-            return stroke_closes(pts, float(params.get("resolution", DEFAULT_INFLATE_PARAMS["resolution"])))
-        except ContourError:
-            return None  # the inflation reports what is wrong with the stroke
-
-    @staticmethod
-    def _is_closed(layer) -> bool:
-        """Closed as the assembly sees it: marked closed, or its mesh has no junction."""
-        return bool(layer.closed) or (layer.mesh is not None and len(layer.mesh.junction) == 0)
-
-    def _new_part(self, pts, behind: bool, target: str | None = None) -> None:
-        """A new part from ``pts`` (or the contour of the empty layer ``target``)."""
-        outlines = self._outlines()
-        notes = []
-        closed = self._stroke_closes(pts, DEFAULT_INFLATE_PARAMS)
-        if closed is False and not chord_touches(pts, outlines):
-            closed = True
-            notes.append("its open ends touch no part, so it was made a closed free part")
-        index = None
-        if behind:
-            hit = np.flatnonzero(overlapped(pts, outlines))
-            index = int(hit[0]) if len(hit) else 0
-            below = self.doc.layers[index].name if index < len(self.doc.layers) else None
-            notes.insert(0, f"drawn behind “{below}”" if len(hit) else "drawn behind all parts (it overlaps none)")
-        tool = DrawContourTool(self.doc, target_layer=target, closed=bool(closed), index=index)
-        before, cmd = tool.commands_for(pts)
-        kind = "closed" if closed else "open"
+    def _new_part(self, plan) -> None:
+        """A new part (or the contour of the empty layer ``plan.target``)."""
+        tool = DrawContourTool(self.doc, target_layer=plan.target, closed=plan.closed, index=plan.index)
+        before, cmd = tool.commands_for(plan.points)
+        kind = "closed" if plan.closed else "open"
 
         def done(c):
             self.layers_panel.select(c.layer)
-            self.show_message(f"new {kind} part “{self.doc.layer(c.layer).name}”" + ("; " + "; ".join(notes) if notes else ""))
+            notes = "".join("; " + n for n in plan.notes)
+            self.show_message(f"new {kind} part “{self.doc.layer(c.layer).name}”{notes}")
 
         self.runner.run(cmd, label="Inflating", macro="Draw layer" if before else None, before=before, on_done=done)
 
@@ -718,7 +674,7 @@ class MainWindow(QMainWindow):
         if self._refuse_if_busy():
             self._sync_current_layer()
             return
-        if not closed and self._stroke_closes(layer.points, layer.params):
+        if not closed and closes(layer.points, layer.params):
             self._sync_current_layer()
             self.show_message(f"“{layer.name}” stays closed: the ends of its stroke meet, so it has no open side to attach by")
             return
