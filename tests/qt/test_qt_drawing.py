@@ -219,6 +219,7 @@ def test_parameter_edits_during_a_solve_are_coalesced_and_ctrl_z_cancels(w, mous
     wait_idle(qtbot, w)
     assert w.doc.layers[0].params["inflation"] == pytest.approx(start + 5 * spin.singleStep())
     assert spin.value() == pytest.approx(start + 5 * spin.singleStep())
+    assert w.doc.undo_stack.count() == 3  # the draw, the first click, the four coalesced ones
     # Ctrl+Z while a solve runs cancels it: the document stays as it was
     before = w.doc.layers[0]
     n = w.doc.undo_stack.count()
