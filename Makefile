@@ -46,7 +46,10 @@ bench: $(STAMP)
 # Regenerate the README's screenshots (observation needs OpenGL: Xvfb + Mesa).
 screenshots: $(STAMP)
 	QT_QPA_PLATFORM=offscreen $(BIN)/python -m sketchforge.qt.screenshots $(EXAMPLE) docs/screenshots
-	QT_QPA_PLATFORM=offscreen $(BIN)/python -m sketchforge.qt.drawing_strip docs/screenshots
+	tmp=$$(mktemp -d) && \
+	QT_QPA_PLATFORM=offscreen $(BIN)/python -m sketchforge.qt.drawing_strip docs/screenshots --save $$tmp/creature.json && \
+	xvfb-run -a env QT_QPA_PLATFORM=xcb $(BIN)/sketchforge --screenshot docs/screenshots/drawing-7-observation.png $$tmp/creature.json --mode observation; \
+	rc=$$?; rm -rf $$tmp; exit $$rc
 	xvfb-run -a env QT_QPA_PLATFORM=xcb $(BIN)/sketchforge --screenshot docs/screenshots/observation.png $(EXAMPLE) --mode observation
 
 clean:

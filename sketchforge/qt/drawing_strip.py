@@ -5,7 +5,8 @@ The gestures are real mouse and key events sent to the real window (as the Qt te
 them), so the pictures show what a person gets: body, head in front, a leg drawn behind with
 the right button, its copy by Ctrl+D sent to the back by End and two more legs, an eye (a
 closed loop on the head) and its twin by Ctrl+D, and the help overlay (F1). Writes
-``drawing-1-body.png`` … ``drawing-6-help.png``.
+``drawing-1-body.png`` … ``drawing-6-help.png``; ``--save DOC`` also saves the document, which
+``make screenshots`` then shows assembled in OBSERVATION (``drawing-7-observation.png``).
 """
 
 from __future__ import annotations
@@ -58,11 +59,13 @@ class _Mouse:
 
 
 def main(argv=None) -> int:
-    argv = list(sys.argv[1:] if argv is None else argv)
-    if len(argv) != 1:
-        print("usage: python -m sketchforge.qt.drawing_strip OUTDIR", file=sys.stderr)
-        return 2
-    out = Path(argv[0])
+    import argparse
+
+    parser = argparse.ArgumentParser(prog="python -m sketchforge.qt.drawing_strip")
+    parser.add_argument("outdir", type=Path)
+    parser.add_argument("--save", type=Path, help="also save the drawn document (for an OBSERVATION screenshot)")
+    args = parser.parse_args(sys.argv[1:] if argv is None else argv)
+    out = args.outdir
     out.mkdir(parents=True, exist_ok=True)
     from PySide6.QtCore import QSettings, Qt
     from PySide6.QtTest import QTest
@@ -101,20 +104,25 @@ def main(argv=None) -> int:
     shot("body")
     mouse.drag(_ellipse((0.55, 0.42), 0.3, 0.26))  # 2: the head, in front
     shot("head")
-    mouse.drag(_u((-0.32, -0.3), 0.2, 0.62), right=True)  # 3: a leg behind the body (right drag)
+    mouse.drag(_u((-0.4, -0.3), 0.16, 0.62), right=True)  # 3: a leg behind the body (right drag)
     shot("leg-behind")
     QTest.keyClick(w.canvas, Qt.Key.Key_D, Qt.KeyboardModifier.ControlModifier)  # 4: its copy, moved aside...
     settle(w, app)
     QTest.keyClick(w.canvas, Qt.Key.Key_End)  # ...and sent to the back (End)
-    mouse.drag(_u((0.3, -0.3), 0.2, 0.62), right=True)  # two more legs at the front end
-    mouse.drag(_u((0.42, -0.3), 0.2, 0.62), right=True)
+    mouse.drag(_u((0.2, -0.3), 0.16, 0.62), right=True)  # two more legs at the front end
+    mouse.drag(_u((0.4, -0.3), 0.16, 0.62), right=True)
     shot("legs")
-    mouse.drag(_ellipse((0.62, 0.5), 0.05, 0.06, n=40))  # 5: an eye on the head, and its twin (Ctrl+D)
+    mouse.drag(_ellipse((0.5, 0.5), 0.045, 0.055, n=40))  # 5: an eye on the head, and its twin (Ctrl+D)
     settle(w, app)
     QTest.keyClick(w.canvas, Qt.Key.Key_D, Qt.KeyboardModifier.ControlModifier)
     shot("eyes")
     QTest.keyClick(w.canvas, Qt.Key.Key_F1)  # 6: every gesture and key
     shot("help")
+    if args.save is not None:
+        from sketchforge.document import fileformat as ff
+
+        ff.save(w.doc, args.save)
+        print(f"wrote {args.save}", file=sys.stderr)
     w.close_now()
     w.jobs.wait(30_000)
     (out / ".strip-settings.ini").unlink(missing_ok=True)

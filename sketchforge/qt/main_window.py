@@ -58,8 +58,9 @@ FILE_FILTER = "sketchforge documents (*.json *.sketchforge);;All files (*)"
 MAX_RECENT = 8
 #: A redraw stroke's ends must lie this close (screen pixels) to the selected outline.
 SPLICE_PIXELS = 10
-#: Ctrl+D moves the copy this fraction of the part's width to the right (a second eye, leg...).
-DUPLICATE_OFFSET = 0.6
+#: Ctrl+D moves the copy this many part widths to the right: beside it with a gap (a second
+#: eye, leg...), so the copy's junction does not lie across the original.
+DUPLICATE_OFFSET = 1.25
 
 
 class _AutosaveGuard:
@@ -708,7 +709,7 @@ class MainWindow(QMainWindow):
             self.show_message(f"duplicated “{layer.name}” {'behind' if button == 'left' else 'in front of'} itself")
 
     def duplicate_aside(self, layer_id: str) -> None:
-        """Ctrl+D: a copy in front, moved right by 0.6 of the part's width (beside it)."""
+        """Ctrl+D: a copy in front, moved right by 1.25 part widths (beside it)."""
         layer = self.doc.layer(layer_id)
         pts = layer.points if layer.points is not None else None
         width = float(np.ptp(pts[:, 0])) if pts is not None and len(pts) else 0.0

@@ -165,13 +165,13 @@ def test_depth_keys_delete_and_duplicates(w, mouse, qtbot):
     mouse(w.canvas).double_click((-0.8, 0.0), Qt.MouseButton.RightButton)
     ids = [l.id for l in w.doc.layers]
     assert len(ids) == 5 and ids.index(w.current_layer) == ids.index(c) + 1
-    # Ctrl+D: a copy moved aside (0.6 of its width to the right)
+    # Ctrl+D: a copy moved aside (1.25 of its width to the right)
     mouse(w.canvas).click((0.0, 0.0))
     key(w, qtbot, K.Key_D, M.ControlModifier)
     copy = w.doc.layer(w.current_layer)
     src = w.doc.layer(a)
     shift = copy.mesh.V[:, :2].mean(axis=0) - src.mesh.V[:, :2].mean(axis=0)
-    assert np.allclose(shift, [0.48, 0.0], atol=0.02)
+    assert np.allclose(shift, [1.0, 0.0], atol=0.02)
     assert np.array_equal(copy.mesh.F, src.mesh.F)
     # Del removes the selected part; every key was one undo step
     n = len(w.doc.layers)
