@@ -12,6 +12,7 @@ EXAMPLES = [
     {"command": "duplicate_layer", "layer": "body", "id": "body2", "name": "Body copy"},
     {"command": "duplicate_layer", "layer": "body", "id": "body3", "name": "Body copy", "index": 0, "offset": [0.25, -0.5]},
     {"command": "mirror_layer", "layer": "body"},
+    {"command": "translate_layer", "layer": "body", "offset": [0.125, -0.5]},
     {"command": "set_contour", "layer": "body", "points": [[0.0, 0.0], [1.0, 0.0], [0.5, 1.0]]},
     {"command": "set_contour", "layer": "body", "points": [[0.0, 0.0], [1.0, 0.0], [0.5, 1.0]], "closed": True},
     {"command": "set_contour", "layer": "body", "points": [[0.0, 0.0], [1.0, 0.0], [0.5, 1.0]], "keep_edits": True},

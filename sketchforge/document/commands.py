@@ -504,6 +504,38 @@ def _translated(layer: Layer, off: np.ndarray) -> Layer:
 
 
 @dataclass
+class TranslateLayer(ReplaceLayerCommand):
+    """Move a layer in the drawing plane by ``offset`` (dx, dy): its stroke, mesh and sculpt
+    edit positions together (no re-inflation: the same surface, moved). Each nudge is its own
+    step (summing nudges would not replay bit for bit)."""
+
+    name: ClassVar[str] = "translate_layer"
+    offset: Any = (0.0, 0.0)
+
+    def __post_init__(self) -> None:
+        off = np.asarray(self.offset, dtype=np.float64).reshape(-1)
+        if off.shape != (2,) or not np.all(np.isfinite(off)):
+            raise ParameterError("a move's offset must be two finite numbers")
+        self.offset = [float(off[0]), float(off[1])]
+
+    def text(self) -> str:
+        return "Move layer"
+
+    def compute(self, doc, old: Layer) -> Layer:
+        return _translated(old, np.asarray(self.offset, dtype=np.float64))
+
+    def to_dict(self) -> dict:
+        return {"command": self.name, "layer": self.layer, "offset": list(self.offset)}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "TranslateLayer":
+        offset = parse_vector(d, "offset", cls.name)
+        if len(offset) != 2:
+            raise DocumentFormatError(f"command {cls.name!r}: 'offset' must be 2 numbers")
+        return cls(layer=parse_field(d, "layer", str, cls.name), offset=offset)
+
+
+@dataclass
 class SetLight(Command):
     """Set the light direction. Commands of one drag (same ``gesture``) merge into one undo
     step; the gesture id is not saved (the journal keeps the final direction)."""
@@ -589,6 +621,7 @@ CORE_COMMANDS: tuple[type[Command], ...] = (
     SetLayerVisible,
     MoveLayer,
     DuplicateLayer,
+    TranslateLayer,
     MirrorLayer,
     SetContour,
     SetInflateParams,

@@ -61,6 +61,8 @@ SPLICE_PIXELS = 10
 #: Ctrl+D moves the copy this many part widths to the right: beside it with a gap (a second
 #: eye, leg...), so the copy's junction does not lie across the original.
 DUPLICATE_OFFSET = 1.25
+#: An arrow key moves the selected part this many screen pixels.
+NUDGE_PIXELS = 10
 
 
 class _AutosaveGuard:
@@ -288,6 +290,13 @@ class MainWindow(QMainWindow):
         self._action(lm, "Send &backward", lambda: self._on_current(lambda lid: self.move_depth(lid, -1)), "PgDown")
         self._action(lm, "Bring to fron&t", lambda: self._on_current(lambda lid: self.move_depth(lid, "front")), "Home")
         self._action(lm, "Send to bac&k", lambda: self._on_current(lambda lid: self.move_depth(lid, "back")), "End")
+        lm.addSeparator()
+        # Arrows move the selected part only while the drawing has the focus: elsewhere they
+        # belong to the lists and fields.
+        for text, key, step in (("left", "Left", (-1, 0)), ("right", "Right", (1, 0)), ("up", "Up", (0, 1)), ("down", "Down", (0, -1))):
+            act = self._action(lm, f"Move {text}", lambda _=False, s=step: self._on_current(lambda lid: self.nudge(lid, s)), key)
+            act.setShortcutContext(Qt.ShortcutContext.WidgetWithChildrenShortcut)
+            self.canvas.addAction(act)
 
         v = mb.addMenu("&View")
         self._action(v, "&Fit drawing", self.canvas.fit, "Ctrl+0")
@@ -706,7 +715,10 @@ class MainWindow(QMainWindow):
         cmd = C.DuplicateLayer(layer=layer.id, index=k if button == "left" else k + 1)
         if self.push(cmd):
             self.layers_panel.select(cmd.new_id)
-            self.show_message(f"duplicated “{layer.name}” {'behind' if button == 'left' else 'in front of'} itself")
+            self.show_message(
+                f"duplicated “{layer.name}” {'behind' if button == 'left' else 'in front of'} itself, in place: "
+                "the arrow keys move the copy"
+            )
 
     def duplicate_aside(self, layer_id: str) -> None:
         """Ctrl+D: a copy in front, moved right by 1.25 part widths (beside it)."""
@@ -718,6 +730,12 @@ class MainWindow(QMainWindow):
         if self.push(cmd):
             self.layers_panel.select(cmd.new_id)
             self.show_message(f"duplicated “{layer.name}”, moved aside")
+
+    def nudge(self, layer_id: str, step) -> None:
+        """Arrow keys: move the selected part NUDGE_PIXELS screen pixels (one undo step)."""
+        d = NUDGE_PIXELS * self.canvas.pixel_size()
+        if self.push(C.TranslateLayer(layer=layer_id, offset=[step[0] * d, step[1] * d])):
+            self.show_message(f"moved “{self.doc.layer(layer_id).name}” (arrow keys)")
 
     def move_depth(self, layer_id: str, where) -> None:
         """PgUp / PgDn: one step to the front / back; Home / End: to the very front / back."""

@@ -15,6 +15,7 @@ SHORTCUTS: tuple[tuple[str, str], ...] = (
     ("Click", "select the part under the pointer"),
     ("Double-click (left / right)", "duplicate the part behind / in front of itself"),
     ("Ctrl+D", "duplicate the selected part, moved aside"),
+    ("Arrow keys (drawing focused)", "move the selected part by 10 pixels"),
     ("Page Up / Page Down", "move the selected part one step to the front / back"),
     ("Home / End", "move the selected part to the very front / back"),
     ("Del", "remove the selected part"),

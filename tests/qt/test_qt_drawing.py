@@ -308,3 +308,31 @@ def test_right_click_selects_and_question_mark_opens_the_help(w, mouse, qtbot):
     assert w.help_overlay.isVisible()
     mouse(w.canvas).click((0.5, -0.5))
     QApplication.processEvents()
+
+
+def test_a_double_click_copy_is_moved_with_the_arrow_keys(w, mouse, qtbot):
+    draw(w, mouse, qtbot, loop(0.5, (0, 0)))
+    draw(w, mouse, qtbot, u_shape((-0.2, -0.3), 0.16, 0.6))  # a leg, open, on the body
+    leg = w.doc.layers[-1].id
+    mouse(w.canvas).double_click((-0.2, -0.7), Qt.MouseButton.RightButton)  # a copy in front, in place
+    copy = w.current_layer
+    assert copy != leg and "arrow keys" in status(w)
+    w.canvas.setFocus()
+    before = w.doc.layer(copy).mesh.V.copy()
+    n = w.doc.undo_stack.count()
+    for _ in range(4):
+        key(w, qtbot, K.Key_Right)
+    step = 10 * w.canvas.pixel_size()
+    moved = w.doc.layer(copy).mesh.V
+    assert np.allclose(moved[:, 0] - before[:, 0], 4 * step) and np.array_equal(moved[:, 1:], before[:, 1:])
+    assert w.doc.undo_stack.count() == n + 4 and w.act_undo.text() == "Undo Move layer"
+    # arrows in the Layers list still move the list's selection, not the part
+    w.layers_panel.list.setFocus()
+    key(w, qtbot, K.Key_Right)
+    assert w.doc.undo_stack.count() == n + 4
+    # the journal replays the copy and its moves bit for bit
+    replayed = Document(host=w.host)
+    for entry in w.doc.journal():
+        replayed.execute(entry)
+    for a, b in zip(replayed.layers, w.doc.layers):
+        assert np.array_equal(a.mesh.V, b.mesh.V)
