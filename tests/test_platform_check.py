@@ -39,6 +39,8 @@ def test_nothing_to_say_when_a_window_can_open():
     for env in ({"QT_QPA_PLATFORM": "offscreen"}, {"QT_QPA_PLATFORM": "wayland"}, {"WAYLAND_DISPLAY": "wayland-0"}):
         assert diagnose(env, finder(ALL), "linux") is None
     assert diagnose({}, finder(ALL), "darwin") is None
+    # the escape hatch for libraries the linker cache does not list
+    assert diagnose({"DISPLAY": ":1", "SKETCHFORGE_NO_PLATFORM_CHECK": "1"}, finder(ALL), "linux") is None
 
 
 def test_missing_packages_keeps_the_table_order():
