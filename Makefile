@@ -6,7 +6,14 @@ STAMP := $(VENV)/.installed
 EXAMPLE ?= examples/creature.json
 PLUGINS := plugins/inflate plugins/isophote_tool plugins/assemble
 
-.PHONY: run test venv bench screenshots clean
+.PHONY: run deps test venv bench screenshots clean
+
+# What Qt's xcb window plugin needs on a minimal Debian/Ubuntu image (the same list as
+# sketchforge/qt/platform_check.py's XCB_LIBRARIES; a test keeps the two equal).
+DEB_PACKAGES := libxcb1 libx11-xcb1 libxcb-icccm4 libxcb-keysyms1 libxcb-image0 libxcb-render-util0 \
+	libxcb-cursor0 libxcb-randr0 libxcb-render0 libxcb-shape0 libxcb-shm0 libxcb-sync1 libxcb-util1 \
+	libxcb-xfixes0 libxcb-xkb1 libxkbcommon0 libxkbcommon-x11-0 libegl1 libgl1 libfontconfig1 libdbus-1-3
+SUDO := $(shell [ "$$(id -u)" -eq 0 ] || echo sudo)
 
 venv: $(STAMP)
 
@@ -17,8 +24,16 @@ $(STAMP): pyproject.toml $(addsuffix /pyproject.toml,$(PLUGINS))
 	$(BIN)/python -m pip install -q -e '.[test]' $(addprefix -e ,$(PLUGINS))
 	touch $@
 
+# Checks first that a window can open (display, xcb libraries): if not, the last line says
+# what to install (`make deps`) or to use xvfb-run, instead of Qt's abort text.
 run: $(STAMP)
-	$(BIN)/sketchforge $(EXAMPLE)
+	@if problem=$$($(BIN)/python -m sketchforge.qt.platform_check); then \
+		$(BIN)/sketchforge $(EXAMPLE); \
+	else echo "$$problem"; exit 2; fi
+
+# Installs the system libraries Qt's window plugin needs (Debian/Ubuntu, apt).
+deps:
+	$(SUDO) apt-get install -y --no-install-recommends $(DEB_PACKAGES)
 
 # The whole suite. Qt runs offscreen; the few OpenGL tests start their own Xvfb
 # (pytest-xvfb) and are skipped where no Xvfb binary exists.
@@ -31,6 +46,10 @@ bench: $(STAMP)
 # Regenerate the README's screenshots (observation needs OpenGL: Xvfb + Mesa).
 screenshots: $(STAMP)
 	QT_QPA_PLATFORM=offscreen $(BIN)/python -m sketchforge.qt.screenshots $(EXAMPLE) docs/screenshots
+	tmp=$$(mktemp -d) && \
+	QT_QPA_PLATFORM=offscreen $(BIN)/python -m sketchforge.qt.drawing_strip docs/screenshots --save $$tmp/creature.json && \
+	xvfb-run -a env QT_QPA_PLATFORM=xcb $(BIN)/sketchforge --screenshot docs/screenshots/drawing-7-observation.png $$tmp/creature.json --mode observation; \
+	rc=$$?; rm -rf $$tmp; exit $$rc
 	xvfb-run -a env QT_QPA_PLATFORM=xcb $(BIN)/sketchforge --screenshot docs/screenshots/observation.png $(EXAMPLE) --mode observation
 
 clean:

@@ -51,7 +51,9 @@ def cmd_info(args) -> int:
     for i, layer in enumerate(doc.layers):
         nv = layer.mesh.n_vertices if layer.mesh is not None else 0
         nf = layer.mesh.n_faces if layer.mesh is not None else 0
-        kind = "closed" if layer.closed else "open"
+        # As the assembly sees it: an open stroke whose ends met has no junction (a free part).
+        free = layer.closed or (layer.mesh is not None and len(layer.mesh.junction) == 0)
+        kind = "closed" if free else "open"
         vis = "" if layer.visible else " (hidden)"
         print(f"  {i}: {layer.id} {layer.name!r}{vis} {kind}, {nv} vertices, {nf} triangles, {len(layer.edits)} sculpt edits")
     return 0

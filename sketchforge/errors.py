@@ -56,3 +56,7 @@ class GeometryError(SketchforgeError, ValueError):
     """Geometry cannot safely reach a native library (Triangle, libigl, OSQP, GEOS): non-finite
     or huge coordinates, crossing constrained segments, degenerate triangles, inconsistent
     shapes... Raised by :mod:`sketchforge.geometry.guard` before the native call."""
+
+
+class EditsDoNotApplyError(SketchforgeError):
+    """A redrawn outline's sculpt edits do not apply to its new surface (nothing changed)."""

@@ -103,3 +103,24 @@ def test_replay_exports_the_assembled_model_closed_and_oriented(tmp_path):
     assert len(np.unique(directed, axis=0)) == len(directed)
     volume = np.einsum("ij,ij->i", V[F[:, 0]], np.cross(V[F[:, 1]], V[F[:, 2]])).sum() / 6
     assert volume > 0
+
+
+def test_info_reports_a_loop_whose_ends_meet_as_closed_as_the_assembly_sees_it(tmp_path, real_host):
+    """A closed loop saved with closed=False (an older file, or a script) has no junction: the
+    inflation closes it, the assembly treats it as a free part, and info says "closed"."""
+    from sketchforge.document import fileformat as ff
+    from sketchforge.document.document import Document
+
+    t = np.linspace(0, 2 * np.pi, 120, endpoint=False)
+    loop = np.c_[0.5 * np.cos(t), 0.5 * np.sin(t)]
+    u = loop[:84]  # an arc whose ends are far apart
+    doc = Document(host=real_host)
+    for lid, pts in (("loop", loop), ("arc", u)):
+        doc.execute({"command": "add_layer", "id": lid, "name": lid})
+        doc.execute({"command": "set_contour", "layer": lid, "points": pts.tolist()})
+    assert len(doc.layer("loop").mesh.junction) == 0 and len(doc.layer("arc").mesh.junction) > 0
+    path = tmp_path / "kinds.json"
+    ff.save(doc, path)
+    res = run("info", path)
+    assert res.returncode == 0, res.stderr
+    assert "loop 'loop' closed" in res.stdout and "arc 'arc' open" in res.stdout

@@ -14,7 +14,7 @@ changing the inflation parameters can re-apply it.
 from __future__ import annotations
 
 import itertools
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, ClassVar
 
 import numpy as np
@@ -23,6 +23,7 @@ from sketchforge.document.layer import Layer, Light
 from sketchforge.geometry.inflate_params import check_inflate_params
 from sketchforge.errors import (
     DocumentFormatError,
+    EditsDoNotApplyError,
     ParameterError,
     SketchforgeError,
     SolverError,
@@ -126,8 +127,13 @@ def inflate_layer(doc, layer: Layer) -> Layer:
         raise SketchforgeError("no inflate plugin is installed, so a contour cannot become a mesh")
     if not np.all(np.isfinite(mesh.V)):
         raise SolverError(f"inflating layer {layer.id!r} produced non-finite heights; nothing was changed")
-    out = layer.evolve(mesh=mesh, edits=())
-    for entry in layer.edits:
+    return reapply_edits(doc, layer.evolve(mesh=mesh, edits=()), layer.edits)
+
+
+def reapply_edits(doc, layer: Layer, edits) -> Layer:
+    """``layer`` (freshly inflated, no edits) with the sculpt ``edits`` re-applied in order."""
+    out = layer
+    for entry in edits:
         cls = doc.host.command_class(entry.get("command", ""))
         out = cls.reapply(doc, out, entry)
     return out
@@ -278,12 +284,16 @@ class SetLayerVisible(ReplaceLayerCommand):
 
 @dataclass
 class SetContour(ReplaceLayerCommand):
-    """Set (or redraw) a layer's stroke. Redrawing drops the layer's sculpt edits: they were
-    drawn on the old shape and have no meaning on a new outline (the app warns first)."""
+    """Set (or redraw) a layer's stroke. By default redrawing drops the layer's sculpt edits
+    (they were drawn on the old shape; the app asks first). With ``keep_edits`` the edits are
+    re-applied to the new surface in order; if one no longer applies, nothing changes and
+    :class:`~sketchforge.errors.EditsDoNotApplyError` says which (the app then asks whether
+    to redraw without them)."""
 
     name: ClassVar[str] = "set_contour"
     points: Any = None  # (n,2) float64
     closed: bool = False
+    keep_edits: bool = False
 
     def __post_init__(self) -> None:
         self.points = np.array(self.points, dtype=np.float64)
@@ -293,12 +303,22 @@ class SetContour(ReplaceLayerCommand):
         return "Draw contour"
 
     def compute(self, doc, old: Layer) -> Layer:
-        return inflate_layer(doc, old.evolve(points=self.points, closed=bool(self.closed), edits=()))
+        base = inflate_layer(doc, old.evolve(points=self.points, closed=bool(self.closed), edits=()))
+        if not (self.keep_edits and old.edits):
+            return base
+        try:
+            return reapply_edits(doc, base, old.edits)
+        except SketchforgeError as exc:
+            raise EditsDoNotApplyError(
+                f"the {len(old.edits)} sculpt edit(s) of layer {old.id!r} do not apply to the new outline ({exc})"
+            ) from None
 
     def to_dict(self) -> dict:
         d = {"command": self.name, "layer": self.layer, "points": self.points.tolist()}
         if self.closed:
             d["closed"] = True
+        if self.keep_edits:
+            d["keep_edits"] = True
         return d
 
     @classmethod
@@ -307,6 +327,7 @@ class SetContour(ReplaceLayerCommand):
             layer=parse_field(d, "layer", str, cls.name),
             points=parse_points(d, cls.name),
             closed=parse_field(d, "closed", bool, cls.name, False),
+            keep_edits=parse_field(d, "keep_edits", bool, cls.name, False),
         )
 
 
@@ -394,12 +415,18 @@ class MoveLayer(Command):
 
 @dataclass
 class DuplicateLayer(Command):
-    """Copy a layer (mesh and edits included) just in front of it."""
+    """Copy a layer (mesh and edits included), by default just in front of it. ``index``
+    places the copy elsewhere in the back-to-front list (after the copy is inserted: 0 = at
+    the very back); ``offset`` (dx, dy) moves the copy in the drawing plane: its stroke, its
+    mesh and the positions its sculpt edits were drawn at (``pick``, ``stroke``) move
+    together, so a later parameter change re-applies the edits where they now are."""
 
     name: ClassVar[str] = "duplicate_layer"
     layer: str = ""
     new_id: str | None = None
     new_name: str | None = None
+    index: int | None = None
+    offset: Any = None  # None or (dx, dy)
     _copy: Layer | None = field(default=None, repr=False)
     _src: Layer | None = field(default=None, repr=False)
 
@@ -409,6 +436,14 @@ class DuplicateLayer(Command):
     def do(self, doc) -> None:
         src_index = doc.index_of(self.layer)
         src = doc.layers[src_index]
+        n = len(doc.layers)
+        idx = src_index + 1 if self.index is None else self.index
+        if not 0 <= idx <= n:
+            raise ParameterError(f"layer index {idx} is outside 0..{n}")
+        if self.offset is not None:
+            off = np.asarray(self.offset, dtype=np.float64).reshape(-1)
+            if off.shape != (2,) or not np.all(np.isfinite(off)):
+                raise ParameterError("a duplicate's offset must be two finite numbers")
         if self.new_id is None:
             self.new_id = doc.new_layer_id(src.id + "_copy")
         if self.new_id in doc.layer_ids():
@@ -416,22 +451,88 @@ class DuplicateLayer(Command):
         if self.new_name is None:
             self.new_name = src.name + " copy"
         if self._copy is None or self._src is not src:
-            self._copy, self._src = src.evolve(id=self.new_id, name=self.new_name), src
-        doc._insert_layer(src_index + 1, self._copy)
+            copy = src.evolve(id=self.new_id, name=self.new_name)
+            if self.offset is not None:
+                copy = _translated(copy, off)
+            self._copy, self._src = copy, src
+        doc._insert_layer(idx, self._copy)
 
     def undo(self, doc) -> None:
         doc._remove_layer(doc.index_of(self.new_id))
 
     def to_dict(self) -> dict:
-        return {"command": self.name, "layer": self.layer, "id": self.new_id, "name": self.new_name}
+        d = {"command": self.name, "layer": self.layer, "id": self.new_id, "name": self.new_name}
+        if self.index is not None:
+            d["index"] = self.index
+        if self.offset is not None:
+            d["offset"] = [float(v) for v in np.asarray(self.offset, dtype=np.float64).reshape(-1)]
+        return d
 
     @classmethod
     def from_dict(cls, d: dict) -> "DuplicateLayer":
+        offset = parse_vector(d, "offset", cls.name) if "offset" in d else None
+        if offset is not None and len(offset) != 2:
+            raise DocumentFormatError(f"command {cls.name!r}: 'offset' must be 2 numbers")
         return cls(
             layer=parse_field(d, "layer", str, cls.name),
             new_id=parse_field(d, "id", str, cls.name, None),
             new_name=parse_field(d, "name", str, cls.name, None),
+            index=parse_field(d, "index", int, cls.name, None),
+            offset=offset,
         )
+
+
+def _translated(layer: Layer, off: np.ndarray) -> Layer:
+    """``layer`` moved by ``off`` (2,) in the drawing plane: stroke, mesh and edit positions."""
+    changes: dict[str, Any] = {}
+    if layer.points is not None:
+        changes["points"] = np.asarray(layer.points) + off
+    if layer.mesh is not None:
+        V = np.array(layer.mesh.V, dtype=np.float64)
+        V[:, :2] += off
+        changes["mesh"] = replace(layer.mesh, V=V)
+    edits = []
+    for entry in layer.edits:
+        e = dict(entry)
+        if isinstance(e.get("pick"), list) and len(e["pick"]) >= 2:
+            e["pick"] = [float(e["pick"][0] + off[0]), float(e["pick"][1] + off[1]), *e["pick"][2:]]
+        if isinstance(e.get("stroke"), list):
+            e["stroke"] = (np.asarray(e["stroke"], dtype=np.float64).reshape(-1, 2) + off).tolist()
+        edits.append(e)
+    changes["edits"] = tuple(edits)
+    return layer.evolve(**changes)
+
+
+@dataclass
+class TranslateLayer(ReplaceLayerCommand):
+    """Move a layer in the drawing plane by ``offset`` (dx, dy): its stroke, mesh and sculpt
+    edit positions together (no re-inflation: the same surface, moved). Each nudge is its own
+    step (summing nudges would not replay bit for bit)."""
+
+    name: ClassVar[str] = "translate_layer"
+    offset: Any = (0.0, 0.0)
+
+    def __post_init__(self) -> None:
+        off = np.asarray(self.offset, dtype=np.float64).reshape(-1)
+        if off.shape != (2,) or not np.all(np.isfinite(off)):
+            raise ParameterError("a move's offset must be two finite numbers")
+        self.offset = [float(off[0]), float(off[1])]
+
+    def text(self) -> str:
+        return "Move layer"
+
+    def compute(self, doc, old: Layer) -> Layer:
+        return _translated(old, np.asarray(self.offset, dtype=np.float64))
+
+    def to_dict(self) -> dict:
+        return {"command": self.name, "layer": self.layer, "offset": list(self.offset)}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "TranslateLayer":
+        offset = parse_vector(d, "offset", cls.name)
+        if len(offset) != 2:
+            raise DocumentFormatError(f"command {cls.name!r}: 'offset' must be 2 numbers")
+        return cls(layer=parse_field(d, "layer", str, cls.name), offset=offset)
 
 
 @dataclass
@@ -520,6 +621,7 @@ CORE_COMMANDS: tuple[type[Command], ...] = (
     SetLayerVisible,
     MoveLayer,
     DuplicateLayer,
+    TranslateLayer,
     MirrorLayer,
     SetContour,
     SetInflateParams,

@@ -72,7 +72,18 @@ def grab_window(window, path) -> None:
 
 def run_app(doc_path=None, screenshot: str | None = None, mode: str = "editing") -> int:
     """Start the app on ``doc_path`` (or an empty document). With ``screenshot``, save a PNG of
-    the window in ``mode`` ("editing", "sculpture" or "observation") and return."""
+    the window in ``mode`` ("editing", "sculpture" or "observation") and return.
+
+    Where Qt could not open a window (no display, the xcb plugin's libraries missing), one line
+    says what to do (:mod:`sketchforge.qt.platform_check`) and the exit status is 2: Qt's own
+    abort text names no package."""
+    if "PySide6.QtWidgets" not in sys.modules or sys.modules["PySide6.QtWidgets"].QApplication.instance() is None:
+        from sketchforge.qt.platform_check import diagnose
+
+        problem = diagnose()
+        if problem is not None:
+            print(problem, file=sys.stderr)
+            return 2
     app = ensure_qapp()
     from sketchforge.document.document import Document
     from sketchforge.qt.main_window import MainWindow

@@ -7,13 +7,16 @@ optional isophote lines, the light indicator, an optional reference image) and t
 gestures into calls on the interaction in use:
 
 - ``"draw"``: a left drag is a stroke (``DrawContourTool`` collects it); on release
-  :attr:`stroke_finished` carries the points to the window, which runs the inflation off the
-  GUI thread.
+  :attr:`stroke_finished` carries the points and the stroke's kind to the window, which runs
+  the inflation off the GUI thread: ``"front"`` (a left drag), ``"behind"`` (a right drag, or
+  Shift + left drag) or ``"redraw"`` (Ctrl + left drag: the selected part's whole outline).
+  A click picks the part under it (:attr:`part_clicked`), a double click duplicates it
+  (:attr:`part_double_clicked`, with the button).
 - ``"light"``: a left drag sets the light with ``LightTool`` (one undo step per drag); never a
   stroke.
 - ``"sculpt"``: clicks, drags and the wheel go to the sculpt controller (``sculpt.py``).
 
-Middle drag pans, right drag zooms, the wheel zooms (in sculpture with a picked isophote the
+Middle drag pans, right drag zooms (except in ``"draw"``, where it draws behind), the wheel zooms (in sculpture with a picked isophote the
 wheel changes the band radius; Ctrl+wheel still zooms).
 """
 
@@ -43,7 +46,8 @@ class CanvasViewBox(pg.ViewBox):
         self._canvas = canvas
 
     def mouseDragEvent(self, ev, axis=None):
-        if ev.button() == Qt.MouseButton.LeftButton and self._canvas.handle_left_drag(ev):
+        draws = self._canvas.interaction == "draw" and ev.button() == Qt.MouseButton.RightButton
+        if (ev.button() == Qt.MouseButton.LeftButton or draws) and self._canvas.handle_left_drag(ev):
             ev.accept()
             return
         if ev.button() == Qt.MouseButton.LeftButton:
@@ -52,7 +56,11 @@ class CanvasViewBox(pg.ViewBox):
         super().mouseDragEvent(ev, axis)  # middle: pan, right: zoom
 
     def mouseClickEvent(self, ev):
-        if ev.button() == Qt.MouseButton.LeftButton and self._canvas.handle_click(ev):
+        if ev.double() and self._canvas.handle_double_click(ev):
+            ev.accept()
+            return
+        selects = self._canvas.interaction == "draw" and ev.button() == Qt.MouseButton.RightButton
+        if (ev.button() == Qt.MouseButton.LeftButton or selects) and self._canvas.handle_click(ev):
             ev.accept()
             return
         super().mouseClickEvent(ev)
@@ -65,8 +73,13 @@ class CanvasViewBox(pg.ViewBox):
 
 
 class Canvas(pg.GraphicsView):
-    #: points (n, 2) float64 in document coordinates, at the end of a draw gesture
-    stroke_finished = Signal(object)
+    #: points (n, 2) float64 in document coordinates and the kind ("front", "behind",
+    #: "redraw"), at the end of a draw gesture
+    stroke_finished = Signal(object, str)
+    #: a click in "draw": the document point (2,) (the window selects the part there)
+    part_clicked = Signal(object)
+    #: a double click in "draw": the document point (2,) and "left" or "right"
+    part_double_clicked = Signal(object, str)
     #: a one-line message for the status bar
     message = Signal(str)
 
@@ -89,6 +102,7 @@ class Canvas(pg.GraphicsView):
         self.current_layer: str | None = None
         self._layer_items: dict[str, it.ShadedLayerItem] = {}
         self._tool = None
+        self._stroke_kind = "front"
         self._reference: pg.ImageItem | None = None
         self._light_center = np.zeros(2)
         self._preview: tuple[str, object] | None = None  # (layer id, mesh) shown instead of the layer's
@@ -307,11 +321,13 @@ class Canvas(pg.GraphicsView):
     def handle_left_drag(self, ev) -> bool:
         mode = self.interaction
         if ev.isStart():
-            if self.busy and mode != "light":
+            # A stroke may be drawn while the last one inflates (the window queues it).
+            if self.busy and mode not in ("light", "draw"):
                 self.message.emit("a solve is running: wait for it or cancel it")
                 return True
             start = self._event_doc(ev, ev.buttonDownPos())
             if mode == "draw":
+                self._stroke_kind = _stroke_kind(ev.button(), ev.modifiers())
                 self._tool = DrawContourTool(self.doc)
                 self._tool.press(start)
             elif mode == "light":
@@ -330,7 +346,14 @@ class Canvas(pg.GraphicsView):
                 pts = np.asarray(tool.overlay.get("stroke", np.zeros((0, 2))))
                 tool.cancel()
                 self.stroke.set_lines([])
-                self.stroke_finished.emit(np.vstack([pts, pos[None]]) if len(pts) else pos[None])
+                pts = np.vstack([pts, pos[None]]) if len(pts) else pos[None]
+                if self._pixel_extent(pts) < MIN_STROKE_PIXELS:
+                    self.message.emit(
+                        f"the stroke is shorter than {MIN_STROKE_PIXELS} pixels, so no part was made: "
+                        "press, drag around the shape and release"
+                    )
+                    return True
+                self.stroke_finished.emit(pts, self._stroke_kind)
             elif mode == "light":
                 self._gesture_call(tool.release, pos)
                 self._update_light_indicator()
@@ -353,7 +376,28 @@ class Canvas(pg.GraphicsView):
         except SketchforgeError as exc:
             self.message.emit(str(exc))
 
+    def pixel_size(self) -> float:
+        """Drawing units per screen pixel at the current zoom."""
+        a, b = self.widget_to_doc(QPointF(0, 0)), self.widget_to_doc(QPointF(100, 0))
+        return float(np.linalg.norm(b - a)) / 100.0
+
+    def _pixel_extent(self, pts) -> float:
+        pts = np.asarray(pts, dtype=np.float64)
+        return float(np.max(np.ptp(pts, axis=0))) / max(self.pixel_size(), 1e-300)
+
+    def handle_double_click(self, ev) -> bool:
+        if self.interaction != "draw":
+            return False
+        button = {Qt.MouseButton.LeftButton: "left", Qt.MouseButton.RightButton: "right"}.get(ev.button())
+        if button is None:
+            return False
+        self.part_double_clicked.emit(self._event_doc(ev), button)
+        return True
+
     def handle_click(self, ev) -> bool:
+        if self.interaction == "draw":
+            self.part_clicked.emit(self._event_doc(ev))
+            return True
         if self.interaction == "sculpt" and self.sculpt is not None:
             if self.busy:
                 self.message.emit("a solve is running: wait for it or cancel it")
@@ -368,6 +412,20 @@ class Canvas(pg.GraphicsView):
         if ev.modifiers() & Qt.KeyboardModifier.ControlModifier:
             return False
         return self.sculpt.wheel(ev.delta())
+
+
+#: A draw gesture spanning fewer screen pixels than this is refused with a message (a slip).
+MIN_STROKE_PIXELS = 8
+
+
+def _stroke_kind(button, modifiers) -> str:
+    """Which part a draw gesture makes: right button or Shift draws behind, Ctrl redraws the
+    selected part's whole outline, a plain left drag draws in front."""
+    if button == Qt.MouseButton.RightButton or modifiers & Qt.KeyboardModifier.ShiftModifier:
+        return "behind"
+    if modifiers & Qt.KeyboardModifier.ControlModifier:
+        return "redraw"
+    return "front"
 
 
 class _FallbackShader:

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 from PySide6.QtCore import QSettings, Qt, QTimer
 from PySide6.QtGui import QAction, QActionGroup, QKeySequence
 from PySide6.QtWidgets import (
@@ -35,7 +36,8 @@ from sketchforge.document import commands as C
 from sketchforge.document import fileformat as ff
 from sketchforge.document.autosave import Autosaver, autosave_interval, describe_stop, find_recoverable, forget, recover
 from sketchforge.document.layer import Light
-from sketchforge.errors import SketchforgeError
+from sketchforge.errors import EditsDoNotApplyError, SketchforgeError
+from sketchforge.geometry.parts import part_at
 from sketchforge.qt.canvas import Canvas
 from sketchforge.qt.command_runner import CommandRunner, GuardedJobs
 from sketchforge.qt.errors_ui import ask_yes_no, error_text, show_error
@@ -46,12 +48,21 @@ from sketchforge.qt.panels.light_panel import LightPanel
 from sketchforge.qt.panels.mode_panel import ModePanel
 from sketchforge.qt.panels.sculpt_panel import SculptPanel
 from sketchforge.qt.sculpt import SculptController
+from sketchforge.qt.shortcuts import HelpOverlay
 from sketchforge.qt.view3d import View3D
 from sketchforge.qt.workers import JobRunner
 from sketchforge.tools import DrawContourTool
+from sketchforge.tools.draw import closes, layer_outlines, plan_stroke
 
 FILE_FILTER = "sketchforge documents (*.json *.sketchforge);;All files (*)"
 MAX_RECENT = 8
+#: A redraw stroke's ends must lie this close (screen pixels) to the selected outline.
+SPLICE_PIXELS = 10
+#: Ctrl+D moves the copy this many part widths to the right: beside it with a gap (a second
+#: eye, leg...), so the copy's junction does not lie across the original.
+DUPLICATE_OFFSET = 1.25
+#: An arrow key moves the selected part this many screen pixels.
+NUDGE_PIXELS = 10
 
 
 class _AutosaveGuard:
@@ -95,6 +106,10 @@ class MainWindow(QMainWindow):
         self.jobs = JobRunner(self)
         self.solve_guard = _AutosaveGuard(self)
         self.runner = CommandRunner(doc, self.jobs, self, guard=self.solve_guard)
+        #: {layer id: {param: value}} edited while a solve ran: applied when it ends (last wins)
+        self._pending_params: dict[str, dict] = {}
+        #: [(points, kind)] strokes drawn while a solve ran: drawn in order when it ends
+        self._pending_strokes: list[tuple] = []
 
         self._build_widgets()
         self._build_menus()
@@ -232,6 +247,7 @@ class MainWindow(QMainWindow):
 
         self.sculpt = SculptController(doc, self.host, self.canvas, self.runner)
         self.canvas.sculpt = self.sculpt
+        self.help_overlay = HelpOverlay(self.center)
 
     def _action(self, menu, text, slot, shortcut=None, checkable=False) -> QAction:
         act = QAction(text, self)
@@ -267,8 +283,20 @@ class MainWindow(QMainWindow):
         lm = mb.addMenu("&Layer")
         self._action(lm, "&Add layer", self.add_layer, "Ctrl+Shift+N")
         self._action(lm, "&Remove layer", lambda: self._on_current(self.remove_layer), "Del")
-        self._action(lm, "&Duplicate layer", lambda: self._on_current(self.duplicate_layer), "Ctrl+D")
+        self._action(lm, "&Duplicate layer", lambda: self._on_current(self.duplicate_aside), "Ctrl+D")
         self._action(lm, "&Mirror layer", lambda: self._on_current(self.mirror_layer), "Ctrl+M")
+        lm.addSeparator()
+        self._action(lm, "Bring &forward", lambda: self._on_current(lambda lid: self.move_depth(lid, +1)), "PgUp")
+        self._action(lm, "Send &backward", lambda: self._on_current(lambda lid: self.move_depth(lid, -1)), "PgDown")
+        self._action(lm, "Bring to fron&t", lambda: self._on_current(lambda lid: self.move_depth(lid, "front")), "Home")
+        self._action(lm, "Send to bac&k", lambda: self._on_current(lambda lid: self.move_depth(lid, "back")), "End")
+        lm.addSeparator()
+        # Arrows move the selected part only while the drawing has the focus: elsewhere they
+        # belong to the lists and fields.
+        for text, key, step in (("left", "Left", (-1, 0)), ("right", "Right", (1, 0)), ("up", "Up", (0, 1)), ("down", "Down", (0, -1))):
+            act = self._action(lm, f"Move {text}", lambda _=False, s=step: self._on_current(lambda lid: self.nudge(lid, s)), key)
+            act.setShortcutContext(Qt.ShortcutContext.WidgetWithChildrenShortcut)
+            self.canvas.addAction(act)
 
         v = mb.addMenu("&View")
         self._action(v, "&Fit drawing", self.canvas.fit, "Ctrl+0")
@@ -281,6 +309,8 @@ class MainWindow(QMainWindow):
         for name, key in (("editing", "F2"), ("sculpture", "F3"), ("observation", "F4")):
             act = self._action(v, f"{name.upper()}", lambda _=False, n=name: self.set_mode(n), key)
             group.addAction(act)
+        h = mb.addMenu("&Help")
+        self._action(h, "&Gestures and keys", self.toggle_help, ["F1", "?"])
         self.update_recent_menu()
 
     def _build_status_bar(self) -> None:
@@ -308,6 +338,9 @@ class MainWindow(QMainWindow):
         doc.layer_removed.connect(lambda *a: self._sync_current_layer())
 
         self.canvas.stroke_finished.connect(self.draw_stroke)
+        self.canvas.part_clicked.connect(self.select_at)
+        self.canvas.part_double_clicked.connect(self.duplicate_at)
+        self.creation_panel.closed_toggled.connect(self.set_closed)
         self.canvas.message.connect(self.show_message)
         self.view3d.message.connect(self.show_message)
         self.sculpt.message.connect(self.show_message)
@@ -381,7 +414,7 @@ class MainWindow(QMainWindow):
         if self.current_layer not in ids:
             self.current_layer = self.layers_panel.current_id()
         layer = self.doc.layer(self.current_layer) if self.current_layer in ids else None
-        self.creation_panel.show_layer(layer)
+        self.creation_panel.show_layer(layer, self._pending_params.get(self.current_layer))
 
     def _shader_changed(self, name: str) -> None:
         if name:
@@ -393,10 +426,16 @@ class MainWindow(QMainWindow):
 
     def _busy(self, busy: bool) -> None:
         self.canvas.busy = busy
-        for act in (self.act_undo, self.act_redo, self.act_new, self.act_open, self.act_save, self.act_save_as):
+        # Undo stays enabled: during a solve it cancels the solve (see ``undo``).
+        for act in (self.act_redo, self.act_new, self.act_open, self.act_save, self.act_save_as):
             act.setEnabled(not busy)
-        if not busy:
+        if busy:
+            self.act_undo.setEnabled(True)
+        else:
             self._sync_undo()
+            if self._pending_params or self._pending_strokes:
+                # Queued so that the finished solve's own callbacks run first.
+                QTimer.singleShot(0, self._run_pending)
 
     def _progress(self, label: str) -> None:
         for w in (self.progress_label, self.progress, self.cancel_button):
@@ -424,6 +463,20 @@ class MainWindow(QMainWindow):
             self.view3d.deactivate()
             self.center.setCurrentWidget(self.canvas)
             self.set_state(self.state)
+        self._focus_center()
+
+    def _focus_center(self) -> None:
+        """Keys go to the view after every mode switch: the widget that had focus (a mode
+        button, or the canvas just hidden) would otherwise keep it or leave none."""
+        widget = self.center.currentWidget()
+        gl = getattr(widget, "gl", None)
+        target = gl if isinstance(gl, QWidget) else widget
+        target.setFocusPolicy(Qt.FocusPolicy.StrongFocus)
+        target.setFocus(Qt.FocusReason.OtherFocusReason)
+        self.activateWindow()
+
+    def toggle_help(self) -> None:
+        self.help_overlay.toggle()
 
     def set_state(self, state: str) -> None:
         self.state = state
@@ -438,6 +491,7 @@ class MainWindow(QMainWindow):
         if state == "sculpture":
             self.sculpt.reset()
             self.sculpt_panel.show_state(self.sculpt)
+        self._focus_center()
 
     def _model_changed(self, name: str) -> None:
         self.sculpt.set_options({} if name == "lambertian" else {"model": name})
@@ -445,6 +499,7 @@ class MainWindow(QMainWindow):
     def _light_toggled(self, on: bool) -> None:
         self.act_light.setChecked(on)
         self._apply_interaction()
+        self._focus_center()
 
     def _apply_interaction(self) -> None:
         if self.modes.light.isChecked():
@@ -473,8 +528,10 @@ class MainWindow(QMainWindow):
             return False
 
     def _on_current(self, fn) -> None:
-        if self.current_layer is not None:
+        if self.current_layer is not None and self.current_layer in self.doc.layer_ids():
             fn(self.current_layer)
+        else:
+            self.show_message("select a part first (click it in the drawing or in the Layers list)")
 
     def add_layer(self) -> None:
         cmd = C.AddLayer()
@@ -494,56 +551,221 @@ class MainWindow(QMainWindow):
             self.runner.run(C.MirrorLayer(layer=layer_id), label="Inflating")
 
     def set_params(self, params: dict) -> None:
-        if self.current_layer is None or self._refuse_if_busy():
+        if self.current_layer is None:
+            self.show_message("select a part first (click it) to change its parameters")
             return
-        edits = len(self.doc.layer(self.current_layer).edits)
+        if self.runner.busy:
+            # Coalesced: the edits made during a solve run together when it ends, the last
+            # value of each parameter wins, none is dropped.
+            self._pending_params.setdefault(self.current_layer, {}).update(params)
+            self.show_message("a solve is running: this change is applied when it ends")
+            return
+        self._run_params(self.current_layer, params)
+
+    def _run_params(self, layer_id: str, params: dict) -> None:
+        edits = len(self.doc.layer(layer_id).edits)
         # With sculpt edits the layer is re-inflated and its edits re-applied in order (or the
         # change is refused with the reason); say so, since it takes longer and may fail.
         label = f"Inflating and re-applying {edits} sculpt edit{'s' * (edits != 1)}" if edits else "Inflating"
         self.runner.run(
-            C.SetInflateParams(layer=self.current_layer, params=params),
+            C.SetInflateParams(layer=layer_id, params=params),
             label=label,
             on_done=(lambda *_: self.show_message(f"re-applied {edits} sculpt edit{'s' * (edits != 1)} to the rebuilt surface")) if edits else None,
             on_error=lambda exc: self._sync_current_layer() or False,
         )
+
+    def _run_pending(self) -> None:
+        """After a solve: the strokes drawn meanwhile (in order), then the parameter edits."""
+        if self.runner.busy:
+            return
+        if self._pending_strokes:
+            pts, kind = self._pending_strokes.pop(0)
+            self.draw_stroke(pts, kind)
+            return
+        self._run_pending_params()
+
+    def _run_pending_params(self) -> None:
+        if self.runner.busy or not self._pending_params:
+            return
+        layer_id = next(iter(self._pending_params))
+        params = self._pending_params.pop(layer_id)
+        if layer_id not in self.doc.layer_ids():
+            self._sync_current_layer()
+            return
+        old = self.doc.layer(layer_id).params
+        if all(old.get(k) == v for k, v in params.items()):
+            self._sync_current_layer()
+            self._run_pending_params()
+            return
+        self._run_params(layer_id, params)
 
     def set_light_angle(self, degrees: float) -> None:
         light = Light.from_angle(degrees)
         if light != self.doc.light:
             self.push(C.SetLight(direction=[light.x, light.y, 0.0]))
 
-    def draw_stroke(self, points) -> None:
-        """A finished stroke: the current layer's contour (redraw), or a new layer's."""
-        if self._refuse_if_busy():
+    # --- parts drawn and arranged with the mouse and keys (Monster Mash) ------------------------
+    def _outlines(self) -> list:
+        return layer_outlines(self.doc)
+
+    def draw_stroke(self, points, kind: str = "front") -> None:
+        """A finished stroke of ``kind`` "front", "behind" or "redraw" (see
+        :func:`~sketchforge.tools.draw.plan_stroke` for where it goes)."""
+        pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+        if self.runner.busy:
+            # Drawn while the last part inflates: drawn as soon as it is done, so quick
+            # strokes are never lost; where it goes is decided then, on the new document.
+            self._pending_strokes.append((pts, kind))
+            n = len(self._pending_strokes)
+            self.show_message(f"{n} stroke{'s' * (n != 1)} waiting: drawn when the current inflation ends (Esc drops them)")
             return
-        if len(points) < 2:
-            self.show_message("the stroke is too short: press, drag and release to draw a contour")
+        if len(pts) < 2:
+            self.show_message("the stroke is too short: press, drag around the shape and release")
             return
-        closed = self.creation_panel.closed.isChecked()
-        target = self.current_layer if self.current_layer in self.doc.layer_ids() else None
-        if target is not None:
-            layer = self.doc.layer(target)
-            if layer.edits and not ask_yes_no(
+        plan = plan_stroke(self.doc, pts, kind, self.current_layer, SPLICE_PIXELS * self.canvas.pixel_size())
+        if plan.refusal is not None:
+            self.show_message(plan.refusal)
+        elif plan.redraw is not None:
+            what = "redrew the outline" if plan.redraw == "whole" else "redrew part of the outline"
+            self._redraw(self.doc.layer(plan.target), plan.points, plan.closed, what)
+        else:
+            self._new_part(plan)
+
+    def _new_part(self, plan) -> None:
+        """A new part (or the contour of the empty layer ``plan.target``)."""
+        tool = DrawContourTool(self.doc, target_layer=plan.target, closed=plan.closed, index=plan.index)
+        before, cmd = tool.commands_for(plan.points)
+        kind = "closed" if plan.closed else "open"
+
+        def done(c):
+            self.layers_panel.select(c.layer)
+            notes = "".join("; " + n for n in plan.notes)
+            self.show_message(f"new {kind} part “{self.doc.layer(c.layer).name}”{notes}")
+
+        self.runner.run(cmd, label="Inflating", macro="Draw layer" if before else None, before=before, on_done=done)
+
+    def _redraw(self, layer, pts, closed: bool, what: str, keep_edits: bool = True) -> None:
+        """Replace ``layer``'s outline; its sculpt edits are kept when they still apply, else the
+        person is asked whether to redraw without them."""
+        keep = keep_edits and bool(layer.edits)
+        tool = DrawContourTool(self.doc, target_layer=layer.id, closed=bool(closed), keep_edits=keep)
+        _, cmd = tool.commands_for(pts)
+
+        def error(exc) -> bool:
+            if not isinstance(exc, EditsDoNotApplyError):
+                return False
+            if ask_yes_no(
                 self,
                 "Redraw the contour?",
-                f"Layer “{layer.name}” has {len(layer.edits)} sculpt edit(s). Redrawing its contour "
-                "re-inflates it and drops them (Undo brings them back).",
+                f"Layer “{layer.name}” has {len(layer.edits)} sculpt edit(s) that do not apply to the new "
+                f"outline ({exc}). Redraw it without them? (Undo brings them back.)",
             ):
-                return
-        # The tool builds the commands (a new layer: AddLayer + SetContour, one "Draw layer"
-        # step); the runner inflates off the GUI thread.
-        before, cmd = DrawContourTool(self.doc, target_layer=target, closed=closed).commands_for(points)
+                QTimer.singleShot(0, lambda: self._redraw(self.doc.layer(layer.id), pts, closed, what, keep_edits=False))
+            else:
+                self.show_message("the outline was not redrawn: its sculpt edits would be lost")
+            return True
+
+        kept = f"; kept its {len(layer.edits)} sculpt edit(s)" if keep else ""
         self.runner.run(
             cmd,
             label="Inflating",
-            macro="Draw layer" if before else None,
-            before=before,
-            on_done=lambda done: self.layers_panel.select(done.layer),
+            on_done=lambda c: self.show_message(f"{what} of “{layer.name}”{kept}"),
+            on_error=error,
         )
 
+    def set_closed(self, closed: bool) -> None:
+        """The panel's box: make the selected part closed (free) or open (attached by its
+        closing segment), re-inflated from the same stroke."""
+        layer = self.doc.layer(self.current_layer) if self.current_layer in self.doc.layer_ids() else None
+        if layer is None or layer.points is None:
+            self.show_message("select a part first (click it) to make it open or closed")
+            self._sync_current_layer()
+            return
+        if self._refuse_if_busy():
+            self._sync_current_layer()
+            return
+        if not closed and closes(layer.points, layer.params):
+            self._sync_current_layer()
+            self.show_message(f"“{layer.name}” stays closed: the ends of its stroke meet, so it has no open side to attach by")
+            return
+        self._redraw(layer, layer.points, closed, "made closed" if closed else "made open")
+
+    def _selected_or_say(self, what: str):
+        if self.current_layer not in self.doc.layer_ids():
+            self.show_message(f"select a part first (click it) to {what}")
+            return None
+        return self.doc.layer(self.current_layer)
+
+    def select_at(self, point) -> None:
+        k = part_at(point, self._outlines())
+        if k < 0:
+            self.show_message("no part here: drag to draw one, click a part to select it")
+            return
+        self.layers_panel.select(self.doc.layers[k].id)
+        self.show_message(f"selected “{self.doc.layers[k].name}”")
+
+    def duplicate_at(self, point, button: str) -> None:
+        """Double click: duplicate the part under the pointer, behind it (left) or in front
+        (right), as Monster Mash does."""
+        k = part_at(point, self._outlines())
+        if k < 0:
+            self.show_message("double-click a part to duplicate it (left: behind it, right: in front)")
+            return
+        layer = self.doc.layers[k]
+        cmd = C.DuplicateLayer(layer=layer.id, index=k if button == "left" else k + 1)
+        if self.push(cmd):
+            self.layers_panel.select(cmd.new_id)
+            self.show_message(
+                f"duplicated “{layer.name}” {'behind' if button == 'left' else 'in front of'} itself, in place: "
+                "the arrow keys move the copy"
+            )
+
+    def duplicate_aside(self, layer_id: str) -> None:
+        """Ctrl+D: a copy in front, moved right by 1.25 part widths (beside it)."""
+        layer = self.doc.layer(layer_id)
+        pts = layer.points if layer.points is not None else None
+        width = float(np.ptp(pts[:, 0])) if pts is not None and len(pts) else 0.0
+        step = DUPLICATE_OFFSET * (width if width > 0 else 0.4)
+        cmd = C.DuplicateLayer(layer=layer_id, offset=[step, 0.0])
+        if self.push(cmd):
+            self.layers_panel.select(cmd.new_id)
+            self.show_message(f"duplicated “{layer.name}”, moved aside")
+
+    def nudge(self, layer_id: str, step) -> None:
+        """Arrow keys: move the selected part NUDGE_PIXELS screen pixels (one undo step)."""
+        d = NUDGE_PIXELS * self.canvas.pixel_size()
+        if self.push(C.TranslateLayer(layer=layer_id, offset=[step[0] * d, step[1] * d])):
+            self.show_message(f"moved “{self.doc.layer(layer_id).name}” (arrow keys)")
+
+    def move_depth(self, layer_id: str, where) -> None:
+        """PgUp / PgDn: one step to the front / back; Home / End: to the very front / back."""
+        n = len(self.doc.layers)
+        i = self.doc.index_of(layer_id)
+        name = self.doc.layer(layer_id).name
+        target = {"front": n - 1, "back": 0}.get(where, i + (where if isinstance(where, int) else 0))
+        target = max(0, min(n - 1, target))
+        if target == i:
+            self.show_message(f"“{name}” is already at the {'front' if i == n - 1 else 'back'}")
+            return
+        if self.push(C.MoveLayer(layer=layer_id, index=target)):
+            self.layers_panel.select(layer_id)
+            self.show_message(f"“{name}” is now {'the frontmost' if target == n - 1 else 'the backmost' if target == 0 else f'at depth {target + 1} of {n}'} part")
+
     def undo(self) -> None:
-        if not self._refuse_if_busy():
+        """Ctrl+Z. During a solve it cancels the solve: the action being computed is not on the
+        stack yet, so dropping it is what undoing it means; the next Ctrl+Z undoes the step
+        before."""
+        if self.runner.busy:
+            self._pending_params.clear()
+            self._pending_strokes.clear()
+            self.runner.cancel()
+            self._sync_current_layer()
+            self.show_message("cancelled the running computation; its action was not applied")
+            return
+        if self.doc.undo_stack.can_undo():
             self.doc.undo_stack.undo()
+        else:
+            self.show_message("nothing to undo")
 
     def redo(self) -> None:
         if not self._refuse_if_busy():
@@ -567,6 +789,8 @@ class MainWindow(QMainWindow):
 
     def adopt(self, loaded, path: Path | None) -> None:
         """Take over the state of a freshly loaded document (history starts here)."""
+        self._pending_strokes.clear()
+        self._pending_params.clear()
         self.runner.cancel()
         self.doc.adopt(loaded)
         self.path = path
@@ -690,7 +914,15 @@ class MainWindow(QMainWindow):
         self.recent_menu.setEnabled(bool(files))
 
     def cancel_current(self) -> None:
-        """Esc: stop the running solve, and drop a sculpt stroke being drawn with its preview."""
+        """Esc: close the help, stop the running solve, and drop a sculpt stroke being drawn
+        with its preview."""
+        if self.help_overlay.isVisible():
+            self.help_overlay.hide()
+            self._focus_center()
+            return
+        if self._pending_strokes:
+            self.show_message(f"dropped {len(self._pending_strokes)} waiting stroke(s)")
+        self._pending_strokes.clear()
         self.runner.cancel()
         if self.canvas.interaction == "sculpt":
             self.sculpt.cancel()

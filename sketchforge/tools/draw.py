@@ -1,10 +1,17 @@
-"""Draw a layer's contour: one stroke per layer, open or closed."""
+"""Draw a layer's contour: one stroke per layer, open or closed, in front or at a given depth;
+and :func:`plan_stroke`, where a finished stroke goes (new part in front or behind, redraw of
+a stretch or of the whole outline), decided from the document alone."""
 
 from __future__ import annotations
+
+from dataclasses import dataclass
 
 import numpy as np
 
 from sketchforge.document.commands import AddLayer, Command, SetContour
+from sketchforge.errors import ContourError
+from sketchforge.geometry.inflate_params import DEFAULT_INFLATE_PARAMS
+from sketchforge.geometry.parts import chord_touches, overlapped, splice_outline, stroke_closes
 from sketchforge.tools.base import Tool
 
 
@@ -20,10 +27,15 @@ class DrawContourTool(Tool):
     name = "draw"
     label = "Draw contour"
 
-    def __init__(self, doc, target_layer: str | None = None, closed: bool = False) -> None:
+    def __init__(self, doc, target_layer: str | None = None, closed: bool = False, index: int | None = None,
+                 keep_edits: bool = False) -> None:
         super().__init__(doc)
         self.target_layer = target_layer
         self.closed = closed
+        #: where a new layer goes in the back-to-front list (None: in front of all)
+        self.index = index
+        #: a redraw re-applies the layer's sculpt edits (SetContour.keep_edits)
+        self.keep_edits = keep_edits
         self._points: list[np.ndarray] = []
 
     def press(self, pos) -> None:
@@ -41,8 +53,8 @@ class DrawContourTool(Tool):
         new layer, meant to be one macro "Draw layer"."""
         pts = np.asarray(points, dtype=np.float64)
         if self.target_layer is not None:
-            return [], SetContour(layer=self.target_layer, points=pts, closed=self.closed)
-        add = AddLayer(id=self.doc.new_layer_id())
+            return [], SetContour(layer=self.target_layer, points=pts, closed=self.closed, keep_edits=self.keep_edits)
+        add = AddLayer(id=self.doc.new_layer_id(), index=self.index)
         return [add], SetContour(layer=add.id, points=pts, closed=self.closed)
 
     def release(self, pos):
@@ -65,3 +77,88 @@ class DrawContourTool(Tool):
             stack.abort_macro()
             raise
         return stack.end_macro()
+
+
+# --- where a finished stroke goes (Monster Mash's rules), decided on the document alone ------
+
+
+@dataclass(frozen=True)
+class StrokePlan:
+    """What a finished draw stroke does; :func:`plan_stroke` makes it, the front end runs it
+    with :class:`DrawContourTool` (``target``, ``closed``, ``index``)."""
+
+    #: the layer whose contour it sets (a redraw, or an empty layer); None: a new layer
+    target: str | None
+    #: (n, 2) float64, the contour: the stroke, or the outline with a stretch redrawn
+    points: np.ndarray
+    closed: bool
+    #: where a new layer goes in the back-to-front list (None: in front of all)
+    index: int | None = None
+    #: "whole" or "stretch" for a redraw of an existing part, None otherwise
+    redraw: str | None = None
+    #: what the person should be told besides the result (drawn behind whom, made free)
+    notes: tuple[str, ...] = ()
+    #: why nothing is done (the rest is then meaningless)
+    refusal: str | None = None
+
+
+def layer_outlines(doc) -> list:
+    """Each layer's outline, back to front, as it is drawn: the mesh boundary (m, 2) float64,
+    else the stroke, None for an empty or hidden layer."""
+    out = []
+    for layer in doc.layers:
+        if not layer.visible:
+            out.append(None)
+        elif layer.mesh is not None and len(layer.mesh.boundary):
+            out.append(np.asarray(layer.mesh.V)[layer.mesh.boundary, :2])
+        else:
+            out.append(layer.points)
+    return out
+
+
+def is_free(layer) -> bool:
+    """Closed as the assembly sees it: marked closed, or its mesh has no junction."""
+    return bool(layer.closed) or (layer.mesh is not None and len(layer.mesh.junction) == 0)
+
+
+def closes(points, params) -> bool | None:
+    """:func:`~sketchforge.geometry.parts.stroke_closes` at ``params``' resolution; None for a
+    stroke that cannot be an outline (the inflation then says why)."""
+    try:
+        return stroke_closes(points, float(params.get("resolution", DEFAULT_INFLATE_PARAMS["resolution"])))
+    except ContourError:
+        return None
+
+
+def plan_stroke(doc, points, kind: str = "front", selected: str | None = None, splice_tol: float = 0.0) -> StrokePlan:
+    """Where a finished stroke goes.
+
+    points : (n, 2) float64. kind : "front" (a new part in front of all), "behind" (a new part
+    under the backmost part it overlaps, or at the very back) or "redraw" (the selected part's
+    whole outline). A "front" stroke that starts and ends within ``splice_tol`` of the selected
+    part's outline redraws that stretch; one with an empty layer selected fills it. A new part
+    is closed when its ends meet, and also when its open junction touches no part."""
+    pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    layer = doc.layer(selected) if selected in doc.layer_ids() else None
+    if kind == "redraw":
+        if layer is None:
+            return StrokePlan(None, pts, False, refusal="Ctrl + drag redraws the selected part's outline: select a part first (click it)")
+        c = closes(pts, layer.params)
+        return StrokePlan(layer.id, pts, layer.closed if c is None else c, redraw="whole")
+    if kind == "front" and layer is not None and layer.points is not None:
+        spliced = splice_outline(layer.points, is_free(layer), pts, splice_tol)
+        if spliced is not None:
+            return StrokePlan(layer.id, spliced, bool(layer.closed), redraw="stretch")
+    target = layer.id if kind == "front" and layer is not None and layer.points is None else None
+    outlines = layer_outlines(doc)
+    notes = []
+    closed = closes(pts, DEFAULT_INFLATE_PARAMS if layer is None or target is None else layer.params)
+    if closed is False and not chord_touches(pts, outlines):
+        closed = True
+        notes.append("its open ends touch no part, so it was made a closed free part")
+    index = None
+    if kind == "behind":
+        hit = np.flatnonzero(overlapped(pts, outlines))
+        index = int(hit[0]) if len(hit) else 0
+        notes.insert(0, f"drawn behind “{doc.layers[index].name}”" if len(hit) else "drawn behind all parts (it overlaps none)")
+    return StrokePlan(target, pts, bool(closed), index=index, notes=tuple(notes))

@@ -34,12 +34,12 @@ class Mouse:
         v = vb.mapToView(vb.mapFromScene(self.canvas.mapToScene(pixel)))
         return QPointF(pixel), np.array([v.x(), v.y()])
 
-    def drag_pixels(self, pixels, button=Qt.MouseButton.LeftButton):
-        self._send(QEvent.Type.MouseMove, pixels[0], Qt.MouseButton.NoButton, Qt.MouseButton.NoButton)
-        self._send(QEvent.Type.MouseButtonPress, pixels[0], button, button)
+    def drag_pixels(self, pixels, button=Qt.MouseButton.LeftButton, modifiers=Qt.KeyboardModifier.NoModifier):
+        self._send(QEvent.Type.MouseMove, pixels[0], Qt.MouseButton.NoButton, Qt.MouseButton.NoButton, modifiers)
+        self._send(QEvent.Type.MouseButtonPress, pixels[0], button, button, modifiers)
         for p in pixels[1:]:
-            self._send(QEvent.Type.MouseMove, p, Qt.MouseButton.NoButton, button)
-        self._send(QEvent.Type.MouseButtonRelease, pixels[-1], button, Qt.MouseButton.NoButton)
+            self._send(QEvent.Type.MouseMove, p, Qt.MouseButton.NoButton, button, modifiers)
+        self._send(QEvent.Type.MouseButtonRelease, pixels[-1], button, Qt.MouseButton.NoButton, modifiers)
         QApplication.processEvents()
 
     def click_pixel(self, p, button=Qt.MouseButton.LeftButton):
@@ -48,13 +48,21 @@ class Mouse:
         self._send(QEvent.Type.MouseButtonRelease, p, button, Qt.MouseButton.NoButton)
         QApplication.processEvents()
 
+    def double_click(self, xy, button=Qt.MouseButton.LeftButton):
+        """Press, release, double-click, release: the event sequence Qt delivers."""
+        p = self.px(xy)
+        self.click_pixel(p, button)
+        self._send(QEvent.Type.MouseButtonDblClick, p, button, button)
+        self._send(QEvent.Type.MouseButtonRelease, p, button, Qt.MouseButton.NoButton)
+        QApplication.processEvents()
+
     def _send(self, kind, pos: QPointF, button, buttons, modifiers=Qt.KeyboardModifier.NoModifier):
         ev = QMouseEvent(kind, pos, self.vp.mapToGlobal(pos), button, buttons, modifiers)
         QApplication.sendEvent(self.vp, ev)
 
-    def drag(self, points, button=Qt.MouseButton.LeftButton):
+    def drag(self, points, button=Qt.MouseButton.LeftButton, modifiers=Qt.KeyboardModifier.NoModifier):
         """Press at the first point, move through the others, release at the last."""
-        self.drag_pixels([self.px(p) for p in points], button)
+        self.drag_pixels([self.px(p) for p in points], button, modifiers)
 
     def click(self, xy, button=Qt.MouseButton.LeftButton):
         self.click_pixel(self.px(xy), button)

@@ -14,9 +14,9 @@ from qt_helpers import circle, wait_idle
 from sketchforge.document import commands as C
 
 
-def draw_circle(window, mouse, qtbot, radius=0.5, center=(0.0, 0.0), n=48):
+def draw_circle(window, mouse, qtbot, radius=0.5, center=(0.0, 0.0), n=48, modifiers=Qt.KeyboardModifier.NoModifier):
     pts = circle(radius, n, center)
-    mouse(window.canvas).drag(list(pts) + [pts[0]])
+    mouse(window.canvas).drag(list(pts) + [pts[0]], modifiers=modifiers)
     wait_idle(qtbot, window)
     return pts
 
@@ -65,12 +65,12 @@ def test_draw_contour_makes_a_layer_with_a_mesh_and_one_undo_step(make_window, m
     assert w.layers_panel.current_id() == layer.id
 
 
-def test_redraw_replaces_the_contour_of_the_current_layer(make_window, mouse, qtbot, host):
+def test_ctrl_drag_redraws_the_whole_contour_of_the_selected_layer(make_window, mouse, qtbot, host):
     needs_inflate(host)
     w = make_window()
     draw_circle(w, mouse, qtbot, 0.4)
     first = w.doc.layers[0].mesh
-    draw_circle(w, mouse, qtbot, 0.3, center=(0.2, 0.0))
+    draw_circle(w, mouse, qtbot, 0.3, center=(0.2, 0.0), modifiers=Qt.KeyboardModifier.ControlModifier)
     assert len(w.doc.layers) == 1
     assert w.doc.layers[0].mesh is not first
     assert w.act_undo.text() == "Undo Draw contour"
@@ -85,7 +85,7 @@ def test_redraw_warns_when_the_layer_has_sculpt_edits(make_window, mouse, qtbot,
     w.doc._replace_layer(layer.evolve(edits=({"command": "sculpt_isophote"},)))
     dialogs.answers = [pytest.importorskip("PySide6.QtWidgets").QMessageBox.StandardButton.No]
     before = w.doc.layers[0]
-    draw_circle(w, mouse, qtbot, 0.3)
+    draw_circle(w, mouse, qtbot, 0.3, modifiers=Qt.KeyboardModifier.ControlModifier)
     assert len(dialogs.of("question")) == 1
     assert w.doc.layers[0] is before  # declined: nothing changed
 

@@ -1,5 +1,10 @@
-"""CREATION controls: the current layer's inflation parameters, the stroke kind, and how the
-drawing region shades (Lambertian or cel, isophote lines)."""
+"""CREATION controls: the current layer's inflation parameters, whether it is closed (a free
+part) or open (attached by its closing segment), and how the drawing region shades (Lambertian
+or cel, isophote lines).
+
+A new stroke decides open or closed by itself (its ends meet: closed); the box shows the
+selected part's kind and flips it (:attr:`closed_toggled`), it never carries over to the next
+stroke."""
 
 from __future__ import annotations
 
@@ -19,6 +24,8 @@ class CreationPanel(QGroupBox):
     params_edited = Signal(dict)
     shader_changed = Signal(str)
     isolines_changed = Signal(int)
+    #: the person ticked or unticked "closed" for the selected part
+    closed_toggled = Signal(bool)
 
     def __init__(self, parent=None) -> None:
         super().__init__("Creation", parent)
@@ -38,9 +45,11 @@ class CreationPanel(QGroupBox):
             form.addRow(label, s)
         self.closed = QCheckBox("closed outline (free part)")
         self.closed.setToolTip(
-            "For the next stroke (shows the selected layer's kind). Unchecked: an open stroke's "
-            "closing segment attaches to the layer below"
+            "The selected part's kind; click to flip it. A new stroke is closed when its ends "
+            "meet; open, its closing segment attaches to the part it lies on"
         )
+        self.closed.setEnabled(False)
+        self.closed.clicked.connect(lambda on: self._updating or self.closed_toggled.emit(bool(on)))
         form.addRow(self.closed)
         self.shader = QComboBox()
         self.shader.currentTextChanged.connect(self.shader_changed.emit)
@@ -59,22 +68,28 @@ class CreationPanel(QGroupBox):
         self.shader.setCurrentText(current)
         self.shader.blockSignals(False)
 
-    def show_layer(self, layer) -> None:
-        """Mirror the current layer's parameters (None: no layer selected)."""
+    def show_layer(self, layer, pending: dict | None = None) -> None:
+        """Mirror the current layer's parameters (None: no layer selected); ``pending`` are
+        values edited during a solve and not applied yet (shown, not reverted)."""
         self._updating = True
         try:
             for s in self.spins.values():
                 s.setEnabled(layer is not None)
+            self.closed.setEnabled(layer is not None and layer.points is not None)
             if layer is None:
                 self.layer_label.setText("no layer: draw to create one")
+                self.closed.setChecked(False)
                 return
-            kind = "no contour yet: draw it" if layer.points is None else f"{len(layer.edits)} sculpt edits"
+            closed = bool(layer.closed) or (layer.mesh is not None and len(layer.mesh.junction) == 0)
+            kind = "no contour yet: draw it" if layer.points is None else (
+                f"{'closed' if closed else 'open'}, {len(layer.edits)} sculpt edits"
+            )
             self.layer_label.setText(f"<b>{layer.name}</b> ({kind})")
-            if layer.points is not None:
-                # A redraw keeps the layer's kind unless the person changes it here.
-                self.closed.setChecked(bool(layer.closed))
+            # Closed as the assembly sees it: marked closed, or a stroke whose ends met.
+            self.closed.setChecked(closed if layer.points is not None else False)
+            values = {**dict(layer.params), **(pending or {})}
             for key, s in self.spins.items():
-                s.setValue(float(layer.params.get(key, s.value())))
+                s.setValue(float(values.get(key, s.value())))
         finally:
             self._updating = False
 
