@@ -44,7 +44,8 @@ XCB_LIBRARIES: tuple[tuple[str, str], ...] = (
 )
 
 #: The headless commands a person without a display can use instead.
-HEADLESS_HINT = "sketchforge info|render|export DOC work without one (see `sketchforge --help`)"
+HEADLESS_HINT = ("`sketchforge info DOC`, `sketchforge render DOC --png OUT.png` and "
+                 "`sketchforge replay DOC --export OUT.obj` work without one")
 
 
 def missing_packages(find_library: Callable[[str], str | None] = ctypes.util.find_library) -> list[str]:
