@@ -2,9 +2,14 @@
 
 pyqtgraph's ViewBox already points y up, so ``ViewBox.mapSceneToView`` turns a mouse position
 into document coordinates; :meth:`Canvas.doc_to_widget` is the inverse (tests use it to aim
-mouse events). The canvas draws the document (one flat-shaded item per layer, back to front,
-optional isophote lines, the light indicator, an optional reference image) and turns mouse
-gestures into calls on the interaction in use:
+mouse events). The canvas draws the document and turns mouse gestures into calls on the
+interaction in use. Drawing: the visible layers' meshes are rasterised for the current view by
+the geometry core (:mod:`sketchforge.geometry.gbuffer`: per-pixel normals, antialiased
+silhouettes, layers back to front, the same code as ``sketchforge render``) into one image with
+the isophote lines of the layers in front; a new light only re-shades that buffer, a new view or
+mesh rasterises again (a view change after a short pause, showing the previous image meanwhile).
+Over it: the selected layer's outline, the light indicator, an optional reference image.
+Gestures:
 
 - ``"draw"``: a left drag is a stroke (``DrawContourTool`` collects it); on release
   :attr:`stroke_finished` carries the points to the window, which runs the inflation off the
@@ -21,18 +26,35 @@ from __future__ import annotations
 
 import numpy as np
 import pyqtgraph as pg
-from PySide6.QtCore import QPointF, QRectF, Qt, Signal
+from PySide6.QtCore import QPointF, QRectF, Qt, QTimer, Signal
 from PySide6.QtGui import QColor, QImage
 
 from sketchforge.errors import SketchforgeError
-from sketchforge.geometry.intensity import vertex_intensity
-from sketchforge.geometry.isophotes import isophotes
+from sketchforge.geometry import gbuffer as gb
 from sketchforge.qt import items as it
 from sketchforge.tools import DrawContourTool, LightTool
 
 BACKGROUND = QColor(242, 240, 236)
 #: Default visible region (document units) of an empty document.
 HOME_RANGE = QRectF(-1.2, -1.2, 2.4, 2.4)
+#: Pause after the last pan/zoom step before the view is rasterised again (ms).
+VIEW_SETTLE_MS = 60
+#: Opacity of the thin lines along the layers' visible outlines.
+OUTLINE_ALPHA = 0.45
+#: Per-layer colour multipliers that tell touching layers apart (an eye on a head) without
+#: hiding the shading: hue shifts of a few percent, cycled through the document's layer order.
+LAYER_TINTS = np.array(
+    [
+        [1.00, 1.00, 1.00],
+        [0.96, 0.99, 1.05],
+        [1.04, 0.99, 0.94],
+        [0.97, 1.03, 0.97],
+        [1.03, 0.97, 1.01],
+        [0.98, 0.98, 1.06],
+        [1.03, 1.02, 0.93],
+        [0.95, 1.02, 1.03],
+    ]
+)
 
 
 class CanvasViewBox(pg.ViewBox):
@@ -92,8 +114,19 @@ class Canvas(pg.GraphicsView):
         self._reference: pg.ImageItem | None = None
         self._light_center = np.zeros(2)
         self._preview: tuple[str, object] | None = None  # (layer id, mesh) shown instead of the layer's
+        self.layer_tint = True  # subtle per-layer tints (LAYER_TINTS)
+        self.layer_outlines = True  # thin lines along the layers' visible outlines
+        # The rasterised view: the GBuffer, and what it was made of (view, meshes) to know when
+        # it is stale. A light change re-shades it; a view or mesh change rasterises again.
+        self._gbuf: gb.GBuffer | None = None
+        self._gbuf_key = None
+        self._gbuf_meshes: list = []
+        self.scene_item = it.ShadedSceneItem()
+        self.scene_item.setZValue(-1)
+        self._raster_timer = QTimer(self)
+        self._raster_timer.setSingleShot(True)
+        self._raster_timer.timeout.connect(self.render_now)
 
-        self.isolines = it.PolylinesItem(it.cosmetic_pen(it.ISOLINES, 1.0))
         self.outline = it.PolylinesItem(it.cosmetic_pen(it.SELECTED, 1.5, Qt.PenStyle.DotLine), closed=True)
         self.stroke = it.PolylinesItem(it.cosmetic_pen(it.STROKE_DRAW, 2.0))
         self.light_indicator = it.LightIndicator()
@@ -105,7 +138,8 @@ class Canvas(pg.GraphicsView):
             "stroke": it.PolylinesItem(it.cosmetic_pen(it.STROKE_SCULPT, 2.5)),
         }
         z = 1000
-        for item in (self.isolines, self.outline, *self.overlays.values(), self.stroke, self.light_indicator):
+        self.vb.addItem(self.scene_item)
+        for item in (self.outline, *self.overlays.values(), self.stroke, self.light_indicator):
             item.setZValue(z)
             z += 1
             self.vb.addItem(item)
@@ -117,6 +151,8 @@ class Canvas(pg.GraphicsView):
         doc.layer_changed.connect(self._on_layer_changed)
         doc.light_changed.connect(self._on_light)
         self.vb.sigRangeChanged.connect(lambda *a: self._update_light_indicator())
+        self.vb.sigRangeChanged.connect(lambda *a: self._schedule_render(VIEW_SETTLE_MS))
+        self.vb.sigResized.connect(lambda *a: self._schedule_render(VIEW_SETTLE_MS))
         self.rebuild()
 
     # --- coordinates ---------------------------------------------------------------------------
@@ -162,8 +198,69 @@ class Canvas(pg.GraphicsView):
             return
         if self._preview is not None and self._preview[0] == layer.id:
             layer = layer.evolve(mesh=self._preview[1])
-        item.set_layer(layer, self.doc.light, self._shader())
+        item.set_layer(layer)
         item.setVisible(layer.visible)
+        self._schedule_render(0)
+
+    # --- the shaded picture ---------------------------------------------------------------------
+    def current_view(self) -> gb.View | None:
+        """The pixel grid of the drawing region now (device pixels), or None before layout."""
+        rect = self.vb.viewRect()
+        size = self.vb.size()
+        dpr = float(self.devicePixelRatioF()) or 1.0
+        w, h = int(round(size.width() * dpr)), int(round(size.height() * dpr))
+        if w < 1 or h < 1 or rect.width() <= 0 or rect.height() <= 0:
+            return None
+        return gb.View(float(rect.left()), float(rect.top() + rect.height()), w / float(rect.width()), w, h)
+
+    def _shown_meshes(self) -> list:
+        """Per layer (back to front) the mesh drawn now: the preview's, the layer's, or None."""
+        out = []
+        for layer in self.doc.layers:
+            item = self._layer_items.get(layer.id)
+            out.append(item._mesh if (item is not None and layer.visible) else None)
+        return out
+
+    def _schedule_render(self, delay_ms: int) -> None:
+        if not self._raster_timer.isActive() or delay_ms == 0:
+            self._raster_timer.start(delay_ms)
+
+    def render_now(self) -> None:
+        """Rasterise the view again if the view or a shown mesh changed, then shade it."""
+        self._raster_timer.stop()
+        view = self.current_view()
+        if view is None:
+            return
+        meshes = self._shown_meshes()
+        key = (view, tuple(id(m) if m is not None else None for m in meshes))
+        if self._gbuf is None or key != self._gbuf_key or any(
+            a is not b for a, b in zip(meshes, self._gbuf_meshes)
+        ):
+            self._gbuf = gb.rasterise(meshes, view)
+            self._gbuf_key = key
+            self._gbuf_meshes = meshes  # holds them: ids stay unique while the key is in use
+        self.reshade()
+
+    def reshade(self) -> None:
+        """Shade the current buffer with the document's light and shader (no rasterisation)."""
+        if self._gbuf is None:
+            return
+        n = self._gbuf.n_layers
+        tints = np.resize(LAYER_TINTS, (n, 3)) if (self.layer_tint and n > 1) else None
+        shader = self._shader()
+        img = gb.shade(
+            self._gbuf,
+            np.asarray(self.doc.light.direction, dtype=np.float64),
+            shader.shade,
+            np.array([BACKGROUND.redF(), BACKGROUND.greenF(), BACKGROUND.blueF()]),
+            tints=tints,
+            isophotes=int(self.isoline_count),
+            line_colour=(it.ISOLINES.redF(), it.ISOLINES.greenF(), it.ISOLINES.blueF()),
+            line_alpha=it.ISOLINES.alphaF(),
+            bgrx=True,
+            outline_alpha=OUTLINE_ALPHA if self.layer_outlines else 0.0,
+        )
+        self.scene_item.set_image(img, self._gbuf.view)
 
     def show_preview(self, layer_id: str, mesh) -> None:
         """Draw ``mesh`` in place of the layer's surface until :meth:`clear_preview` (a view
@@ -191,34 +288,12 @@ class Canvas(pg.GraphicsView):
         self._refresh_decorations()
 
     def _on_light(self, light) -> None:
-        shader = self._shader()
-        for layer in self.doc.layers:
-            item = self._layer_items.get(layer.id)
-            if item is not None:
-                item.set_shading(light, shader)
-        self._refresh_isolines()
+        self.reshade()
         self._update_light_indicator()
 
     def _refresh_decorations(self) -> None:
-        self._refresh_isolines()
         self._refresh_outline()
         self._update_light_indicator()
-
-    def _refresh_isolines(self) -> None:
-        """K isophote lines per visible layer at n·l = j/(K+1), j = 1..K."""
-        lines = []
-        K = int(self.isoline_count)
-        if K > 0:
-            light = self.doc.light.direction
-            for layer in self.doc.layers:
-                mesh = layer.mesh
-                if not layer.visible or mesh is None or mesh.n_faces == 0:
-                    continue
-                E = vertex_intensity(mesh.V, mesh.F, light)
-                for j in range(1, K + 1):
-                    polylines, _ = isophotes(mesh.V[:, :2], mesh.F, E, j / (K + 1))
-                    lines.extend(polylines)
-        self.isolines.set_lines(lines)
 
     def _refresh_outline(self) -> None:
         lines = []
@@ -248,11 +323,20 @@ class Canvas(pg.GraphicsView):
 
     def set_shader(self, name: str) -> None:
         self.shader_name = name
-        self._on_light(self.doc.light)
+        self.reshade()
 
     def set_isoline_count(self, k: int) -> None:
+        """K isophote lines at n·l = j/(K+1), j = 1..K, of the layer in front at each pixel."""
         self.isoline_count = int(k)
-        self._refresh_isolines()
+        self.reshade()
+
+    def set_layer_tint(self, on: bool) -> None:
+        self.layer_tint = bool(on)
+        self.reshade()
+
+    def set_layer_outlines(self, on: bool) -> None:
+        self.layer_outlines = bool(on)
+        self.reshade()
 
     def set_interaction(self, name: str) -> None:
         if self._tool is not None:
