@@ -109,6 +109,8 @@ class GBuffer:
     stack_frag, stack_slot : (q,) int64
         The fragments over those pixels, back to front, and the index of their pixel in
         ``stack_pixels``.
+    stack_bounds : (n_layers + 1,) int64
+        ``stack_frag[stack_bounds[i]:stack_bounds[i + 1]]`` are layer i's.
     front_frag : (f,) int64
         The fragments that own a pixel (``front[front >= 0]``, same order).
     dn_dx, dn_dy : (f, 3) float32
@@ -132,6 +134,7 @@ class GBuffer:
     stack_pixels: np.ndarray
     stack_frag: np.ndarray
     stack_slot: np.ndarray
+    stack_bounds: np.ndarray
     front_frag: np.ndarray
     dn_dx: np.ndarray
     dn_dy: np.ndarray
@@ -393,7 +396,8 @@ def _assemble(view, L, pix_l, lay_l, alpha_l, nrm_l, edges_l) -> GBuffer:
     dn_dx = np.asfortranarray(dn_dx)
     dn_dy = np.asfortranarray(dn_dy)
     return GBuffer(view, pix, lay, alpha, nrm, front, bounds, solo, pix[solo], stack_pixels.astype(i64),
-                   stack_frag.astype(i64), stack_slot.reshape(-1).astype(i64), front_frag, dn_dx, dn_dy,
+                   stack_frag.astype(i64), stack_slot.reshape(-1).astype(i64),
+                   np.searchsorted(lay[stack_frag], np.arange(L + 1)).astype(i64), front_frag, dn_dx, dn_dy,
                    edge_pix, edge_dist)
 
 
@@ -480,28 +484,34 @@ def shade(
     out[:] = _pack(bg[None, :] * 255.0 + 0.5)[0]
     if len(gbuf.pix):
         colour = np.asarray(shader(gbuf.normal, l), dtype=np.float32).reshape(-1, 3)
+        if not colour.flags.writeable or np.may_share_memory(colour, gbuf.normal):
+            colour = colour.copy()  # scaled in place below: never write into the buffer
+        scale = np.full((gbuf.n_layers, 3), 255.0, dtype=np.float32)
         if tints is not None:
-            colour = colour * np.asarray(tints, dtype=np.float32)[gbuf.layer]
+            scale *= np.asarray(tints, dtype=np.float32).reshape(-1, 3)[: gbuf.n_layers]
+        b = gbuf.bounds
+        for li in range(gbuf.n_layers):  # fragments are grouped by layer: slices, no gather
+            if b[li + 1] > b[li]:
+                colour[b[li] : b[li + 1]] *= scale[li]
         if isophotes > 0:
             cov = isophote_coverage(gbuf, l, isophotes, line_width)
             hit = np.nonzero(cov > 0)[0]
             f = gbuf.front_frag[hit]
-            lc = np.asarray(line_colour, dtype=np.float32).reshape(3)
+            lc = np.asarray(line_colour, dtype=np.float32).reshape(3) * 255.0
             colour[f] += (line_alpha * cov[hit])[:, None] * (lc - colour[f])
-        colour *= 255.0
         colour += 0.5
         packed = _pack(colour)
         out[gbuf.solo_pix] = packed[gbuf.solo]
         if len(gbuf.stack_pixels):
             acc = np.empty((len(gbuf.stack_pixels), 3), dtype=np.float32)
             acc[:] = bg * 255.0 + 0.5
-            fr, slot = gbuf.stack_frag, gbuf.stack_slot
-            lay = gbuf.layer[fr]
-            # A pixel holds at most one fragment per layer: blend layer by layer, back to front.
-            for li in np.unique(lay):
-                sel = lay == li
-                k, q = fr[sel], slot[sel]
-                acc[q] += gbuf.alpha[k, None] * (colour[k] - acc[q])
+            fr, slot, sb = gbuf.stack_frag, gbuf.stack_slot, gbuf.stack_bounds
+            # A pixel holds at most one fragment per layer: blend layer by layer, back to front
+            # (stack_frag ascends, so it is grouped by layer).
+            for li in range(gbuf.n_layers):
+                k, q = fr[sb[li] : sb[li + 1]], slot[sb[li] : sb[li + 1]]
+                if len(k):
+                    acc[q] += gbuf.alpha[k, None] * (colour[k] - acc[q])
             out[gbuf.stack_pixels] = _pack(acc)
     if outline_alpha > 0 and len(gbuf.edge_pix):
         cov = np.clip(np.float32(0.5 * outline_width + 0.5) - gbuf.edge_dist, 0.0, 1.0) * outline_alpha

@@ -1,5 +1,5 @@
 """CREATION controls: the current layer's inflation parameters, the stroke kind, and how the
-drawing region shades (Lambertian or cel, isophote lines)."""
+drawing region shades (Lambertian or cel, isophote lines, layer tints and outlines)."""
 
 from __future__ import annotations
 
@@ -19,6 +19,10 @@ class CreationPanel(QGroupBox):
     params_edited = Signal(dict)
     shader_changed = Signal(str)
     isolines_changed = Signal(int)
+    #: subtle per-layer tints on / off
+    tint_changed = Signal(bool)
+    #: thin lines along the layers' visible outlines on / off
+    outlines_changed = Signal(bool)
 
     def __init__(self, parent=None) -> None:
         super().__init__("Creation", parent)
@@ -50,6 +54,16 @@ class CreationPanel(QGroupBox):
         self.isolines.setToolTip("Number of isophote lines drawn over the shading")
         self.isolines.valueChanged.connect(self.isolines_changed.emit)
         form.addRow("Isophote lines", self.isolines)
+        self.tint = QCheckBox("tint layers")
+        self.tint.setChecked(True)
+        self.tint.setToolTip("A slightly different hue per layer, to tell touching layers apart")
+        self.tint.toggled.connect(self.tint_changed.emit)
+        self.outlines = QCheckBox("outline layers")
+        self.outlines.setChecked(True)
+        self.outlines.setToolTip("A thin line along each layer's visible outline")
+        self.outlines.toggled.connect(self.outlines_changed.emit)
+        form.addRow(self.tint)
+        form.addRow(self.outlines)
         self._updating = False
 
     def set_shaders(self, names, current: str) -> None:
