@@ -23,11 +23,16 @@ of the layers behind it.
 
 from __future__ import annotations
 
+import weakref
 from dataclasses import dataclass
 
 import numpy as np
 
 from sketchforge.geometry.normals import vertex_normals
+
+# Per mesh (meshes are immutable): vertex normals and outline edges, so a new view of the same
+# meshes (pan, zoom) only rasterises.
+_mesh_cache: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
 
 # Outline edges longer than this (pixels) are split before testing the pixels around them, so
 # the work stays proportional to the outline's length, not to its bounding box.
@@ -113,9 +118,6 @@ class GBuffer:
         ``stack_frag[stack_bounds[i]:stack_bounds[i + 1]]`` are layer i's.
     front_frag : (f,) int64
         The fragments that own a pixel (``front[front >= 0]``, same order).
-    dn_dx, dn_dy : (f, 3) float32
-        Change of the owner's normal per pixel to the right and downwards (finite differences
-        that never cross into another layer): the screen-space gradient of any n·l.
     edge_pix : (e,) int64
         Pixels near a layer's outline where that outline is not hidden by a layer in front.
     edge_dist : (e,) float32
@@ -136,14 +138,23 @@ class GBuffer:
     stack_slot: np.ndarray
     stack_bounds: np.ndarray
     front_frag: np.ndarray
-    dn_dx: np.ndarray
-    dn_dy: np.ndarray
     edge_pix: np.ndarray
     edge_dist: np.ndarray
 
     @property
     def n_layers(self) -> int:
         return len(self.bounds) - 1
+
+    def normal_derivatives(self) -> tuple[np.ndarray, np.ndarray]:
+        """(f, 3) float32 ``dn_dx, dn_dy``: change of the owner's normal per pixel to the right
+        and downwards at each owned pixel (finite differences that never cross into another
+        layer), so the screen-space gradient of any n·l. Computed on first use (isophote lines
+        need it, plain shading does not) and kept."""
+        cache = self.__dict__.setdefault("_derivatives", [])
+        if not cache:
+            W, H = self.view.width, self.view.height
+            cache.extend(_normal_derivatives(self.front, self.normal, self.layer, W, H))
+        return cache[0], cache[1]
 
     def front_layer(self) -> np.ndarray:
         """(height, width) int32: the layer in front at each pixel centre, -1 for none."""
@@ -308,7 +319,11 @@ def rasterise(meshes: list, view: View, antialias: bool = True) -> GBuffer:
         if mesh is None or mesh.n_faces == 0:
             continue
         V, F = np.asarray(mesh.V), np.asarray(mesh.F, dtype=np.int64)
-        N = vertex_normals(V, F)
+        cached = _mesh_cache.get(mesh)
+        if cached is None:
+            cached = (vertex_normals(V, F), boundary_edges(F))
+            _mesh_cache[mesh] = cached
+        N, outline = cached
         P = view.to_pixels(V)
         pix, tri, bary = scan_triangles(P, F, W, H)
         if len(pix):
@@ -330,7 +345,7 @@ def rasterise(meshes: list, view: View, antialias: bool = True) -> GBuffer:
             n = np.zeros((0, 3))
         alpha = np.ones(len(pix))
         if antialias:
-            opix, dist, onrm = _outline_distance(P, N, boundary_edges(F), W, H)
+            opix, dist, onrm = _outline_distance(P, N, outline, W, H)
             edges_l.append((li, opix, dist))
             inside = np.zeros(npx, dtype=bool)
             inside[pix] = True
@@ -346,11 +361,10 @@ def rasterise(meshes: list, view: View, antialias: bool = True) -> GBuffer:
             pix = np.r_[pix, opix[~ins][grow]]
             n = np.r_[n, onrm[~ins][grow]]
             alpha = np.r_[alpha, cov[grow]]
-        order = np.argsort(pix, kind="stable")
-        pix_l.append(pix[order])
+        pix_l.append(pix)
         lay_l.append(np.full(len(pix), li, dtype=np.int32))
-        alpha_l.append(alpha[order].astype(np.float32))
-        nrm_l.append(n[order].astype(np.float32))
+        alpha_l.append(alpha.astype(np.float32))
+        nrm_l.append(n.astype(np.float32))
     return _assemble(view, len(meshes), pix_l, lay_l, alpha_l, nrm_l, edges_l)
 
 
@@ -390,48 +404,38 @@ def _assemble(view, L, pix_l, lay_l, alpha_l, nrm_l, edges_l) -> GBuffer:
     stack_frag = np.nonzero(~alone)[0]  # already back to front
     stack_pixels, stack_slot = np.unique(pix[stack_frag], return_inverse=True)
     front_frag = front[front >= 0]
-    dn_dx, dn_dy = _normal_derivatives(front, nrm, lay, W, H)
     # Column-major: the shaders' per-component products run on contiguous columns.
     nrm = np.asfortranarray(nrm, dtype=np.float32)
-    dn_dx = np.asfortranarray(dn_dx)
-    dn_dy = np.asfortranarray(dn_dy)
     return GBuffer(view, pix, lay, alpha, nrm, front, bounds, solo, pix[solo], stack_pixels.astype(i64),
                    stack_frag.astype(i64), stack_slot.reshape(-1).astype(i64),
-                   np.searchsorted(lay[stack_frag], np.arange(L + 1)).astype(i64), front_frag, dn_dx, dn_dy,
+                   np.searchsorted(lay[stack_frag], np.arange(L + 1)).astype(i64), front_frag,
                    edge_pix, edge_dist)
 
 
 def _normal_derivatives(front, nrm, lay, W, H):
-    """Finite differences of the owner's normal, one-sided at a layer's edge, 0 when isolated."""
-    ok = front >= 0
-    owner = np.full(W * H, -1, dtype=np.int64)
-    owner[ok] = lay[front[ok]]
-    owner = owner.reshape(H, W)
-    img = np.zeros((W * H, 3), dtype=np.float32)
-    img[ok] = nrm[front[ok]]
-    img = img.reshape(H, W, 3)
+    """Finite differences of the owner's normal at each owned pixel: central where both
+    neighbours belong to the same layer, one-sided where one does, 0 where none does."""
+    owned = np.nonzero(front >= 0)[0]
+    f = front[owned]
+    own_layer = np.full(W * H, -1, dtype=np.int32)
+    own_layer[owned] = lay[f]
+    comp = [np.take(nrm[:, j], f) for j in range(3)]  # per component: contiguous gathers
+    img = np.zeros((3, W * H), dtype=np.float32)
+    for j in range(3):
+        img[j, owned] = comp[j]
+    r, c = np.divmod(owned, W)
+    mine = own_layer[owned]
     out = []
-    for axis in (1, 0):
-        if axis == 1:
-            same = (owner[:, 1:] == owner[:, :-1]) & (owner[:, 1:] >= 0)
-            diff = np.where(same[..., None], img[:, 1:] - img[:, :-1], 0.0)
-            fwd = np.zeros_like(img)
-            bwd = np.zeros_like(img)
-            nf = np.zeros((H, W), np.float32)
-            nb = np.zeros((H, W), np.float32)
-            fwd[:, :-1], bwd[:, 1:] = diff, diff
-            nf[:, :-1], nb[:, 1:] = same, same
-        else:
-            same = (owner[1:] == owner[:-1]) & (owner[1:] >= 0)
-            diff = np.where(same[..., None], img[1:] - img[:-1], 0.0)
-            fwd = np.zeros_like(img)
-            bwd = np.zeros_like(img)
-            nf = np.zeros((H, W), np.float32)
-            nb = np.zeros((H, W), np.float32)
-            fwd[:-1], bwd[1:] = diff, diff
-            nf[:-1], nb[1:] = same, same
-        g = (fwd + bwd) / np.maximum(nf + nb, 1.0)[..., None]
-        out.append(g.reshape(-1, 3)[ok].astype(np.float32))
+    for step, lo_ok, hi_ok in ((1, c > 0, c < W - 1), (W, r > 0, r < H - 1)):
+        grads = np.zeros((len(owned), 3), dtype=np.float32, order="F")
+        count = np.zeros(len(owned), dtype=np.float32)
+        for sign, ok in ((1, hi_ok), (-1, lo_ok)):
+            q = np.where(ok, owned + sign * step, owned)
+            same = (ok & (np.take(own_layer, q) == mine)).astype(np.float32)
+            for j in range(3):
+                grads[:, j] += same * sign * (np.take(img[j], q) - comp[j])
+            count += same
+        out.append(grads / np.maximum(count, 1.0)[:, None])
     return out[0], out[1]
 
 
@@ -570,8 +574,9 @@ def isophote_coverage(gbuf: GBuffer, light, K: int, width: float = 1.2) -> np.nd
     l = np.asarray(light, dtype=np.float32).reshape(3)
     K = int(K)
     E = _dot(gbuf.normal[gbuf.front_frag], l)
-    gx = _dot(gbuf.dn_dx, l)
-    gy = _dot(gbuf.dn_dy, l)
+    dn_dx, dn_dy = gbuf.normal_derivatives()
+    gx = _dot(dn_dx, l)
+    gy = _dot(dn_dy, l)
     t = E * (K + 1)
     level = np.clip(np.rint(t), 1, K)
     d = np.abs(t - level) * (1.0 / (K + 1))

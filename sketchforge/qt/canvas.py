@@ -24,6 +24,8 @@ wheel changes the band radius; Ctrl+wheel still zooms).
 
 from __future__ import annotations
 
+import threading
+
 import numpy as np
 import pyqtgraph as pg
 from PySide6.QtCore import QPointF, QRectF, Qt, QTimer, Signal
@@ -91,6 +93,8 @@ class Canvas(pg.GraphicsView):
     stroke_finished = Signal(object)
     #: a one-line message for the status bar
     message = Signal(str)
+    #: ((GBuffer | None, error | None), view, meshes) from the rasterising thread
+    _raster_done = Signal(object, object, object)
 
     def __init__(self, doc, host, parent=None) -> None:
         # Every mouse move counts: a stroke drawn quickly must keep its points (pyqtgraph drops
@@ -119,13 +123,20 @@ class Canvas(pg.GraphicsView):
         # The rasterised view: the GBuffer, and what it was made of (view, meshes) to know when
         # it is stale. A light change re-shades it; a view or mesh change rasterises again.
         self._gbuf: gb.GBuffer | None = None
-        self._gbuf_key = None
         self._gbuf_meshes: list = []
+        self._raster_thread: threading.Thread | None = None
+        self._raster_again = False
+        self._raster_generation = 0  # requests made
+        self._raster_adopted = 0  # the request whose buffer is shown
+        self._raster_done.connect(self._on_raster_done)
         self.scene_item = it.ShadedSceneItem()
         self.scene_item.setZValue(-1)
         self._raster_timer = QTimer(self)
         self._raster_timer.setSingleShot(True)
-        self._raster_timer.timeout.connect(self.render_now)
+        self._raster_timer.timeout.connect(self._render_async)
+        self._edit_timer = QTimer(self)
+        self._edit_timer.setSingleShot(True)
+        self._edit_timer.timeout.connect(self.render_now)
 
         self.outline = it.PolylinesItem(it.cosmetic_pen(it.SELECTED, 1.5, Qt.PenStyle.DotLine), closed=True)
         self.stroke = it.PolylinesItem(it.cosmetic_pen(it.STROKE_DRAW, 2.0))
@@ -200,7 +211,9 @@ class Canvas(pg.GraphicsView):
             layer = layer.evolve(mesh=self._preview[1])
         item.set_layer(layer)
         item.setVisible(layer.visible)
-        self._schedule_render(0)
+        # An edit shows at once (on the next turn of the event loop, once for all layers that
+        # changed together); only view changes rasterise in the background.
+        self._edit_timer.start(0)
 
     # --- the shaded picture ---------------------------------------------------------------------
     def current_view(self) -> gb.View | None:
@@ -225,21 +238,82 @@ class Canvas(pg.GraphicsView):
         if not self._raster_timer.isActive() or delay_ms == 0:
             self._raster_timer.start(delay_ms)
 
-    def render_now(self) -> None:
-        """Rasterise the view again if the view or a shown mesh changed, then shade it."""
-        self._raster_timer.stop()
+    def _wanted(self):
+        """(view, meshes) the picture should show now, or None before the first layout."""
         view = self.current_view()
-        if view is None:
-            return
-        meshes = self._shown_meshes()
-        key = (view, tuple(id(m) if m is not None else None for m in meshes))
-        if self._gbuf is None or key != self._gbuf_key or any(
-            a is not b for a, b in zip(meshes, self._gbuf_meshes)
-        ):
-            self._gbuf = gb.rasterise(meshes, view)
-            self._gbuf_key = key
-            self._gbuf_meshes = meshes  # holds them: ids stay unique while the key is in use
+        return None if view is None else (view, self._shown_meshes())
+
+    def _is_current(self, view, meshes) -> bool:
+        g = self._gbuf
+        return (
+            g is not None
+            and g.view == view
+            and len(meshes) == len(self._gbuf_meshes)
+            and all(a is b for a, b in zip(meshes, self._gbuf_meshes))
+        )
+
+    def _adopt(self, gbuf, meshes, generation: int) -> None:
+        if generation <= self._raster_adopted:
+            return  # an older request than the buffer shown (render_now ran meanwhile)
+        self._raster_adopted = generation
+        self._gbuf = gbuf
+        self._gbuf_meshes = meshes  # holds them: what the buffer shows
         self.reshade()
+
+    def _render_async(self) -> None:
+        """Rasterise on a worker thread (the GUI stays responsive during a pan or an edit); the
+        previous picture stays in place, moving with the view, until the new one arrives."""
+        wanted = self._wanted()
+        if wanted is None or self._is_current(*wanted):
+            return
+        if self._raster_thread is not None:
+            self._raster_again = True  # one more when the running one ends
+            return
+        view, meshes = wanted
+        self._raster_generation += 1
+        generation = self._raster_generation
+
+        def work():
+            try:
+                result = (gb.rasterise(meshes, view), None)
+            except Exception as exc:  # shown in the status bar, never lost in a thread
+                result = (None, exc)
+            try:
+                self._raster_done.emit(result, meshes, generation)
+            except RuntimeError:  # the canvas is gone
+                pass
+
+        self._raster_again = False
+        self._raster_thread = threading.Thread(target=work, name="canvas-raster", daemon=True)
+        self._raster_thread.start()
+
+    def _on_raster_done(self, result, meshes, generation) -> None:
+        self._raster_thread = None
+        gbuf, exc = result
+        if exc is not None:
+            self.message.emit(f"cannot draw the layers: {exc}")
+        else:
+            # Newer than the picture shown even if the view moved on meanwhile: it is placed in
+            # document coordinates, so it is drawn where it belongs until the next one.
+            self._adopt(gbuf, meshes, generation)
+        wanted = self._wanted()
+        if self._raster_again or (wanted is not None and not self._is_current(*wanted)):
+            self._schedule_render(0)
+
+    def render_now(self) -> None:
+        """Rasterise the view now (on this thread) if the view or a shown mesh changed, then
+        shade it: after an edit, and for screenshots, which must show the current state."""
+        self._raster_timer.stop()
+        self._edit_timer.stop()
+        wanted = self._wanted()
+        if wanted is None:
+            return
+        if self._is_current(*wanted):
+            self.reshade()
+            return
+        view, meshes = wanted
+        self._raster_generation += 1
+        self._adopt(gb.rasterise(meshes, view), meshes, self._raster_generation)
 
     def reshade(self) -> None:
         """Shade the current buffer with the document's light and shader (no rasterisation)."""

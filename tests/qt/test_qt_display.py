@@ -57,3 +57,24 @@ def test_canvas_shading_is_as_smooth_as_the_headless_render(make_window, mouse, 
     print(f"high-pass RMS: canvas {canvas_rms:.3f}, render {render_rms:.3f} grey levels")
     assert render_rms < 0.5  # the reference itself is smooth
     assert canvas_rms <= 2.5 * render_rms
+
+
+def test_a_view_change_rasterises_in_the_background_and_a_light_change_does_not(make_window, mouse, qtbot, host):
+    w = make_window()
+    pts = ellipse(40)
+    mouse(w.canvas).drag(list(pts) + [pts[0]])
+    wait_idle(qtbot, w)
+    if w.doc.layers[0].mesh is None:
+        pytest.skip("no inflate plugin is installed")
+    w.canvas.render_now()
+    first = w.canvas._gbuf
+    w.canvas.vb.translateBy(x=0.2, y=0.1)  # a pan
+    assert w.canvas._gbuf is first  # nothing rasterised on the GUI thread during the gesture
+    qtbot.waitUntil(lambda: w.canvas._raster_thread is not None, timeout=2000)
+    qtbot.waitUntil(lambda: w.canvas._gbuf is not first and w.canvas._raster_thread is None, timeout=20_000)
+    assert w.canvas._gbuf.view == w.canvas.current_view()
+    panned = w.canvas._gbuf
+    before = w.canvas.scene_item.pixels().copy()
+    w.set_light_angle(200.0)
+    assert w.canvas._gbuf is panned  # a new light re-shades the same buffer
+    assert np.any(w.canvas.scene_item.pixels() != before)
