@@ -150,11 +150,19 @@ class GBuffer:
         and downwards at each owned pixel (finite differences that never cross into another
         layer), so the screen-space gradient of any n·l. Computed on first use (isophote lines
         need it, plain shading does not) and kept."""
+        return self._line_data()[:2]
+
+    def _line_data(self):
+        """dn_dx, dn_dy, the owners' normals column by column, and per owned pixel a bound on
+        |∇(n·l)| for any unit l (so lines are only evaluated where they can be)."""
         cache = self.__dict__.setdefault("_derivatives", [])
         if not cache:
             W, H = self.view.width, self.view.height
-            cache.extend(_normal_derivatives(self.front, self.normal, self.layer, W, H))
-        return cache[0], cache[1]
+            dx, dy = _normal_derivatives(self.front, self.normal, self.layer, W, H)
+            cols = tuple(np.ascontiguousarray(np.take(self.normal[:, j], self.front_frag)) for j in range(3))
+            bound = np.sqrt(np.einsum("ij,ij->i", dx, dx) + np.einsum("ij,ij->i", dy, dy)).astype(np.float32)
+            cache.extend((dx, dy, cols, bound))
+        return cache
 
     def front_layer(self) -> np.ndarray:
         """(height, width) int32: the layer in front at each pixel centre, -1 for none."""
@@ -573,16 +581,22 @@ def isophote_coverage(gbuf: GBuffer, light, K: int, width: float = 1.2) -> np.nd
     """
     l = np.asarray(light, dtype=np.float32).reshape(3)
     K = int(K)
-    E = _dot(gbuf.normal[gbuf.front_frag], l)
-    dn_dx, dn_dy = gbuf.normal_derivatives()
-    gx = _dot(dn_dx, l)
-    gy = _dot(dn_dy, l)
-    t = E * (K + 1)
-    level = np.clip(np.rint(t), 1, K)
-    d = np.abs(t - level) * (1.0 / (K + 1))
-    g = np.sqrt(gx * gx + gy * gy)
-    dist = d / np.maximum(g, 1e-6)
-    return np.clip(np.float32(0.5 * width + 0.5) - dist, 0.0, 1.0)
+    dn_dx, dn_dy, (nx, ny, nz), bound = gbuf._line_data()
+    t = nx * (l[0] * (K + 1))
+    t += ny * (l[1] * (K + 1))
+    t += nz * (l[2] * (K + 1))
+    d = np.abs(t - np.clip(np.rint(t), 1, K))  # distance to the nearest level, in level units
+    reach = np.float32(0.5 * width + 0.5)
+    # |∇t| <= (K + 1) * bound: pixels farther than ``reach`` from a line even at that slope are
+    # skipped (most of them), the others get the exact distance.
+    cand = np.nonzero(d < reach * (K + 1) * bound)[0]
+    cov = np.zeros(len(t), dtype=np.float32)
+    if len(cand):
+        gx = _dot(dn_dx[cand], l) * (K + 1)
+        gy = _dot(dn_dy[cand], l) * (K + 1)
+        g = np.sqrt(gx * gx + gy * gy)
+        cov[cand] = np.clip(reach - d[cand] / np.maximum(g, 1e-6), 0.0, 1.0)
+    return cov
 
 
 def _dot(N: np.ndarray, l: np.ndarray) -> np.ndarray:

@@ -60,10 +60,11 @@ def cel_shade(normals: np.ndarray, light: np.ndarray) -> np.ndarray:
 
     Returns
     -------
-    (n, 3) float64 in [0, 1], each row one of :data:`CEL_TONES`
+    (n, 3) in [0, 1], each row one of :data:`CEL_TONES` (float32 for float32 normals)
     """
-    tone = np.digitize(_ndotl(normals, light), CEL_THRESHOLDS, right=True)
-    return CEL_TONES[tone].copy()
+    e = _ndotl(normals, light)
+    tone = (e > CEL_THRESHOLDS[0]).astype(np.int8) + (e > CEL_THRESHOLDS[1])
+    return CEL_TONES.astype(e.dtype)[tone]
 
 
 LAMBERT_SHADER = Shader(
