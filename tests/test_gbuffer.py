@@ -121,3 +121,31 @@ def test_reshading_is_the_same_as_rendering_afresh_and_views_frame_the_meshes():
         q = gb.shade(g, l, lambert_shade, BG, isophotes=4, bgrx=True)
         np.testing.assert_array_equal(q[:, :, 2::-1], a)
         assert np.all(q[:, :, 3] == 255)
+
+
+def test_tints_and_outlines_tell_apart_two_layers_that_shade_alike():
+    """An eye on a head: two flat disks (same normal, same shade). Without help the eye cannot be
+    seen; a per-layer tint changes its colour, an outline darkens a ring along its edge."""
+    disk = hemisphere(0.8, 0.06)
+    head = Mesh(np.c_[disk.V[:, :2], np.zeros(disk.n_vertices)], disk.F)
+    eye = Mesh(np.c_[disk.V[:, :2] * 0.3 + [0.3, 0.2], np.zeros(disk.n_vertices)], disk.F)
+    view = _view(200)
+    g = gb.rasterise([head, eye], view)
+    l = np.array([0.6, 0.0, 0.8])
+    plain = gb.shade(g, l, lambert_shade, BG).astype(int)
+    owner = g.front_layer()
+    from scipy import ndimage
+
+    eye_in = ndimage.binary_erosion(owner == 1, iterations=3)
+    head_in = ndimage.binary_erosion(owner == 0, iterations=3)
+    assert np.abs(plain[eye_in].mean(axis=0) - plain[head_in].mean(axis=0)).max() < 0.5  # invisible
+    tinted = gb.shade(g, l, lambert_shade, BG, tints=[[1, 1, 1], [0.96, 0.99, 1.05]]).astype(int)
+    assert np.abs(tinted[eye_in].mean(axis=0) - tinted[head_in].mean(axis=0)).max() >= 4
+    lined = gb.shade(g, l, lambert_shade, BG, outline_alpha=0.45).astype(int).sum(axis=2)
+    ring = ndimage.binary_dilation(owner == 1, iterations=1) & ~ndimage.binary_erosion(owner == 1, iterations=1)
+    assert lined[ring].mean() < plain.sum(axis=2)[ring].mean() - 60
+    # the outline of a layer hidden behind another is not drawn
+    ring_pix = np.flatnonzero(ring)
+    assert np.isin(g.edge_pix, ring_pix).sum() > 100
+    hidden = gb.rasterise([eye, head], view)
+    assert not np.any(np.isin(hidden.edge_pix, ring_pix))
