@@ -540,13 +540,16 @@ def shade(
 
 
 def _pack(c: np.ndarray) -> np.ndarray:
-    """(k, 3) float 0..255.5 RGB -> (k,) uint32 0xffRRGGBB (Qt's Format_RGB32)."""
-    c = np.clip(c, 0.0, 255.0).astype(np.uint32)
-    r = c[:, 0] << 16
-    r |= c[:, 1] << 8
-    r |= c[:, 2]
-    r |= np.uint32(0xFF000000)
-    return r
+    """(k, 3) float32 0..255.5 RGB (clipped in place) -> (k,) uint32 0xffRRGGBB (Qt's
+    Format_RGB32), written byte by byte (B, G, R, 255 in little-endian memory)."""
+    c = np.clip(c, 0.0, 255.0, out=c if c.dtype == np.float32 and c.flags.writeable else None)
+    c8 = c.astype(np.uint8)
+    p4 = np.empty((len(c8), 4), dtype=np.uint8)
+    p4[:, 0] = c8[:, 2]
+    p4[:, 1] = c8[:, 1]
+    p4[:, 2] = c8[:, 0]
+    p4[:, 3] = 255
+    return p4.view("<u4").ravel()
 
 
 def front_intensity(gbuf: GBuffer, light) -> tuple[np.ndarray, np.ndarray]:
