@@ -149,3 +149,16 @@ def test_tints_and_outlines_tell_apart_two_layers_that_shade_alike():
     assert np.isin(g.edge_pix, ring_pix).sum() > 100
     hidden = gb.rasterise([eye, head], view)
     assert not np.any(np.isin(hidden.edge_pix, ring_pix))
+
+
+def test_a_broken_display_shader_is_refused_with_a_clear_message():
+    import pytest
+
+    g = gb.rasterise([hemisphere(1.0, 0.1)], _view(40))
+    with pytest.raises(ValueError, match="one finite RGB row per normal"):
+        gb.shade(g, X, lambda N, l: np.ones((len(N), 4)), BG)
+    with pytest.raises(ValueError, match="shape"):
+        gb.shade(g, X, lambda N, l: np.full((len(N), 3), np.nan), BG)
+    normal = g.normal.copy()
+    gb.shade(g, X, lambda N, l: N, BG)  # a shader returning its input never alters the buffer
+    np.testing.assert_array_equal(g.normal, normal)

@@ -487,6 +487,11 @@ def shade(
     Returns
     -------
     (height, width, 3) or (height, width, 4) uint8
+
+    Raises
+    ------
+    ValueError
+        If the shader returns the wrong shape or non-finite colours.
     """
     view = gbuf.view
     W, H = view.width, view.height
@@ -495,7 +500,13 @@ def shade(
     out = np.empty(H * W, dtype=np.uint32)
     out[:] = _pack(bg[None, :] * 255.0 + 0.5)[0]
     if len(gbuf.pix):
-        colour = np.asarray(shader(gbuf.normal, l), dtype=np.float32).reshape(-1, 3)
+        colour = np.asarray(shader(gbuf.normal, l), dtype=np.float32)
+        # one summing pass: a NaN or an infinity anywhere makes the sum non-finite
+        if colour.shape != (len(gbuf.pix), 3) or not np.isfinite(colour.sum(dtype=np.float64)):
+            raise ValueError(
+                f"the display shader returned an array of shape {colour.shape} for {len(gbuf.pix)} "
+                "normals; it must return one finite RGB row per normal"
+            )
         if not colour.flags.writeable or np.may_share_memory(colour, gbuf.normal):
             colour = colour.copy()  # scaled in place below: never write into the buffer
         scale = np.full((gbuf.n_layers, 3), 255.0, dtype=np.float32)

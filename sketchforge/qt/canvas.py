@@ -322,7 +322,15 @@ class Canvas(pg.GraphicsView):
         n = self._gbuf.n_layers
         tints = np.resize(LAYER_TINTS, (n, 3)) if (self.layer_tint and n > 1) else None
         shader = self._shader()
-        img = gb.shade(
+        try:
+            img = self._shade(shader, tints)
+        except ValueError as exc:  # a broken shader plugin: say so, draw with the built-in one
+            self.message.emit(f"shader '{getattr(shader, 'name', '?')}': {exc}; showing Lambertian shading")
+            img = self._shade(_FallbackShader, tints)
+        self.scene_item.set_image(img, self._gbuf.view)
+
+    def _shade(self, shader, tints) -> np.ndarray:
+        return gb.shade(
             self._gbuf,
             np.asarray(self.doc.light.direction, dtype=np.float64),
             shader.shade,
@@ -334,7 +342,6 @@ class Canvas(pg.GraphicsView):
             bgrx=True,
             outline_alpha=OUTLINE_ALPHA if self.layer_outlines else 0.0,
         )
-        self.scene_item.set_image(img, self._gbuf.view)
 
     def show_preview(self, layer_id: str, mesh) -> None:
         """Draw ``mesh`` in place of the layer's surface until :meth:`clear_preview` (a view

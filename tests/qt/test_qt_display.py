@@ -78,3 +78,28 @@ def test_a_view_change_rasterises_in_the_background_and_a_light_change_does_not(
     w.set_light_angle(200.0)
     assert w.canvas._gbuf is panned  # a new light re-shades the same buffer
     assert np.any(w.canvas.scene_item.pixels() != before)
+
+
+def test_a_broken_shader_plugin_falls_back_to_lambert_with_a_message(make_window, mouse, qtbot, host):
+    w = make_window()
+    pts = ellipse(40)
+    mouse(w.canvas).drag(list(pts) + [pts[0]])
+    wait_idle(qtbot, w)
+    if w.doc.layers[0].mesh is None:
+        pytest.skip("no inflate plugin is installed")
+    w.canvas.render_now()
+    good = w.canvas.scene_item.pixels().copy()
+
+    class Broken:
+        name = "broken"
+
+        @staticmethod
+        def shade(N, light):
+            return np.zeros((3, 3))
+
+    messages = []
+    w.canvas.message.connect(messages.append)
+    w.canvas._shader = lambda: Broken
+    w.canvas.reshade()
+    assert messages and "broken" in messages[-1] and "Lambertian" in messages[-1]
+    np.testing.assert_array_equal(w.canvas.scene_item.pixels(), good)  # lambert is the default
