@@ -319,61 +319,80 @@ def rasterise(meshes: list, view: View, antialias: bool = True) -> GBuffer:
     -------
     GBuffer
     """
-    W, H = int(view.width), int(view.height)
-    npx = W * H
     pix_l, lay_l, alpha_l, nrm_l = [], [], [], []
     edges_l = []  # per layer (its index, outline pixels, their distances)
     for li, mesh in enumerate(meshes):
         if mesh is None or mesh.n_faces == 0:
             continue
-        V, F = np.asarray(mesh.V), np.asarray(mesh.F, dtype=np.int64)
-        cached = _mesh_cache.get(mesh)
-        if cached is None:
-            cached = (vertex_normals(V, F), boundary_edges(F))
-            _mesh_cache[mesh] = cached
-        N, outline = cached
-        P = view.to_pixels(V)
-        pix, tri, bary = scan_triangles(P, F, W, H)
-        if len(pix):
-            count = np.bincount(pix, minlength=npx)
-            dup = count[pix] > 1
-            if dup.any():
-                # Several fragments of one mesh at a pixel: shared edges (same surface) or a
-                # folded mesh. The largest z wins: write them in ascending z, the last one stays.
-                z = np.einsum("kj,kj->k", bary, V[F[tri], 2])
-                order = np.r_[np.nonzero(~dup)[0], np.nonzero(dup)[0][np.argsort(z[dup], kind="stable")]]
-                pix, tri, bary = pix[order], tri[order], bary[order]
-                owner = np.full(npx, -1, dtype=np.int64)
-                owner[pix] = np.arange(len(pix))
-                keep = owner[pix] == np.arange(len(pix))
-                pix, tri, bary = pix[keep], tri[keep], bary[keep]
-            n = np.einsum("kj,kjd->kd", bary, N[F[tri]])
-            n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
-        else:
-            n = np.zeros((0, 3))
-        alpha = np.ones(len(pix))
-        if antialias:
-            opix, dist, onrm = _outline_distance(P, N, outline, W, H)
-            edges_l.append((li, opix, dist))
-            inside = np.zeros(npx, dtype=bool)
-            inside[pix] = True
-            ins = inside[opix]
-            # Inside the outline: less than full coverage within half a pixel of it.
-            where = np.full(npx, -1, dtype=np.int64)
-            where[pix] = np.arange(len(pix))
-            k = where[opix[ins]]
-            alpha[k] = np.clip(0.5 + dist[ins], 0.0, 1.0)
-            # Outside: the part of the pixel the outline still reaches, shaded like the rim.
-            cov = np.clip(0.5 - dist[~ins], 0.0, 1.0)
-            grow = cov > 1.0 / 512.0
-            pix = np.r_[pix, opix[~ins][grow]]
-            n = np.r_[n, onrm[~ins][grow]]
-            alpha = np.r_[alpha, cov[grow]]
+        pix, alpha, n, edges = _layer_fragments(mesh, view, antialias)
+        if edges is not None:
+            edges_l.append((li, *edges))
         pix_l.append(pix)
         lay_l.append(np.full(len(pix), li, dtype=np.int32))
-        alpha_l.append(alpha.astype(np.float32))
-        nrm_l.append(n.astype(np.float32))
+        alpha_l.append(alpha)
+        nrm_l.append(n)
     return _assemble(view, len(meshes), pix_l, lay_l, alpha_l, nrm_l, edges_l)
+
+
+def _layer_fragments(mesh, view: View, antialias: bool):
+    """One mesh's fragments in a view: (pix, alpha, normal, (outline pixels, distances) or None).
+
+    Kept per mesh for the last view, so a change to one layer (an edit, a live preview)
+    rasterises only that layer again."""
+    cached = _mesh_cache.get(mesh)
+    V, F = np.asarray(mesh.V), np.asarray(mesh.F, dtype=np.int64)
+    if cached is None:
+        cached = {"N": vertex_normals(V, F), "outline": boundary_edges(F)}
+        _mesh_cache[mesh] = cached
+    last = cached.get("fragments")
+    if last is not None and last[0] == (view, antialias):
+        return last[1]
+    N, outline = cached["N"], cached["outline"]
+    W, H = int(view.width), int(view.height)
+    npx = W * H
+    P = view.to_pixels(V)
+    pix, tri, bary = scan_triangles(P, F, W, H)
+    if len(pix):
+        count = np.bincount(pix, minlength=npx)
+        dup = count[pix] > 1
+        if dup.any():
+            # Several fragments of one mesh at a pixel: shared edges (same surface) or a
+            # folded mesh. The largest z wins: write them in ascending z, the last one stays.
+            z = np.einsum("kj,kj->k", bary, V[F[tri], 2])
+            order = np.r_[np.nonzero(~dup)[0], np.nonzero(dup)[0][np.argsort(z[dup], kind="stable")]]
+            pix, tri, bary = pix[order], tri[order], bary[order]
+            owner = np.full(npx, -1, dtype=np.int64)
+            owner[pix] = np.arange(len(pix))
+            keep = owner[pix] == np.arange(len(pix))
+            pix, tri, bary = pix[keep], tri[keep], bary[keep]
+        n = np.einsum("kj,kjd->kd", bary, N[F[tri]])
+        n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+    else:
+        n = np.zeros((0, 3))
+    alpha = np.ones(len(pix))
+    edges = None
+    if antialias:
+        opix, dist, onrm = _outline_distance(P, N, outline, W, H)
+        edges = (opix, dist)
+        inside = np.zeros(npx, dtype=bool)
+        inside[pix] = True
+        ins = inside[opix]
+        # Inside the outline: less than full coverage within half a pixel of it.
+        where = np.full(npx, -1, dtype=np.int64)
+        where[pix] = np.arange(len(pix))
+        k = where[opix[ins]]
+        alpha[k] = np.clip(0.5 + dist[ins], 0.0, 1.0)
+        # Outside: the part of the pixel the outline still reaches, shaded like the rim.
+        cov = np.clip(0.5 - dist[~ins], 0.0, 1.0)
+        grow = cov > 1.0 / 512.0
+        pix = np.r_[pix, opix[~ins][grow]]
+        n = np.r_[n, onrm[~ins][grow]]
+        alpha = np.r_[alpha, cov[grow]]
+    result = (pix, alpha.astype(np.float32), n.astype(np.float32), edges)
+    for a in (result[0], result[1], result[2], *(edges or ())):
+        a.flags.writeable = False  # shared between buffers
+    cached["fragments"] = ((view, antialias), result)
+    return result
 
 
 def _assemble(view, L, pix_l, lay_l, alpha_l, nrm_l, edges_l) -> GBuffer:

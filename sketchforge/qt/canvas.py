@@ -203,7 +203,7 @@ class Canvas(pg.GraphicsView):
             self._refresh_layer(layer)
         self._refresh_decorations()
 
-    def _refresh_layer(self, layer) -> None:
+    def _refresh_layer(self, layer, background: bool = False) -> None:
         item = self._layer_items.get(layer.id)
         if item is None:
             return
@@ -212,8 +212,12 @@ class Canvas(pg.GraphicsView):
         item.set_layer(layer)
         item.setVisible(layer.visible)
         # An edit shows at once (on the next turn of the event loop, once for all layers that
-        # changed together); only view changes rasterise in the background.
-        self._edit_timer.start(0)
+        # changed together); view changes and live previews rasterise in the background, so
+        # a stroke being drawn never waits for a picture.
+        if background:
+            self._schedule_render(0)
+        else:
+            self._edit_timer.start(0)
 
     # --- the shaded picture ---------------------------------------------------------------------
     def current_view(self) -> gb.View | None:
@@ -349,14 +353,14 @@ class Canvas(pg.GraphicsView):
         if layer_id not in self.doc.layer_ids():
             return
         self._preview = (layer_id, mesh)
-        self._refresh_layer(self.doc.layer(layer_id))
+        self._refresh_layer(self.doc.layer(layer_id), background=True)
 
     def clear_preview(self) -> None:
         if self._preview is None:
             return
         layer_id, self._preview = self._preview[0], None
         if layer_id in self.doc.layer_ids():
-            self._refresh_layer(self.doc.layer(layer_id))
+            self._refresh_layer(self.doc.layer(layer_id), background=True)
 
     def _on_layers(self, *args) -> None:
         self.rebuild()
