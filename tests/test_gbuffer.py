@@ -162,3 +162,16 @@ def test_a_broken_display_shader_is_refused_with_a_clear_message():
     normal = g.normal.copy()
     gb.shade(g, X, lambda N, l: N, BG)  # a shader returning its input never alters the buffer
     np.testing.assert_array_equal(g.normal, normal)
+
+
+def test_shading_in_place_over_an_earlier_picture_equals_shading_afresh():
+    back = hemisphere(0.9, 0.06)
+    small = hemisphere(0.45, 0.05)
+    g = gb.rasterise([back, Mesh(small.V + [0.35, 0.1, 0.0], small.F)], _view(160))
+    picture = gb.shade(g, X, lambert_shade, BG, bgrx=True, isophotes=5, outline_alpha=0.5)
+    for angle, K, outline in ((1.0, 0, 0.0), (2.0, 7, 0.5), (4.0, 3, 0.0)):
+        l = np.array([np.cos(angle), np.sin(angle), 0.0])
+        again = gb.shade(g, l, lambert_shade, BG, bgrx=True, isophotes=K, outline_alpha=outline, out=picture)
+        assert again.base is picture or again is picture or np.shares_memory(again, picture)
+        fresh = gb.shade(g, l, lambert_shade, BG, bgrx=True, isophotes=K, outline_alpha=outline)
+        np.testing.assert_array_equal(again, fresh)

@@ -45,9 +45,11 @@ def lambert_shade(normals: np.ndarray, light: np.ndarray) -> np.ndarray:
     -------
     (n, 3) in [0, 1], float32 for float32 normals, else float64
     """
-    e = _ndotl(normals, light)
-    k = AMBIENT + (1.0 - AMBIENT) * np.clip(e, 0.0, 1.0)
-    return k[:, None] * CLAY.astype(e.dtype)  # in [AMBIENT, 1] * CLAY: no clip needed
+    k = _ndotl(normals, light)  # a fresh array: scaled in place (a buffer may hold 10^6 normals)
+    np.clip(k, 0.0, 1.0, out=k)
+    k *= 1.0 - AMBIENT
+    k += AMBIENT
+    return k[:, None] * CLAY.astype(k.dtype)  # in [AMBIENT, 1] * CLAY: no clip needed
 
 
 def cel_shade(normals: np.ndarray, light: np.ndarray) -> np.ndarray:

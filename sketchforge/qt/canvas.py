@@ -124,6 +124,7 @@ class Canvas(pg.GraphicsView):
         # it is stale. A light change re-shades it; a view or mesh change rasterises again.
         self._gbuf: gb.GBuffer | None = None
         self._gbuf_meshes: list = []
+        self._shaded_gbuf = None  # the buffer the picture's pixels were shaded from
         self._raster_thread: threading.Thread | None = None
         self._raster_again = False
         self._raster_generation = 0  # requests made
@@ -334,6 +335,11 @@ class Canvas(pg.GraphicsView):
         self.scene_item.set_image(img, self._gbuf.view)
 
     def _shade(self, shader, tints) -> np.ndarray:
+        # Re-shading the buffer shown writes into the picture's own pixels (its background
+        # never changes); a new buffer starts a new picture.
+        shown = self.scene_item.pixels()
+        reuse = shown if (shown is not None and self._shaded_gbuf is self._gbuf) else None
+        self._shaded_gbuf = self._gbuf
         return gb.shade(
             self._gbuf,
             np.asarray(self.doc.light.direction, dtype=np.float64),
@@ -345,6 +351,7 @@ class Canvas(pg.GraphicsView):
             line_alpha=it.ISOLINES.alphaF(),
             bgrx=True,
             outline_alpha=OUTLINE_ALPHA if self.layer_outlines else 0.0,
+            out=reuse,
         )
 
     def show_preview(self, layer_id: str, mesh) -> None:

@@ -86,6 +86,8 @@ class ShadedSceneItem(pg.GraphicsObject):
         self.prepareGeometryChange()
         h, w = bgrx.shape[:2]
         self._pixels = np.ascontiguousarray(bgrx)
+        # A new QImage (no copy: it reads the array) even for pixels re-shaded in place, so
+        # nothing that caches images by key shows the old shading.
         self._image = QImage(self._pixels.data, w, h, 4 * w, QImage.Format.Format_RGB32)
         self._x0, self._y1, self._scale = float(view.x0), float(view.y1), float(view.scale)
         self._rect = QRectF(self._x0, self._y1 - h / self._scale, w / self._scale, h / self._scale)
