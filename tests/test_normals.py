@@ -81,3 +81,23 @@ def test_slopes_clamp_in_plane_and_backfacing_normals():
     assert p[3] == 0 and q[3] == 0
     with pytest.raises(ValueError):
         slopes(N, nz_min=0.0)
+
+
+def test_corner_normals_are_smooth_on_a_fair_surface_and_keep_creases():
+    from meshes import hemisphere
+
+    from sketchforge.geometry.normals import corner_normals
+
+    m = hemisphere(1.0, 0.08)
+    C = corner_normals(m.V, m.F, 50.0)
+    np.testing.assert_allclose(C, vertex_normals(m.V, m.F)[m.F], atol=1e-12)
+    # two squares folded at a right angle along y = 1: each side keeps its own flat normal
+    V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0], [0, 1, 1], [1, 1, 1.0]])
+    F = np.array([[0, 1, 2], [1, 3, 2], [2, 3, 4], [3, 5, 4]])
+    C = corner_normals(V, F, 50.0)
+    np.testing.assert_allclose(C[:2], np.broadcast_to([0, 0, 1.0], (2, 3, 3)), atol=1e-12)
+    np.testing.assert_allclose(C[2:], np.broadcast_to([0, -1.0, 0], (2, 3, 3)), atol=1e-12)
+    # a crease angle above the fold smooths across it, as area-weighted vertex normals do
+    C = corner_normals(V, F, 100.0)
+    np.testing.assert_allclose(C, vertex_normals(V, F)[F], atol=1e-12)
+    assert abs(C[0, 2, 1]) > 0.4

@@ -21,6 +21,11 @@ def _covered(img):
     return np.any(img != BG, axis=2)
 
 
+def _is(pixel, colour):
+    """Equal up to the display buffer's float32 rounding (one grey level)."""
+    return np.max(np.abs(pixel.astype(int) - np.asarray(colour, dtype=int))) <= 1
+
+
 def test_hemisphere_brightens_towards_the_light():
     m = hemisphere(1.0, 0.05)
     img = render_top([m], np.array([1.0, 0.0, 0.0]), 128)
@@ -59,16 +64,25 @@ def test_within_a_mesh_the_nearest_surface_wins():
     # Flat plane (n·l = 0: shadow tone) wins where the sphere is below 0.5, i.e. near the rim;
     # the dome (z > 0.5 for r < 0.866) wins in the middle on its lit side.
     tone = np.round(CEL_TONES * 255).astype(np.uint8)
-    assert np.all(img[32, 58] == tone[0])
-    assert np.all(img[32, 40] == tone[1]) or np.all(img[32, 40] == tone[2])
+    assert _is(img[32, 58], tone[0])
+    assert _is(img[32, 40], tone[1]) or _is(img[32, 40], tone[2])
 
 
 def test_cel_has_three_tones_and_isophote_lines_follow_chords():
     m = hemisphere(1.0, 0.04)
     l = np.array([1.0, 0.0, 0.0])
     cel = render_top([m], l, 200, cel=True)
-    colours = {tuple(c) for c in cel[_covered(cel)]}
-    assert colours == {tuple(t) for t in np.round(CEL_TONES * 255).astype(np.uint8)}
+    # Inside the silhouette (its antialiased rim blends into the background) only three tones.
+    cov = _covered(cel)
+    inner = cov.copy()
+    for axis in (0, 1):
+        for shift in (-2, 2):
+            inner &= np.roll(cov, shift, axis=axis)
+    tones = np.round(CEL_TONES * 255).astype(int)
+    px = cel[inner].astype(int)
+    nearest = np.abs(px[:, None, :] - tones[None]).max(axis=2).min(axis=1)
+    assert inner.sum() > 20000 and np.all(nearest <= 1)
+    assert {int(np.argmin(np.abs(p - tones).max(axis=1))) for p in px[::97]} == {0, 1, 2}
     plain = render_top([m], l, 200)
     lines = render_top([m], l, 200, isophotes=3)
     dark = np.any(lines != plain, axis=2)
@@ -139,5 +153,5 @@ def test_later_mesh_covers_earlier_one_whatever_its_height():
     front = render_top([tall, flat], light, 64, cel=True)
     behind = render_top([flat, tall], light, 64, cel=True)
     # Pixel at x = +0.3 (lit side of the dome, inside the small flat disk).
-    assert np.all(front[32, 32 + 9] == tone[0])
-    assert not np.all(behind[32, 32 + 9] == tone[0])
+    assert _is(front[32, 32 + 9], tone[0])
+    assert not _is(behind[32, 32 + 9], tone[0])

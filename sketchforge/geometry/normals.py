@@ -122,3 +122,54 @@ def normals_from_slopes(p: np.ndarray, q: np.ndarray) -> np.ndarray:
     q = np.asarray(q, dtype=np.float64)
     n = np.stack([-p, -q, np.ones_like(p)], axis=-1)
     return n / np.sqrt(1.0 + p * p + q * q)[..., None]
+
+
+def corner_normals(V: np.ndarray, F: np.ndarray, crease_deg: float = 50.0) -> np.ndarray:
+    """Smooth normals per triangle corner that keep the mesh's creases.
+
+    A corner's normal is the area-weighted sum of the normals of the faces around its vertex
+    whose normal is within ``crease_deg`` of its own face's: smooth across a fair surface
+    (what :func:`vertex_normals` gives there), sharp where the geometry folds (a seam between
+    assembled parts, a pinched rim), instead of one faceted colour per triangle.
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+    F : (m, 3) int64
+    crease_deg : float
+        Dihedral angle in degrees above which two faces do not smooth into each other.
+
+    Returns
+    -------
+    (m, 3, 3) float64
+        Unit normal of corner j of face i at [i, j].
+    """
+    F = np.asarray(F, dtype=np.int64)
+    cross = _face_cross(V, F)
+    area2 = np.linalg.norm(cross, axis=1)
+    Nf = np.zeros_like(cross)
+    Nf[:, 2] = 1.0
+    ok = area2 > 0
+    Nf[ok] = cross[ok] / area2[ok, None]
+    m = len(F)
+    # (corner, neighbour face) pairs through the corner's vertex, grouped by vertex.
+    corner_v = F.ravel()
+    corner_f = np.repeat(np.arange(m), 3)
+    order = np.argsort(corner_v, kind="stable")
+    sv, sf = corner_v[order], corner_f[order]
+    start = np.searchsorted(sv, np.arange(len(V)))
+    deg = np.bincount(corner_v, minlength=len(V))
+    # for each corner c (vertex v), all faces in v's group
+    reps = deg[corner_v]
+    c = np.repeat(np.arange(3 * m), reps)
+    k = np.arange(len(c)) - np.repeat(np.cumsum(reps) - reps, reps)
+    nb = sf[start[corner_v[c]] + k]
+    cos_min = np.cos(np.radians(crease_deg))
+    same = np.einsum("ij,ij->i", Nf[corner_f[c]], Nf[nb]) >= cos_min
+    acc = np.zeros((3 * m, 3))
+    np.add.at(acc, c[same], cross[nb[same]])
+    norm = np.linalg.norm(acc, axis=1)
+    out = Nf[corner_f].copy()
+    good = norm > 1e-300
+    out[good] = acc[good] / norm[good, None]
+    return out.reshape(m, 3, 3)

@@ -59,6 +59,7 @@ def grab_window(window, path) -> None:
     """Save the whole window as a PNG (the OpenGL view included, under a real display)."""
     from sketchforge.errors import ExportError
 
+    window.canvas.render_now()  # a view change may still wait for its pause to rasterise
     pix = window.grab()
     if window.view3d.gl is not None and window.mode == "observation":
         # QWidget.grab renders QOpenGLWidgets through their framebuffer; make sure it is fresh.

@@ -2,9 +2,14 @@
 
 pyqtgraph's ViewBox already points y up, so ``ViewBox.mapSceneToView`` turns a mouse position
 into document coordinates; :meth:`Canvas.doc_to_widget` is the inverse (tests use it to aim
-mouse events). The canvas draws the document (one flat-shaded item per layer, back to front,
-optional isophote lines, the light indicator, an optional reference image) and turns mouse
-gestures into calls on the interaction in use:
+mouse events). The canvas draws the document and turns mouse gestures into calls on the
+interaction in use. Drawing: the visible layers' meshes are rasterised for the current view by
+the geometry core (:mod:`sketchforge.geometry.gbuffer`: per-pixel normals, antialiased
+silhouettes, layers back to front, the same code as ``sketchforge render``) into one image with
+the isophote lines of the layers in front; a new light only re-shades that buffer, a new view or
+mesh rasterises again (a view change after a short pause, showing the previous image meanwhile).
+Over it: the selected layer's outline, the light indicator, an optional reference image.
+Gestures:
 
 - ``"draw"``: a left drag is a stroke (``DrawContourTool`` collects it); on release
   :attr:`stroke_finished` carries the points and the stroke's kind to the window, which runs
@@ -22,20 +27,39 @@ wheel changes the band radius; Ctrl+wheel still zooms).
 
 from __future__ import annotations
 
+import threading
+
 import numpy as np
 import pyqtgraph as pg
-from PySide6.QtCore import QPointF, QRectF, Qt, Signal
+from PySide6.QtCore import QPointF, QRectF, Qt, QTimer, Signal
 from PySide6.QtGui import QColor, QImage
 
 from sketchforge.errors import SketchforgeError
-from sketchforge.geometry.intensity import vertex_intensity
-from sketchforge.geometry.isophotes import isophotes
+from sketchforge.geometry import gbuffer as gb
 from sketchforge.qt import items as it
 from sketchforge.tools import DrawContourTool, LightTool
 
 BACKGROUND = QColor(242, 240, 236)
 #: Default visible region (document units) of an empty document.
 HOME_RANGE = QRectF(-1.2, -1.2, 2.4, 2.4)
+#: Pause after the last pan/zoom step before the view is rasterised again (ms).
+VIEW_SETTLE_MS = 60
+#: Opacity of the thin lines along the layers' visible outlines.
+OUTLINE_ALPHA = 0.45
+#: Per-layer colour multipliers that tell touching layers apart (an eye on a head) without
+#: hiding the shading: hue shifts of a few percent, cycled through the document's layer order.
+LAYER_TINTS = np.array(
+    [
+        [1.00, 1.00, 1.00],
+        [0.96, 0.99, 1.05],
+        [1.04, 0.99, 0.94],
+        [0.97, 1.03, 0.97],
+        [1.03, 0.97, 1.01],
+        [0.98, 0.98, 1.06],
+        [1.03, 1.02, 0.93],
+        [0.95, 1.02, 1.03],
+    ]
+)
 
 
 class CanvasViewBox(pg.ViewBox):
@@ -82,6 +106,8 @@ class Canvas(pg.GraphicsView):
     part_double_clicked = Signal(object, str)
     #: a one-line message for the status bar
     message = Signal(str)
+    #: ((GBuffer | None, error | None), view, meshes) from the rasterising thread
+    _raster_done = Signal(object, object, object)
 
     def __init__(self, doc, host, parent=None) -> None:
         # Every mouse move counts: a stroke drawn quickly must keep its points (pyqtgraph drops
@@ -106,8 +132,27 @@ class Canvas(pg.GraphicsView):
         self._reference: pg.ImageItem | None = None
         self._light_center = np.zeros(2)
         self._preview: tuple[str, object] | None = None  # (layer id, mesh) shown instead of the layer's
+        self.layer_tint = True  # subtle per-layer tints (LAYER_TINTS)
+        self.layer_outlines = True  # thin lines along the layers' visible outlines
+        # The rasterised view: the GBuffer, and what it was made of (view, meshes) to know when
+        # it is stale. A light change re-shades it; a view or mesh change rasterises again.
+        self._gbuf: gb.GBuffer | None = None
+        self._gbuf_meshes: list = []
+        self._shaded_gbuf = None  # the buffer the picture's pixels were shaded from
+        self._raster_thread: threading.Thread | None = None
+        self._raster_again = False
+        self._raster_generation = 0  # requests made
+        self._raster_adopted = 0  # the request whose buffer is shown
+        self._raster_done.connect(self._on_raster_done)
+        self.scene_item = it.ShadedSceneItem()
+        self.scene_item.setZValue(-1)
+        self._raster_timer = QTimer(self)
+        self._raster_timer.setSingleShot(True)
+        self._raster_timer.timeout.connect(self._render_async)
+        self._edit_timer = QTimer(self)
+        self._edit_timer.setSingleShot(True)
+        self._edit_timer.timeout.connect(self.render_now)
 
-        self.isolines = it.PolylinesItem(it.cosmetic_pen(it.ISOLINES, 1.0))
         self.outline = it.PolylinesItem(it.cosmetic_pen(it.SELECTED, 1.5, Qt.PenStyle.DotLine), closed=True)
         self.stroke = it.PolylinesItem(it.cosmetic_pen(it.STROKE_DRAW, 2.0))
         self.light_indicator = it.LightIndicator()
@@ -119,7 +164,8 @@ class Canvas(pg.GraphicsView):
             "stroke": it.PolylinesItem(it.cosmetic_pen(it.STROKE_SCULPT, 2.5)),
         }
         z = 1000
-        for item in (self.isolines, self.outline, *self.overlays.values(), self.stroke, self.light_indicator):
+        self.vb.addItem(self.scene_item)
+        for item in (self.outline, *self.overlays.values(), self.stroke, self.light_indicator):
             item.setZValue(z)
             z += 1
             self.vb.addItem(item)
@@ -131,6 +177,8 @@ class Canvas(pg.GraphicsView):
         doc.layer_changed.connect(self._on_layer_changed)
         doc.light_changed.connect(self._on_light)
         self.vb.sigRangeChanged.connect(lambda *a: self._update_light_indicator())
+        self.vb.sigRangeChanged.connect(lambda *a: self._schedule_render(VIEW_SETTLE_MS))
+        self.vb.sigResized.connect(lambda *a: self._schedule_render(VIEW_SETTLE_MS))
         self.rebuild()
 
     # --- coordinates ---------------------------------------------------------------------------
@@ -170,14 +218,155 @@ class Canvas(pg.GraphicsView):
             self._refresh_layer(layer)
         self._refresh_decorations()
 
-    def _refresh_layer(self, layer) -> None:
+    def _refresh_layer(self, layer, background: bool = False) -> None:
         item = self._layer_items.get(layer.id)
         if item is None:
             return
         if self._preview is not None and self._preview[0] == layer.id:
             layer = layer.evolve(mesh=self._preview[1])
-        item.set_layer(layer, self.doc.light, self._shader())
+        item.set_layer(layer)
         item.setVisible(layer.visible)
+        # An edit shows at once (on the next turn of the event loop, once for all layers that
+        # changed together); view changes and live previews rasterise in the background, so
+        # a stroke being drawn never waits for a picture.
+        if background:
+            self._schedule_render(0)
+        else:
+            self._edit_timer.start(0)
+
+    # --- the shaded picture ---------------------------------------------------------------------
+    def current_view(self) -> gb.View | None:
+        """The pixel grid of the drawing region now (device pixels), or None before layout."""
+        rect = self.vb.viewRect()
+        size = self.vb.size()
+        dpr = float(self.devicePixelRatioF()) or 1.0
+        w, h = int(round(size.width() * dpr)), int(round(size.height() * dpr))
+        if w < 1 or h < 1 or rect.width() <= 0 or rect.height() <= 0:
+            return None
+        return gb.View(float(rect.left()), float(rect.top() + rect.height()), w / float(rect.width()), w, h)
+
+    def _shown_meshes(self) -> list:
+        """Per layer (back to front) the mesh drawn now: the preview's, the layer's, or None."""
+        out = []
+        for layer in self.doc.layers:
+            item = self._layer_items.get(layer.id)
+            out.append(item._mesh if (item is not None and layer.visible) else None)
+        return out
+
+    def _schedule_render(self, delay_ms: int) -> None:
+        if not self._raster_timer.isActive() or delay_ms == 0:
+            self._raster_timer.start(delay_ms)
+
+    def _wanted(self):
+        """(view, meshes) the picture should show now, or None before the first layout."""
+        view = self.current_view()
+        return None if view is None else (view, self._shown_meshes())
+
+    def _is_current(self, view, meshes) -> bool:
+        g = self._gbuf
+        return (
+            g is not None
+            and g.view == view
+            and len(meshes) == len(self._gbuf_meshes)
+            and all(a is b for a, b in zip(meshes, self._gbuf_meshes))
+        )
+
+    def _adopt(self, gbuf, meshes, generation: int) -> None:
+        if generation <= self._raster_adopted:
+            return  # an older request than the buffer shown (render_now ran meanwhile)
+        self._raster_adopted = generation
+        self._gbuf = gbuf
+        self._gbuf_meshes = meshes  # holds them: what the buffer shows
+        self.reshade()
+
+    def _render_async(self) -> None:
+        """Rasterise on a worker thread (the GUI stays responsive during a pan or an edit); the
+        previous picture stays in place, moving with the view, until the new one arrives."""
+        wanted = self._wanted()
+        if wanted is None or self._is_current(*wanted):
+            return
+        if self._raster_thread is not None:
+            self._raster_again = True  # one more when the running one ends
+            return
+        view, meshes = wanted
+        self._raster_generation += 1
+        generation = self._raster_generation
+
+        def work():
+            try:
+                result = (gb.rasterise(meshes, view), None)
+            except Exception as exc:  # shown in the status bar, never lost in a thread
+                result = (None, exc)
+            try:
+                self._raster_done.emit(result, meshes, generation)
+            except RuntimeError:  # the canvas is gone
+                pass
+
+        self._raster_again = False
+        self._raster_thread = threading.Thread(target=work, name="canvas-raster", daemon=True)
+        self._raster_thread.start()
+
+    def _on_raster_done(self, result, meshes, generation) -> None:
+        self._raster_thread = None
+        gbuf, exc = result
+        if exc is not None:
+            self.message.emit(f"cannot draw the layers: {exc}")
+        else:
+            # Newer than the picture shown even if the view moved on meanwhile: it is placed in
+            # document coordinates, so it is drawn where it belongs until the next one.
+            self._adopt(gbuf, meshes, generation)
+        wanted = self._wanted()
+        if self._raster_again or (wanted is not None and not self._is_current(*wanted)):
+            self._schedule_render(0)
+
+    def render_now(self) -> None:
+        """Rasterise the view now (on this thread) if the view or a shown mesh changed, then
+        shade it: after an edit, and for screenshots, which must show the current state."""
+        self._raster_timer.stop()
+        self._edit_timer.stop()
+        wanted = self._wanted()
+        if wanted is None:
+            return
+        if self._is_current(*wanted):
+            self.reshade()
+            return
+        view, meshes = wanted
+        self._raster_generation += 1
+        self._adopt(gb.rasterise(meshes, view), meshes, self._raster_generation)
+
+    def reshade(self) -> None:
+        """Shade the current buffer with the document's light and shader (no rasterisation)."""
+        if self._gbuf is None:
+            return
+        n = self._gbuf.n_layers
+        tints = np.resize(LAYER_TINTS, (n, 3)) if (self.layer_tint and n > 1) else None
+        shader = self._shader()
+        try:
+            img = self._shade(shader, tints)
+        except ValueError as exc:  # a broken shader plugin: say so, draw with the built-in one
+            self.message.emit(f"shader '{getattr(shader, 'name', '?')}': {exc}; showing Lambertian shading")
+            img = self._shade(_FallbackShader, tints)
+        self.scene_item.set_image(img, self._gbuf.view)
+
+    def _shade(self, shader, tints) -> np.ndarray:
+        # Re-shading the buffer shown writes into the picture's own pixels (its background
+        # never changes); a new buffer starts a new picture.
+        shown = self.scene_item.pixels()
+        reuse = shown if (shown is not None and self._shaded_gbuf is self._gbuf) else None
+        self._shaded_gbuf = self._gbuf
+        return gb.shade(
+            self._gbuf,
+            np.asarray(self.doc.light.direction, dtype=np.float64),
+            shader.shade,
+            np.array([BACKGROUND.redF(), BACKGROUND.greenF(), BACKGROUND.blueF()]),
+            tints=tints,
+            isophotes=int(self.isoline_count),
+            line_colour=(it.ISOLINES.redF(), it.ISOLINES.greenF(), it.ISOLINES.blueF()),
+            line_alpha=it.ISOLINES.alphaF(),
+            bgrx=True,
+            outline_alpha=OUTLINE_ALPHA if self.layer_outlines else 0.0,
+            out=reuse,
+        )
 
     def show_preview(self, layer_id: str, mesh) -> None:
         """Draw ``mesh`` in place of the layer's surface until :meth:`clear_preview` (a view
@@ -185,14 +374,14 @@ class Canvas(pg.GraphicsView):
         if layer_id not in self.doc.layer_ids():
             return
         self._preview = (layer_id, mesh)
-        self._refresh_layer(self.doc.layer(layer_id))
+        self._refresh_layer(self.doc.layer(layer_id), background=True)
 
     def clear_preview(self) -> None:
         if self._preview is None:
             return
         layer_id, self._preview = self._preview[0], None
         if layer_id in self.doc.layer_ids():
-            self._refresh_layer(self.doc.layer(layer_id))
+            self._refresh_layer(self.doc.layer(layer_id), background=True)
 
     def _on_layers(self, *args) -> None:
         self.rebuild()
@@ -205,34 +394,12 @@ class Canvas(pg.GraphicsView):
         self._refresh_decorations()
 
     def _on_light(self, light) -> None:
-        shader = self._shader()
-        for layer in self.doc.layers:
-            item = self._layer_items.get(layer.id)
-            if item is not None:
-                item.set_shading(light, shader)
-        self._refresh_isolines()
+        self.reshade()
         self._update_light_indicator()
 
     def _refresh_decorations(self) -> None:
-        self._refresh_isolines()
         self._refresh_outline()
         self._update_light_indicator()
-
-    def _refresh_isolines(self) -> None:
-        """K isophote lines per visible layer at n·l = j/(K+1), j = 1..K."""
-        lines = []
-        K = int(self.isoline_count)
-        if K > 0:
-            light = self.doc.light.direction
-            for layer in self.doc.layers:
-                mesh = layer.mesh
-                if not layer.visible or mesh is None or mesh.n_faces == 0:
-                    continue
-                E = vertex_intensity(mesh.V, mesh.F, light)
-                for j in range(1, K + 1):
-                    polylines, _ = isophotes(mesh.V[:, :2], mesh.F, E, j / (K + 1))
-                    lines.extend(polylines)
-        self.isolines.set_lines(lines)
 
     def _refresh_outline(self) -> None:
         lines = []
@@ -262,11 +429,20 @@ class Canvas(pg.GraphicsView):
 
     def set_shader(self, name: str) -> None:
         self.shader_name = name
-        self._on_light(self.doc.light)
+        self.reshade()
 
     def set_isoline_count(self, k: int) -> None:
+        """K isophote lines at n·l = j/(K+1), j = 1..K, of the layer in front at each pixel."""
         self.isoline_count = int(k)
-        self._refresh_isolines()
+        self.reshade()
+
+    def set_layer_tint(self, on: bool) -> None:
+        self.layer_tint = bool(on)
+        self.reshade()
+
+    def set_layer_outlines(self, on: bool) -> None:
+        self.layer_outlines = bool(on)
+        self.reshade()
 
     def set_interaction(self, name: str) -> None:
         if self._tool is not None:

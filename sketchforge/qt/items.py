@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pyqtgraph as pg
 from PySide6.QtCore import QPointF, QRectF, Qt
-from PySide6.QtGui import QColor, QPainterPath, QPen
+from PySide6.QtGui import QColor, QImage, QPainter, QPainterPath, QPen
 
-from sketchforge.qt.render2d import NO_MESH_FILL, face_colours, mesh_polygons, paint_mesh, points_polygon
+from sketchforge.qt.render2d import NO_MESH_FILL, points_polygon
 
 # Overlay colours (figure 4.3 of the thesis).
 STROKE_DRAW = QColor(30, 60, 160)
@@ -33,21 +33,21 @@ def cosmetic_pen(colour: QColor, width: float = 1.0, style=Qt.PenStyle.SolidLine
 
 
 class ShadedLayerItem(pg.GraphicsObject):
-    """One layer: the flat-shaded triangles of its mesh, or its bare stroke without a mesh."""
+    """One layer's state on the canvas: the mesh it shows (the layer's, or a preview) and its
+    visibility. The shaded surfaces of all layers are one picture (:class:`ShadedSceneItem`);
+    this item draws only a bare stroke, for a layer without a mesh."""
 
     def __init__(self) -> None:
         super().__init__()
         self._mesh = None
         self._points = None
-        self._colours: list = []
         self._rect = QRectF()
 
-    def set_layer(self, layer, light, shader) -> None:
+    def set_layer(self, layer) -> None:
         self.prepareGeometryChange()
         self._mesh = layer.mesh if (layer.mesh is not None and layer.mesh.n_faces) else None
         self._points = layer.points
-        self._colours = face_colours(self._mesh, light, shader) if self._mesh is not None else []
-        pts = self._mesh.V[:, :2] if self._mesh is not None else self._points
+        pts = self._points if self._mesh is None else None
         if pts is not None and len(pts):
             lo, hi = pts.min(axis=0), pts.max(axis=0)
             self._rect = QRectF(float(lo[0]), float(lo[1]), float(hi[0] - lo[0]), float(hi[1] - lo[1]))
@@ -55,21 +55,68 @@ class ShadedLayerItem(pg.GraphicsObject):
             self._rect = QRectF()
         self.update()
 
-    def set_shading(self, light, shader) -> None:
-        if self._mesh is not None:
-            self._colours = face_colours(self._mesh, light, shader)
-            self.update()
+    def boundingRect(self) -> QRectF:
+        return self._rect
+
+    def paint(self, painter, option, widget=None) -> None:
+        if self._mesh is None and self._points is not None and len(self._points) >= 2:
+            painter.setPen(cosmetic_pen(CONTOUR, 1.5))
+            painter.setBrush(NO_MESH_FILL)
+            painter.drawPolygon(points_polygon(self._points))
+
+
+class ShadedSceneItem(pg.GraphicsObject):
+    """The shaded layers as one image rendered for a view (document rectangle, pixel grid).
+
+    The image stays where it was rendered in document coordinates, so while the view pans or
+    zooms the last image moves with the drawing until a fresh one for the new view arrives.
+    """
+
+    def __init__(self) -> None:
+        super().__init__()
+        self._image: QImage | None = None
+        self._pixels = None  # keeps the buffer the QImage reads alive
+        self._x0 = 0.0
+        self._y1 = 0.0
+        self._scale = 1.0
+        self._rect = QRectF()
+
+    def set_image(self, bgrx: np.ndarray, view) -> None:
+        """``bgrx``: (height, width, 4) uint8 in Format_RGB32 byte order; ``view``: its View."""
+        self.prepareGeometryChange()
+        h, w = bgrx.shape[:2]
+        self._pixels = np.ascontiguousarray(bgrx)
+        # A new QImage (no copy: it reads the array) even for pixels re-shaded in place, so
+        # nothing that caches images by key shows the old shading.
+        self._image = QImage(self._pixels.data, w, h, 4 * w, QImage.Format.Format_RGB32)
+        self._x0, self._y1, self._scale = float(view.x0), float(view.y1), float(view.scale)
+        self._rect = QRectF(self._x0, self._y1 - h / self._scale, w / self._scale, h / self._scale)
+        self.update()
+
+    def clear(self) -> None:
+        self.prepareGeometryChange()
+        self._image = None
+        self._pixels = None
+        self._rect = QRectF()
+        self.update()
+
+    def pixels(self) -> np.ndarray | None:
+        """The image shown, (height, width, 4) uint8 B, G, R, 255 (tests read it)."""
+        return self._pixels
 
     def boundingRect(self) -> QRectF:
         return self._rect
 
     def paint(self, painter, option, widget=None) -> None:
-        if self._mesh is not None:
-            paint_mesh(painter, mesh_polygons(self._mesh), self._colours)
-        elif self._points is not None and len(self._points) >= 2:
-            painter.setPen(cosmetic_pen(CONTOUR, 1.5))
-            painter.setBrush(NO_MESH_FILL)
-            painter.drawPolygon(points_polygon(self._points))
+        if self._image is None:
+            return
+        painter.save()
+        # The view points y up, image rows run down: row r sits at y1 - r / scale.
+        painter.translate(self._x0, self._y1)
+        painter.scale(1.0 / self._scale, -1.0 / self._scale)
+        painter.setRenderHint(QPainter.RenderHint.SmoothPixmapTransform, True)
+        painter.drawImage(QPointF(0.0, 0.0), self._image)
+        painter.restore()
 
 
 class PolylinesItem(pg.GraphicsObject):

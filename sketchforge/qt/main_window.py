@@ -352,6 +352,10 @@ class MainWindow(QMainWindow):
         self.modes.light_toggled.connect(self._light_toggled)
         self.modes.observe_changed.connect(self.view3d.set_source)
         self.modes.fit_requested.connect(self.canvas.fit)
+        self.modes.fit_requested.connect(self.view3d.fit)
+        self.modes.display3d_changed.connect(lambda style: self.view3d.set_style(style, self.canvas.isoline_count or 8))
+        self.creation_panel.tint_changed.connect(self.canvas.set_layer_tint)
+        self.creation_panel.outlines_changed.connect(self.canvas.set_layer_outlines)
 
         self.creation_panel.params_edited.connect(self.set_params)
         self.creation_panel.shader_changed.connect(self._shader_changed)
@@ -802,6 +806,7 @@ class MainWindow(QMainWindow):
         self._sync_all()
         self.history_panel.rebuild()
         self.canvas.fit()
+        self.view3d.reframe()  # a new model: frame it when it is next shown
 
     def new_document(self) -> None:
         if self._refuse_if_busy() or not self.maybe_save():

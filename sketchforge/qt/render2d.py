@@ -1,63 +1,22 @@
-"""Drawing a layer's shaded mesh with QPainter: the canvas items and the layer thumbnails.
+"""Qt helpers for drawing the document: layer thumbnails, polygons, bounds.
 
-The colours come from the geometry core (face normals) and a registered display shader; this
-module only turns arrays into Qt polygons and colours, and fits a drawing into a thumbnail
-(a coordinate mapping, flipping the document's upward y to Qt's downward one).
+A thumbnail's shading is the geometry core's software renderer (the same per-pixel shading as
+the canvas and ``sketchforge render``); this module only wraps its pixels in a QPixmap and fits
+strokes into a box (a coordinate mapping, flipping the document's upward y to Qt's downward one).
 """
 
 from __future__ import annotations
 
-import weakref
-
 import numpy as np
-from PySide6.QtCore import QPointF, QRectF, Qt
-from PySide6.QtGui import QBrush, QColor, QImage, QPainter, QPen, QPixmap, QPolygonF, QTransform
+from PySide6.QtCore import QPointF, QRectF
+from PySide6.QtGui import QColor, QImage, QPainter, QPen, QPixmap, QPolygonF, QTransform
 
-from sketchforge.geometry.normals import face_normals
+from sketchforge.geometry.raster import render_top
+
+THUMB_BACKGROUND = QColor(250, 249, 246)
 
 #: Fill for a layer that has a stroke but no mesh (no inflate plugin, or a failed inflation).
 NO_MESH_FILL = QColor(200, 200, 210, 90)
-
-_polygon_cache: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
-_normal_cache: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
-
-
-def mesh_polygons(mesh) -> list[QPolygonF]:
-    """One QPolygonF per triangle (document coordinates), cached per Mesh object."""
-    polys = _polygon_cache.get(mesh)
-    if polys is None:
-        tri = mesh.V[mesh.F][:, :, :2].tolist()
-        polys = [QPolygonF([QPointF(a[0], a[1]), QPointF(b[0], b[1]), QPointF(c[0], c[1])]) for a, b, c in tri]
-        _polygon_cache[mesh] = polys
-    return polys
-
-
-def mesh_face_normals(mesh) -> np.ndarray:
-    N = _normal_cache.get(mesh)
-    if N is None:
-        N, _ = face_normals(mesh.V, mesh.F)
-        _normal_cache[mesh] = N
-    return N
-
-
-def face_colours(mesh, light, shader) -> list[QColor]:
-    """Flat shading: ``shader.shade`` of the face normals, as QColors."""
-    rgb = shader.shade(mesh_face_normals(mesh), np.asarray(light.direction, dtype=np.float64))
-    rgb8 = np.clip(np.rint(np.asarray(rgb) * 255.0), 0, 255).astype(np.int64).tolist()
-    return [QColor(r, g, b) for r, g, b in rgb8]
-
-
-def paint_mesh(painter: QPainter, polygons: list[QPolygonF], colours: list[QColor]) -> None:
-    """Fill triangles with their colours. Antialiasing is off so shared edges leave no seams."""
-    painter.save()
-    painter.setRenderHint(QPainter.RenderHint.Antialiasing, False)
-    painter.setPen(Qt.PenStyle.NoPen)
-    brush = QBrush(Qt.BrushStyle.SolidPattern)
-    for poly, colour in zip(polygons, colours):
-        brush.setColor(colour)
-        painter.setBrush(brush)
-        painter.drawPolygon(poly)
-    painter.restore()
 
 
 def points_polygon(points) -> QPolygonF:
@@ -67,14 +26,18 @@ def points_polygon(points) -> QPolygonF:
 def layer_thumbnail(layer, light, shader, size: int = 48) -> QPixmap:
     """A small picture of one layer: its shaded mesh, or its stroke, fitted with a margin."""
     image = QImage(size, size, QImage.Format.Format_ARGB32_Premultiplied)
-    image.fill(QColor(250, 249, 246))
+    image.fill(THUMB_BACKGROUND)
+    if layer.mesh is not None and layer.mesh.n_faces:
+        bg = (THUMB_BACKGROUND.redF(), THUMB_BACKGROUND.greenF(), THUMB_BACKGROUND.blueF())
+        rgb = render_top([layer.mesh], np.asarray(light.direction), size, shader=shader.shade, background=bg,
+                         margin=4.0 / size)
+        shaded = QImage(np.ascontiguousarray(rgb).data, size, size, 3 * size, QImage.Format.Format_RGB888)
+        image = shaded.convertToFormat(QImage.Format.Format_ARGB32_Premultiplied)  # a copy: rgb may go
     painter = QPainter(image)
     painter.setPen(QPen(QColor(180, 180, 180)))
     painter.drawRect(0, 0, size - 1, size - 1)
     pts = None
-    if layer.mesh is not None and layer.mesh.n_faces:
-        pts = layer.mesh.V[:, :2]
-    elif layer.points is not None and len(layer.points):
+    if (layer.mesh is None or not layer.mesh.n_faces) and layer.points is not None and len(layer.points):
         pts = layer.points
     if pts is not None:
         lo, hi = pts.min(axis=0), pts.max(axis=0)
@@ -83,14 +46,11 @@ def layer_thumbnail(layer, light, shader, size: int = 48) -> QPixmap:
         cx, cy = 0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1])
         # document (x right, y up) -> pixels (x right, y down), centred
         painter.setTransform(QTransform(k, 0, 0, -k, size / 2 - k * cx, size / 2 + k * cy))
-        if layer.mesh is not None and layer.mesh.n_faces:
-            paint_mesh(painter, mesh_polygons(layer.mesh), face_colours(layer.mesh, light, shader))
-        else:
-            pen = QPen(QColor(40, 60, 120))
-            pen.setCosmetic(True)
-            painter.setPen(pen)
-            painter.setBrush(NO_MESH_FILL)
-            painter.drawPolygon(points_polygon(pts))
+        pen = QPen(QColor(40, 60, 120))
+        pen.setCosmetic(True)
+        painter.setPen(pen)
+        painter.setBrush(NO_MESH_FILL)
+        painter.drawPolygon(points_polygon(pts))
     painter.end()
     return QPixmap.fromImage(image)
 

@@ -1,4 +1,11 @@
-"""OBSERVATION mode: the model in 3D (pyqtgraph.opengl), flat shaded, with an orbit camera.
+"""OBSERVATION mode: the model in 3D (pyqtgraph.opengl), smooth shaded, with an orbit camera.
+
+Normals are per triangle corner from the geometry core (smooth, creases only where the surface
+folds). The camera frames the model the first time it is shown and on "Fit view"; orbit and zoom
+are kept when the source (assembled / per layer) changes or the model is rebuilt. Display styles:
+"shaded" (a head light), "cel" (the three cel tones of the document's in-plane light) and
+"isophotes" (shaded, with lines n·l = j/(K+1) of the document's light), computed per pixel in
+the fragment shader from the interpolated model-space normal, as on the canvas.
 
 The OpenGL widget is created the first time observation mode is shown, so the editing view
 never needs OpenGL (it runs with ``QT_QPA_PLATFORM=offscreen``; OpenGL needs a display, e.g.
@@ -21,37 +28,98 @@ CLAY = (0.84, 0.74, 0.62, 1.0)
 LAYER_COLOURS = ((0.84, 0.74, 0.62, 1), (0.62, 0.74, 0.84, 1), (0.70, 0.84, 0.62, 1), (0.84, 0.62, 0.70, 1))
 
 
-#: Flat shading with a light at the viewer's upper right (eye coordinates), so the faces that
-#: face the camera are lit (pyqtgraph's own "shaded" program lights from behind the scene).
-SHADER_NAME = "sketchforge_headlight"
+#: Smooth shading with a light at the viewer's upper right (eye coordinates), so the faces that
+#: face the camera are lit (pyqtgraph's own "shaded" program lights from behind the scene), and
+#: the document light's cel tones or isophote lines (model coordinates = document coordinates).
+SHADER_NAME = "sketchforge_observe"
+#: Display styles and their shader code.
+STYLES = {"shaded": 0.0, "cel": 1.0, "isophotes": 2.0}
+#: Field of view (degrees, horizontal) and the share of the smaller view side the model fills.
+FOV = 45.0
+FILL = 0.92
+#: Dihedral angle (degrees) beyond which the surface is drawn with a crease.
+CREASE_DEG = 50.0
+
+_VERTEX = """
+uniform mat4 u_mvp;
+uniform mat3 u_normal;
+attribute vec4 a_position;
+attribute vec3 a_normal;
+attribute vec4 a_color;
+varying vec4 v_color;
+varying vec3 v_normal;
+varying vec3 v_model_normal;
+void main() {
+    v_normal = normalize(u_normal * a_normal);
+    v_model_normal = a_normal;
+    v_color = a_color;
+    gl_Position = u_mvp * a_position;
+}
+"""
+
+_FRAGMENT = """
+#ifdef GL_ES
+#extension GL_OES_standard_derivatives : enable
+precision mediump float;
+#endif
+varying vec4 v_color;
+varying vec3 v_normal;
+varying vec3 v_model_normal;
+uniform float u_light[3];
+uniform float u_style[2];
+void main() {
+    float p = dot(normalize(v_normal), normalize(vec3(0.4, 0.5, 1.0)));
+    p = p < 0. ? 0.15 * -p : p;
+    vec3 rgb = v_color.rgb * (0.25 + 0.75 * p);
+    float e = dot(normalize(v_model_normal), vec3(u_light[0], u_light[1], u_light[2]));
+    if (u_style[0] > 0.5 && u_style[0] < 1.5) {
+        rgb = e <= 0.0 ? vec3(%(t0)s) : (e <= 0.5 ? vec3(%(t1)s) : vec3(%(t2)s));
+    } else if (u_style[0] > 1.5) {
+        float k = u_style[1];
+        float t = e * (k + 1.0);
+        float d = abs(t - clamp(floor(t + 0.5), 1.0, k));
+        float line = 1.0 - clamp(d / max(fwidth(t), 1e-6) - 0.1, 0.0, 1.0);
+        rgb = mix(rgb, vec3(0.12, 0.10, 0.10), 0.85 * line);
+    }
+    gl_FragColor = vec4(rgb, v_color.a);
+}
+"""
 
 
 def _register_shader() -> None:
     from pyqtgraph.opengl import shaders
 
+    from sketchforge.geometry.shaders import CEL_TONES
+
     if SHADER_NAME in shaders.ShaderProgram.names:
         return
-    vertex, _fragment = shaders.getShaderProgram("shaded").shaders
+    tones = {f"t{i}": ", ".join(f"{c:.4f}" for c in CEL_TONES[i]) for i in range(3)}
     shaders.ShaderProgram(
         SHADER_NAME,
-        [
-            vertex,
-            shaders.FragmentShader(
-                """
-                #ifdef GL_ES
-                precision mediump float;
-                #endif
-                varying vec4 v_color;
-                varying vec3 v_normal;
-                void main() {
-                    float p = dot(normalize(v_normal), normalize(vec3(0.4, 0.5, 1.0)));
-                    p = p < 0. ? 0.15 * -p : p;
-                    gl_FragColor = vec4(v_color.rgb * (0.25 + 0.75 * p), v_color.a);
-                }
-                """
-            ),
-        ],
+        [shaders.VertexShader(_VERTEX), shaders.FragmentShader(_FRAGMENT % tones)],
+        uniforms={"u_light": [1.0, 0.0, 0.0], "u_style": [0.0, 8.0]},
     )
+
+
+def _mesh_item_class():
+    """GLMeshItem drawing given per-corner normals (pyqtgraph would average face normals)."""
+    import pyqtgraph.opengl as gl
+    from pyqtgraph.opengl.items.GLMeshItem import DirtyFlag
+
+    class CornerNormalMeshItem(gl.GLMeshItem):
+        def __init__(self, corners, normals, **kwds):
+            self._corner_normals = np.ascontiguousarray(normals, dtype=np.float32)
+            md = gl.MeshData(vertexes=np.ascontiguousarray(corners, dtype=np.float32))
+            super().__init__(meshdata=md, smooth=False, computeNormals=False, **kwds)
+
+        def parseMeshData(self):
+            dirty = super().parseMeshData()
+            if DirtyFlag.POSITION in dirty:
+                self.normals = self._corner_normals
+                dirty |= DirtyFlag.NORMAL
+            return dirty
+
+    return CornerNormalMeshItem
 
 
 def gl_unavailable_reason() -> str | None:
@@ -78,6 +146,10 @@ class View3D(QWidget):
         #: (doc.geometry_revision, mesh) of the last assembly, so that switching modes or the
         #: source back does not assemble an unchanged document again
         self._assembled: tuple[int, object] | None = None
+        self.style = "shaded"
+        self.isophote_count = 8
+        self._framed = False  # the camera was framed on a model: keep the user's orbit from now
+        self._bounds = None  # (centre, radius) of a sphere around what is shown (document units)
         self._layout = QStackedLayout(self)
         self.info = QLabel("")
         self.info.setAlignment(Qt.AlignmentFlag.AlignCenter)
@@ -85,6 +157,7 @@ class View3D(QWidget):
         self._layout.addWidget(self.info)
         self._active = False
         doc.assembly_invalidated.connect(self._invalidated)
+        doc.light_changed.connect(lambda *a: self._apply_style())
 
     # --- lifecycle ------------------------------------------------------------------------------
     def ensure_gl(self) -> bool:
@@ -106,7 +179,53 @@ class View3D(QWidget):
         self._grid = grid
         self._layout.addWidget(self.gl)
         self._layout.setCurrentWidget(self.gl)
+        self._apply_style()
         return True
+
+    # --- display style and camera ------------------------------------------------------------
+    def set_style(self, style: str, isophotes: int | None = None) -> None:
+        """"shaded", "cel" or "isophotes" (with ``isophotes`` lines, default 8)."""
+        if style not in STYLES:
+            raise ValueError(f"unknown 3D display style {style!r}: one of {', '.join(STYLES)}")
+        self.style = style
+        if isophotes is not None:
+            self.isophote_count = max(1, int(isophotes))
+        self._apply_style()
+
+    def _apply_style(self) -> None:
+        if self.gl is None:
+            return
+        from pyqtgraph.opengl import shaders
+
+        prog = shaders.getShaderProgram(SHADER_NAME)
+        l = np.asarray(self.doc.light.direction, dtype=np.float64)
+        prog["u_light"] = [float(x) for x in l / max(np.linalg.norm(l), 1e-12)]
+        prog["u_style"] = [STYLES[self.style], float(self.isophote_count)]
+        self.gl.update()
+
+    def reframe(self) -> None:
+        """Frame the model again the next time it is shown (a new document)."""
+        self._framed = False
+
+    def fit(self) -> None:
+        """Frame what is shown: centred, filling FILL of the smaller side of the view."""
+        if self.gl is None or self._bounds is None:
+            return
+        from PySide6.QtGui import QVector3D
+
+        centre, radius = self._bounds
+        w, h = max(self.gl.width(), 1), max(self.gl.height(), 1)
+        half_h = np.arctan(np.tan(np.radians(0.5 * FOV)) * h / w)  # vertical half-angle
+        half = min(np.radians(0.5 * FOV), half_h)
+        distance = radius / np.sin(half) / FILL
+        self.gl.setCameraParams(fov=FOV)
+        self.gl.setCameraPosition(
+            pos=QVector3D(float(centre[0]), -float(centre[2]), float(centre[1])),
+            distance=float(distance),
+            elevation=18,
+            azimuth=-65,
+        )
+        self._framed = True
 
     def activate(self) -> None:
         self._active = True
@@ -175,9 +294,14 @@ class View3D(QWidget):
             self.gl.removeItem(item)
         self._items = []
         allv = []
+        item_class = _mesh_item_class()
+        from sketchforge.geometry.normals import corner_normals
+
         for mesh, colour in meshes:
-            md = gl.MeshData(vertexes=np.asarray(mesh.V, dtype=np.float32), faces=np.asarray(mesh.F, dtype=np.int32))
-            item = gl.GLMeshItem(meshdata=md, smooth=False, shader=SHADER_NAME, color=colour, glOptions="opaque")
+            V = np.asarray(mesh.V, dtype=np.float64)
+            F = np.asarray(mesh.F, dtype=np.int64)
+            item = item_class(V[F], corner_normals(V, F, CREASE_DEG), shader=SHADER_NAME, color=colour,
+                              glOptions="opaque")
             # The drawing stands upright: document (x, y, z) -> world (x, -z, y), so the grid is
             # the ground, y is up and the viewer of the drawing looks along world +y.
             item.rotate(90, 1, 0, 0)
@@ -189,15 +313,10 @@ class View3D(QWidget):
             lo, hi = V.min(axis=0), V.max(axis=0)
             centre = 0.5 * (lo + hi)
             size = float(np.max(hi - lo)) or 1.0
-            from PySide6.QtGui import QVector3D
-
             self._grid.resetTransform()
             self._grid.setSize(2 * size, 2 * size)
             self._grid.setSpacing(size / 10, size / 10)
             self._grid.translate(float(centre[0]), -float(centre[2]), float(lo[1]))
-            self.gl.setCameraPosition(
-                pos=QVector3D(float(centre[0]), -float(centre[2]), float(centre[1])),
-                distance=1.9 * size,
-                elevation=18,
-                azimuth=-65,
-            )
+            self._bounds = (centre, float(np.max(np.linalg.norm(V - centre, axis=1))) or 1.0)
+            if not self._framed:
+                self.fit()

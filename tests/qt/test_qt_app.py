@@ -65,6 +65,29 @@ settle(w, app)
 assert w.view3d.gl is not None, w.view3d.info.text()
 assert len(w.view3d._items) == len(w.doc.layers)
 grab_window(w, sys.argv[2])
+import numpy as np
+def model_box():
+    img = w.view3d.gl.grabFramebuffer().convertToFormat(img_format)
+    a = np.frombuffer(img.constBits(), np.uint8).reshape(img.height(), img.bytesPerLine())
+    a = a[:, : 4 * img.width()].reshape(img.height(), img.width(), 4)[..., :3].astype(int)
+    # the model: pixels far from the background grey (the ground grid is faint)
+    fg = np.abs(a - a[2, 2]).max(axis=2) > 40
+    rows, cols = np.nonzero(fg.any(axis=1))[0], np.nonzero(fg.any(axis=0))[0]
+    return (cols[-1] - cols[0]) / img.width(), (rows[-1] - rows[0]) / img.height()
+from PySide6.QtGui import QImage
+img_format = QImage.Format.Format_RGB32
+bw, bh = model_box()
+print("framed", bw, bh)
+assert max(bw, bh) > 0.6, (bw, bh)  # the default camera frames the model
+w.view3d.gl.orbit(30, 10)
+w.view3d.gl.setCameraParams(distance=0.5 * w.view3d.gl.opts["distance"])
+camera = {k: str(w.view3d.gl.opts[k]) for k in ("distance", "azimuth", "elevation", "center")}
+w.view3d.set_style("cel")
+w.view3d.refresh()  # the model rebuilt (an edit, a source switch): the camera stays
+settle(w, app)
+assert {k: str(w.view3d.gl.opts[k]) for k in camera} == camera
+w.view3d.fit()
+assert {k: str(w.view3d.gl.opts[k]) for k in camera} != camera
 w.close_now()
 """
 

@@ -1,6 +1,6 @@
 """CREATION controls: the current layer's inflation parameters, whether it is closed (a free
 part) or open (attached by its closing segment), and how the drawing region shades (Lambertian
-or cel, isophote lines).
+or cel, isophote lines, layer tints and outlines).
 
 A new stroke decides open or closed by itself (its ends meet: closed); the box shows the
 selected part's kind and flips it (:attr:`closed_toggled`), it never carries over to the next
@@ -26,6 +26,10 @@ class CreationPanel(QGroupBox):
     isolines_changed = Signal(int)
     #: the person ticked or unticked "closed" for the selected part
     closed_toggled = Signal(bool)
+    #: subtle per-layer tints on / off
+    tint_changed = Signal(bool)
+    #: thin lines along the layers' visible outlines on / off
+    outlines_changed = Signal(bool)
 
     def __init__(self, parent=None) -> None:
         super().__init__("Creation", parent)
@@ -59,6 +63,16 @@ class CreationPanel(QGroupBox):
         self.isolines.setToolTip("Number of isophote lines drawn over the shading")
         self.isolines.valueChanged.connect(self.isolines_changed.emit)
         form.addRow("Isophote lines", self.isolines)
+        self.tint = QCheckBox("tint layers")
+        self.tint.setChecked(True)
+        self.tint.setToolTip("A slightly different hue per layer, to tell touching layers apart")
+        self.tint.toggled.connect(self.tint_changed.emit)
+        self.outlines = QCheckBox("outline layers")
+        self.outlines.setChecked(True)
+        self.outlines.setToolTip("A thin line along each layer's visible outline")
+        self.outlines.toggled.connect(self.outlines_changed.emit)
+        form.addRow(self.tint)
+        form.addRow(self.outlines)
         self._updating = False
 
     def set_shaders(self, names, current: str) -> None:

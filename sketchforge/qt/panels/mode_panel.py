@@ -4,7 +4,7 @@ CREATION / SCULPTURE plus the light button; in OBSERVATION the assembled / per-l
 from __future__ import annotations
 
 from PySide6.QtCore import Signal
-from PySide6.QtWidgets import QButtonGroup, QFrame, QLabel, QPushButton, QRadioButton, QVBoxLayout
+from PySide6.QtWidgets import QButtonGroup, QComboBox, QFrame, QLabel, QPushButton, QRadioButton, QVBoxLayout
 
 
 class ModePanel(QFrame):
@@ -16,6 +16,8 @@ class ModePanel(QFrame):
     light_toggled = Signal(bool)
     #: observation shows the "assembled" model or each "layers" mesh
     observe_changed = Signal(str)
+    #: the 3D view's display style: "shaded", "cel" or "isophotes"
+    display3d_changed = Signal(str)
     fit_requested = Signal()
 
     def __init__(self, parent=None) -> None:
@@ -55,6 +57,11 @@ class ModePanel(QFrame):
             b.setStyleSheet("margin-left: 16px")
         self.assembled.setChecked(True)
 
+        self.display3d = QComboBox()
+        self.display3d.addItems(["shaded", "cel", "isophotes"])
+        self.display3d.setToolTip("3D display: smooth shading, the light's cel tones, or its isophote lines")
+        self.display3d.setStyleSheet("margin-left: 16px")
+
         self.fit = QPushButton("Fit view")
 
         lay.addWidget(self.editing)
@@ -65,6 +72,7 @@ class ModePanel(QFrame):
         lay.addWidget(self.observation)
         lay.addWidget(self.assembled)
         lay.addWidget(self.per_layer)
+        lay.addWidget(self.display3d)
         lay.addStretch(1)
         lay.addWidget(self.fit)
 
@@ -75,6 +83,7 @@ class ModePanel(QFrame):
         self.light.toggled.connect(self.light_toggled.emit)
         self.assembled.toggled.connect(lambda on: on and self.observe_changed.emit("assembled"))
         self.per_layer.toggled.connect(lambda on: on and self.observe_changed.emit("layers"))
+        self.display3d.currentTextChanged.connect(self.display3d_changed.emit)
         self.fit.clicked.connect(self.fit_requested.emit)
         self._enable("editing")
 
@@ -86,5 +95,5 @@ class ModePanel(QFrame):
         editing = mode == "editing"
         for w in (self.creation, self.sculpture, self.light):
             w.setEnabled(editing)
-        for w in (self.assembled, self.per_layer):
+        for w in (self.assembled, self.per_layer, self.display3d):
             w.setEnabled(not editing)

@@ -1,0 +1,641 @@
+"""One software rasteriser for every top view: a per-pixel buffer of normals, then shading.
+
+:func:`rasterise` turns layers (meshes, back to front) seen from +z into a :class:`GBuffer`:
+one fragment per pixel and layer that shows there, with the unit normal interpolated from the
+vertex normals at the pixel centre and the layer's coverage of the pixel (antialiased
+silhouettes). :func:`shade` applies a display shader to the fragments and composites them back
+to front; it never touches the geometry, so a new light costs a dot product and a blend, not a
+rasterisation. The headless renderer (``sketchforge render``) and the editing canvas both go
+through these two functions.
+
+Coverage: a pixel whose centre lies inside a layer's outline is covered by
+``clip(0.5 + d, 0, 1)`` and one whose centre lies outside by ``clip(0.5 - d, 0, 1)``, where d is
+the distance in pixels from the centre to the outline (the mesh's boundary edges). Outside the
+outline the fragment takes the normal of the nearest outline point (linear along the edge), so
+a silhouette blends the rim's own shade into what lies behind. Fragments hidden under an opaque
+fragment of a layer in front are dropped, so shading costs about one fragment per covered pixel.
+
+Isophote lines (:func:`isophote_coverage`) are drawn from the same per-pixel field, n·l of the
+front fragment, with a constant width in pixels (the distance to the level divided by the
+screen-space gradient), so they are smooth and antialiased, and a layer in front hides the lines
+of the layers behind it.
+"""
+
+from __future__ import annotations
+
+import weakref
+from dataclasses import dataclass
+
+import numpy as np
+
+from sketchforge.geometry.normals import vertex_normals
+
+# Per mesh (meshes are immutable): vertex normals and outline edges, so a new view of the same
+# meshes (pan, zoom) only rasterises.
+_mesh_cache: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+
+# Outline edges longer than this (pixels) are split before testing the pixels around them, so
+# the work stays proportional to the outline's length, not to its bounding box.
+_EDGE_PIECE = 8.0
+
+
+@dataclass(frozen=True)
+class View:
+    """An orthographic top view: document point (x, y) -> pixel (column, row).
+
+    column = (x - x0) * scale, row = (y1 - y) * scale, where (x0, y1) is the document point at the
+    top-left corner of the image; pixel (r, c) has its centre at column c + 0.5, row r + 0.5.
+    """
+
+    x0: float
+    y1: float
+    scale: float  # pixels per document unit
+    width: int
+    height: int
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.x0) and np.isfinite(self.y1) and np.isfinite(self.scale) and self.scale > 0):
+            raise ValueError(f"a view needs a finite origin and a positive scale, got {self}")
+        if int(self.width) < 1 or int(self.height) < 1:
+            raise ValueError(f"a view needs at least one pixel, got {self.width}x{self.height}")
+
+    @classmethod
+    def framing(cls, meshes, width: int, height: int, margin: float = 0.05) -> "View":
+        """The view that shows every mesh, centred, equal aspect, ``margin`` empty on each side."""
+        pts = np.concatenate([np.asarray(m.V)[:, :2] for m in meshes])
+        lo, hi = pts.min(axis=0), pts.max(axis=0)
+        centre = 0.5 * (lo + hi)
+        ext = hi - lo
+        avail = np.array([width, height], dtype=np.float64) * (1.0 - 2.0 * margin)
+        ratios = [avail[i] / ext[i] for i in range(2) if ext[i] > 0]
+        scale = float(min(ratios)) if ratios else 1.0
+        return cls(
+            float(centre[0] - 0.5 * width / scale),
+            float(centre[1] + 0.5 * height / scale),
+            scale,
+            int(width),
+            int(height),
+        )
+
+    def to_pixels(self, xy: np.ndarray) -> np.ndarray:
+        """(n, >=2) document points -> (n, 2) float64 (column, row) continuous pixel coordinates."""
+        xy = np.asarray(xy, dtype=np.float64)
+        return np.column_stack([(xy[:, 0] - self.x0) * self.scale, (self.y1 - xy[:, 1]) * self.scale])
+
+
+@dataclass(frozen=True, eq=False)
+class GBuffer:
+    """Fragments of a rasterised view, back to front (ascending ``layer``), and what shading
+    needs to composite them quickly.
+
+    Attributes
+    ----------
+    view : View
+    pix : (k,) int64
+        Flat pixel index row * width + column.
+    layer : (k,) int32
+        Index of the mesh (layer) in the list given to :func:`rasterise`.
+    alpha : (k,) float32
+        Coverage of the pixel by the layer, in (0, 1].
+    normal : (k, 3) float32
+        Unit normal at the pixel centre (or at the nearest outline point outside the outline).
+    front : (height * width,) int64
+        Per pixel, the fragment whose layer is in front at the pixel centre, or -1: the owner of
+        the pixel for isophote lines and picking.
+    bounds : (n_layers + 1,) int64
+        Fragments of layer i are ``bounds[i]:bounds[i + 1]``.
+    stack_pixels : (p,) int64
+        Covered pixels where fragments blend (an outline, a layer over another), each once;
+        every other covered pixel holds one opaque fragment, whose colour is the pixel's.
+    stack_frag, stack_slot : (q,) int64
+        The fragments over those pixels, back to front, and the index of their pixel in
+        ``stack_pixels``.
+    stack_bounds : (n_layers + 1,) int64
+        ``stack_frag[stack_bounds[i]:stack_bounds[i + 1]]`` are layer i's.
+    front_frag : (f,) int64
+        The fragments that own a pixel (``front[front >= 0]``, same order).
+    edge_pix : (e,) int64
+        Pixels near a layer's outline where that outline is not hidden by a layer in front.
+    edge_dist : (e,) float32
+        Distance in pixels from those pixel centres to the nearest such outline.
+    """
+
+    view: View
+    pix: np.ndarray
+    layer: np.ndarray
+    alpha: np.ndarray
+    normal: np.ndarray
+    front: np.ndarray
+    bounds: np.ndarray
+    stack_pixels: np.ndarray
+    stack_frag: np.ndarray
+    stack_slot: np.ndarray
+    stack_bounds: np.ndarray
+    front_frag: np.ndarray
+    edge_pix: np.ndarray
+    edge_dist: np.ndarray
+
+    @property
+    def n_layers(self) -> int:
+        return len(self.bounds) - 1
+
+    def normal_derivatives(self) -> tuple[np.ndarray, np.ndarray]:
+        """(f, 3) float32 ``dn_dx, dn_dy``: change of the owner's normal per pixel to the right
+        and downwards at each owned pixel (finite differences that never cross into another
+        layer), so the screen-space gradient of any n·l. Computed on first use (isophote lines
+        need it, plain shading does not) and kept."""
+        return self._line_data()[:2]
+
+    def _line_data(self):
+        """dn_dx, dn_dy, the owners' normals column by column, and per owned pixel a bound on
+        |∇(n·l)| for any unit l (so lines are only evaluated where they can be)."""
+        cache = self.__dict__.setdefault("_derivatives", [])
+        if not cache:
+            W, H = self.view.width, self.view.height
+            dx, dy = _normal_derivatives(self.front, self.normal, self.layer, W, H)
+            cols = tuple(np.ascontiguousarray(np.take(self.normal[:, j], self.front_frag)) for j in range(3))
+            bound = np.sqrt(np.einsum("ij,ij->i", dx, dx) + np.einsum("ij,ij->i", dy, dy)).astype(np.float32)
+            cache.extend((dx, dy, cols, bound))
+        return cache
+
+    def front_layer(self) -> np.ndarray:
+        """(height, width) int32: the layer in front at each pixel centre, -1 for none."""
+        out = np.full(self.front.shape, -1, dtype=np.int32)
+        ok = self.front >= 0
+        out[ok] = self.layer[self.front[ok]]
+        return out.reshape(self.view.height, self.view.width)
+
+
+def scan_triangles(P: np.ndarray, F: np.ndarray, width: int, height: int):
+    """Pixel centres inside each triangle, by scanlines (no wasted tests).
+
+    Parameters
+    ----------
+    P : (n, 2) float64
+        Vertex positions in continuous pixel coordinates (column, row).
+    F : (m, 3) int64
+    width, height : int
+
+    Returns
+    -------
+    pix : (k,) int64
+        Flat pixel index; a centre exactly on an edge shared by two triangles appears for both.
+    tri : (k,) int64
+    bary : (k, 3) float64
+        Barycentric coordinates of the pixel centre in its triangle, each in [0, 1], summing to 1.
+    """
+    empty = (np.zeros(0, np.int64), np.zeros(0, np.int64), np.zeros((0, 3)))
+    if len(F) == 0:
+        return empty
+    T = P[F]  # (m, 3, 2)
+    a = T[:, 0]
+    e1 = T[:, 1] - a
+    e2 = T[:, 2] - a
+    det = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
+    ymin, ymax = T[:, :, 1].min(axis=1), T[:, :, 1].max(axis=1)
+    r0 = np.clip(np.ceil(ymin - 0.5), 0, height).astype(np.int64)
+    r1 = np.clip(np.floor(ymax - 0.5), -1, height - 1).astype(np.int64)
+    nrow = np.where(np.abs(det) > 1e-12, np.maximum(r1 - r0 + 1, 0), 0)
+    if nrow.sum() == 0:
+        return empty
+    # One (triangle, row) pair per scanline crossing the triangle.
+    t = np.repeat(np.arange(len(F)), nrow)
+    start = np.cumsum(nrow) - nrow
+    row = r0[t] + (np.arange(len(t)) - start[t])
+    yc = row + 0.5
+    xlo = np.full(len(t), np.inf)
+    xhi = np.full(len(t), -np.inf)
+    for i, j in ((0, 1), (1, 2), (2, 0)):
+        pa, pb = T[t, i], T[t, j]
+        dy = pb[:, 1] - pa[:, 1]
+        lo_y = np.minimum(pa[:, 1], pb[:, 1])
+        hi_y = np.maximum(pa[:, 1], pb[:, 1])
+        ok = (yc >= lo_y) & (yc <= hi_y) & (dy != 0)
+        s = np.where(ok, (yc - pa[:, 1]) / np.where(dy != 0, dy, 1.0), 0.0)
+        x = pa[:, 0] + s * (pb[:, 0] - pa[:, 0])
+        xlo = np.where(ok, np.minimum(xlo, x), xlo)
+        xhi = np.where(ok, np.maximum(xhi, x), xhi)
+    c0 = np.clip(np.ceil(xlo - 0.5), 0, width).astype(np.int64)
+    c1 = np.clip(np.floor(xhi - 0.5), -1, width - 1).astype(np.int64)
+    ncol = np.maximum(c1 - c0 + 1, 0)
+    ncol[~np.isfinite(xlo)] = 0
+    tri = np.repeat(t, ncol)
+    start = np.cumsum(ncol) - ncol
+    k = np.arange(len(tri)) - np.repeat(start, ncol)
+    col = np.repeat(c0, ncol) + k
+    rows = np.repeat(row, ncol)
+    dx = col + 0.5 - a[tri, 0]
+    dy = rows + 0.5 - a[tri, 1]
+    inv = 1.0 / det[tri]
+    l1 = np.clip((dx * e2[tri, 1] - dy * e2[tri, 0]) * inv, 0.0, 1.0)
+    l2 = np.clip((e1[tri, 0] * dy - e1[tri, 1] * dx) * inv, 0.0, 1.0)
+    s = l1 + l2
+    over = s > 1.0
+    l1[over] /= s[over]
+    l2[over] /= s[over]
+    bary = np.column_stack([1.0 - l1 - l2, l1, l2])
+    return rows * width + col, tri, bary
+
+
+def boundary_edges(F: np.ndarray) -> np.ndarray:
+    """(b, 2) int64 edges used by exactly one triangle (the outline, holes included)."""
+    F = np.asarray(F, dtype=np.int64)
+    E = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
+    key = np.sort(E, axis=1)
+    _, inv, count = np.unique(key, axis=0, return_inverse=True, return_counts=True)
+    return E[count[inv.ravel()] == 1]
+
+
+def _outline_distance(P, N, edges, width, height):
+    """Pixels within 1.5 px of the outline: (pix, distance in px, normal at the nearest point)."""
+    if len(edges) == 0:
+        return np.zeros(0, np.int64), np.zeros(0), np.zeros((0, 3))
+    a, b = P[edges[:, 0]], P[edges[:, 1]]
+    na, nb = N[edges[:, 0]], N[edges[:, 1]]
+    length = np.linalg.norm(b - a, axis=1)
+    pieces = np.maximum(1, np.ceil(length / _EDGE_PIECE).astype(np.int64))
+    e = np.repeat(np.arange(len(edges)), pieces)
+    start = np.cumsum(pieces) - pieces
+    j = np.arange(len(e)) - start[e]
+    t0 = j / pieces[e]
+    t1 = (j + 1) / pieces[e]
+    pa = a[e] + t0[:, None] * (b[e] - a[e])
+    pb = a[e] + t1[:, None] * (b[e] - a[e])
+    reach = 1.5
+    lo = np.minimum(pa, pb) - reach
+    hi = np.maximum(pa, pb) + reach
+    c0 = np.clip(np.ceil(lo[:, 0] - 0.5), 0, width).astype(np.int64)
+    c1 = np.clip(np.floor(hi[:, 0] - 0.5), -1, width - 1).astype(np.int64)
+    r0 = np.clip(np.ceil(lo[:, 1] - 0.5), 0, height).astype(np.int64)
+    r1 = np.clip(np.floor(hi[:, 1] - 0.5), -1, height - 1).astype(np.int64)
+    bw, bh = np.maximum(c1 - c0 + 1, 0), np.maximum(r1 - r0 + 1, 0)
+    n = bw * bh
+    s = np.repeat(np.arange(len(e)), n)
+    if len(s) == 0:
+        return np.zeros(0, np.int64), np.zeros(0), np.zeros((0, 3))
+    k = np.arange(len(s)) - np.repeat(np.cumsum(n) - n, n)
+    rr, cc = np.divmod(k, bw[s])
+    row, col = r0[s] + rr, c0[s] + cc
+    q = np.column_stack([col + 0.5, row + 0.5])
+    d = pb[s] - pa[s]
+    dd = np.maximum(np.einsum("ij,ij->i", d, d), 1e-300)
+    u = np.clip(np.einsum("ij,ij->i", q - pa[s], d) / dd, 0.0, 1.0)
+    dist = np.linalg.norm(pa[s] + u[:, None] * d - q, axis=1)
+    pix = row * width + col
+    # Nearest piece per pixel.
+    order = np.lexsort((dist, pix))
+    pix, dist, s, u = pix[order], dist[order], s[order], u[order]
+    first = np.r_[True, pix[1:] != pix[:-1]]
+    pix, dist, s, u = pix[first], dist[first], s[first], u[first]
+    ok = dist < reach
+    pix, dist, s, u = pix[ok], dist[ok], s[ok], u[ok]
+    tt = t0[s] + u * (t1[s] - t0[s])
+    es = e[s]
+    nrm = (1.0 - tt)[:, None] * na[es] + tt[:, None] * nb[es]
+    nrm /= np.maximum(np.linalg.norm(nrm, axis=1, keepdims=True), 1e-300)
+    return pix, dist, nrm
+
+
+def rasterise(meshes: list, view: View, antialias: bool = True) -> GBuffer:
+    """Rasterise layers back to front into per-pixel fragments (normals, coverage, layer ids).
+
+    Parameters
+    ----------
+    meshes : list of Mesh or None
+        Back to front: a later mesh covers earlier ones at every pixel it covers, whatever the
+        heights; within one mesh the largest z wins (a folded or assembled mesh). None or an
+        empty mesh keeps its index and draws nothing.
+    view : View
+    antialias : bool
+        Coverage from the distance to each outline; False gives hard pixel-centre silhouettes.
+
+    Returns
+    -------
+    GBuffer
+    """
+    pix_l, lay_l, alpha_l, nrm_l = [], [], [], []
+    edges_l = []  # per layer (its index, outline pixels, their distances)
+    for li, mesh in enumerate(meshes):
+        if mesh is None or mesh.n_faces == 0:
+            continue
+        pix, alpha, n, edges = _layer_fragments(mesh, view, antialias)
+        if edges is not None:
+            edges_l.append((li, *edges))
+        pix_l.append(pix)
+        lay_l.append(np.full(len(pix), li, dtype=np.int32))
+        alpha_l.append(alpha)
+        nrm_l.append(n)
+    return _assemble(view, len(meshes), pix_l, lay_l, alpha_l, nrm_l, edges_l)
+
+
+def _layer_fragments(mesh, view: View, antialias: bool):
+    """One mesh's fragments in a view: (pix, alpha, normal, (outline pixels, distances) or None).
+
+    Kept per mesh for the last view, so a change to one layer (an edit, a live preview)
+    rasterises only that layer again."""
+    cached = _mesh_cache.get(mesh)
+    V, F = np.asarray(mesh.V), np.asarray(mesh.F, dtype=np.int64)
+    if cached is None:
+        cached = {"N": vertex_normals(V, F), "outline": boundary_edges(F)}
+        _mesh_cache[mesh] = cached
+    last = cached.get("fragments")
+    if last is not None and last[0] == (view, antialias):
+        return last[1]
+    N, outline = cached["N"], cached["outline"]
+    W, H = int(view.width), int(view.height)
+    npx = W * H
+    P = view.to_pixels(V)
+    pix, tri, bary = scan_triangles(P, F, W, H)
+    if len(pix):
+        count = np.bincount(pix, minlength=npx)
+        dup = count[pix] > 1
+        if dup.any():
+            # Several fragments of one mesh at a pixel: shared edges (same surface) or a
+            # folded mesh. The largest z wins: write them in ascending z, the last one stays.
+            z = np.einsum("kj,kj->k", bary, V[F[tri], 2])
+            order = np.r_[np.nonzero(~dup)[0], np.nonzero(dup)[0][np.argsort(z[dup], kind="stable")]]
+            pix, tri, bary = pix[order], tri[order], bary[order]
+            owner = np.full(npx, -1, dtype=np.int64)
+            owner[pix] = np.arange(len(pix))
+            keep = owner[pix] == np.arange(len(pix))
+            pix, tri, bary = pix[keep], tri[keep], bary[keep]
+        n = np.einsum("kj,kjd->kd", bary, N[F[tri]])
+        n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+    else:
+        n = np.zeros((0, 3))
+    alpha = np.ones(len(pix))
+    edges = None
+    if antialias:
+        opix, dist, onrm = _outline_distance(P, N, outline, W, H)
+        edges = (opix, dist)
+        inside = np.zeros(npx, dtype=bool)
+        inside[pix] = True
+        ins = inside[opix]
+        # Inside the outline: less than full coverage within half a pixel of it.
+        where = np.full(npx, -1, dtype=np.int64)
+        where[pix] = np.arange(len(pix))
+        k = where[opix[ins]]
+        alpha[k] = np.clip(0.5 + dist[ins], 0.0, 1.0)
+        # Outside: the part of the pixel the outline still reaches, shaded like the rim.
+        cov = np.clip(0.5 - dist[~ins], 0.0, 1.0)
+        grow = cov > 1.0 / 512.0
+        pix = np.r_[pix, opix[~ins][grow]]
+        n = np.r_[n, onrm[~ins][grow]]
+        alpha = np.r_[alpha, cov[grow]]
+    result = (pix, alpha.astype(np.float32), n.astype(np.float32), edges)
+    for a in (result[0], result[1], result[2], *(edges or ())):
+        a.flags.writeable = False  # shared between buffers
+    cached["fragments"] = ((view, antialias), result)
+    return result
+
+
+def _assemble(view, L, pix_l, lay_l, alpha_l, nrm_l, edges_l) -> GBuffer:
+    W, H = int(view.width), int(view.height)
+    npx = W * H
+    i64, f32 = np.int64, np.float32
+    if pix_l:
+        pix = np.concatenate(pix_l)
+        lay = np.concatenate(lay_l)
+        alpha = np.concatenate(alpha_l)
+        nrm = np.concatenate(nrm_l)
+    else:
+        pix, lay, alpha, nrm = np.zeros(0, i64), np.zeros(0, np.int32), np.zeros(0, f32), np.zeros((0, 3), f32)
+    # Drop what an opaque fragment of a layer in front hides: per pixel, the last opaque layer.
+    top = np.full(npx, -1, dtype=np.int32)
+    opaque = alpha >= 1.0
+    top[pix[opaque]] = lay[opaque]  # ascending layers: the frontmost writes last
+    keep = lay >= top[pix]
+    pix, lay, alpha, nrm = pix[keep], lay[keep], alpha[keep], nrm[keep]
+    # Outlines: where no opaque fragment of a layer in front hides them; the nearest wins.
+    edge = np.full(npx, np.inf, dtype=np.float32)
+    for li, opix, dist in edges_l:
+        seen = top[opix] <= li
+        np.minimum.at(edge, opix[seen], dist[seen].astype(np.float32))
+    edge_pix = np.nonzero(np.isfinite(edge))[0]
+    edge_dist = edge[edge_pix]
+    # Owner at the pixel centre: the frontmost fragment whose layer covers the centre (alpha >=
+    # 0.5 means the centre is inside that layer's outline).
+    front = np.full(npx, -1, dtype=i64)
+    centre = alpha >= 0.5
+    front[pix[centre]] = np.nonzero(centre)[0]
+    bounds = np.searchsorted(lay, np.arange(L + 1), side="left").astype(i64)
+    count = np.bincount(pix, minlength=npx)
+    alone = (count[pix] == 1) & (alpha >= 1.0)
+    stack_frag = np.nonzero(~alone)[0]  # already back to front
+    stack_pixels, stack_slot = np.unique(pix[stack_frag], return_inverse=True)
+    front_frag = front[front >= 0]
+    # Column-major: the shaders' per-component products run on contiguous columns.
+    nrm = np.asfortranarray(nrm, dtype=np.float32)
+    return GBuffer(view, pix, lay, alpha, nrm, front, bounds, stack_pixels.astype(i64),
+                   stack_frag.astype(i64), stack_slot.reshape(-1).astype(i64),
+                   np.searchsorted(lay[stack_frag], np.arange(L + 1)).astype(i64), front_frag,
+                   edge_pix, edge_dist)
+
+
+def _normal_derivatives(front, nrm, lay, W, H):
+    """Finite differences of the owner's normal at each owned pixel: central where both
+    neighbours belong to the same layer, one-sided where one does, 0 where none does."""
+    owned = np.nonzero(front >= 0)[0]
+    f = front[owned]
+    own_layer = np.full(W * H, -1, dtype=np.int32)
+    own_layer[owned] = lay[f]
+    comp = [np.take(nrm[:, j], f) for j in range(3)]  # per component: contiguous gathers
+    img = np.zeros((3, W * H), dtype=np.float32)
+    for j in range(3):
+        img[j, owned] = comp[j]
+    r, c = np.divmod(owned, W)
+    mine = own_layer[owned]
+    out = []
+    for step, lo_ok, hi_ok in ((1, c > 0, c < W - 1), (W, r > 0, r < H - 1)):
+        grads = np.zeros((len(owned), 3), dtype=np.float32, order="F")
+        count = np.zeros(len(owned), dtype=np.float32)
+        for sign, ok in ((1, hi_ok), (-1, lo_ok)):
+            q = np.where(ok, owned + sign * step, owned)
+            same = (ok & (np.take(own_layer, q) == mine)).astype(np.float32)
+            for j in range(3):
+                grads[:, j] += same * sign * (np.take(img[j], q) - comp[j])
+            count += same
+        out.append(grads / np.maximum(count, 1.0)[:, None])
+    return out[0], out[1]
+
+
+def shade(
+    gbuf: GBuffer,
+    light,
+    shader,
+    background,
+    tints=None,
+    isophotes: int = 0,
+    line_colour=(0.12, 0.10, 0.10),
+    line_alpha: float = 0.85,
+    line_width: float = 1.2,
+    bgrx: bool = False,
+    outline_alpha: float = 0.0,
+    outline_width: float = 1.0,
+    out: np.ndarray | None = None,
+) -> np.ndarray:
+    """Shade a GBuffer and composite it back to front over the background.
+
+    Parameters
+    ----------
+    gbuf : GBuffer
+    light : (3,) float64
+        Unit direction towards the light.
+    shader : callable
+        ``shader(normals (k, 3) float32, light (3,) float64) -> (k, 3)`` colours in [0, 1].
+    background : (3,) float in [0, 1]
+    tints : (n_layers, 3) float or None
+        Per-layer colour multiplier (telling layers apart); None for none.
+    isophotes : int
+        K lines at n·l = j / (K + 1), j = 1..K, over the front layer; 0 for none.
+    line_colour, line_alpha, line_width
+        The lines' colour, opacity and width in pixels.
+    bgrx : bool
+        Return (height, width, 4) uint8 in Qt's ``Format_RGB32`` byte order (B, G, R, 255)
+        instead of RGB.
+    outline_alpha, outline_width
+        Opacity (0: none) and width in pixels of the layers' visible outlines, drawn in the
+        isophote line colour: where a layer lies over another one, the eye finds its edge.
+    out : (height, width, 4) uint8 or None
+        With ``bgrx``: the result of an earlier ``shade`` of this very buffer with the same
+        background, written over in place. Pixels no fragment reaches never change between
+        lights, so only the others are written (a light drag at 10^6 pixels).
+
+    Returns
+    -------
+    (height, width, 3) or (height, width, 4) uint8
+
+    Raises
+    ------
+    ValueError
+        If the shader returns the wrong shape or non-finite colours.
+    """
+    view = gbuf.view
+    W, H = view.width, view.height
+    l = np.asarray(light, dtype=np.float64).reshape(3)
+    bg = np.clip(np.asarray(background, dtype=np.float32).reshape(3), 0.0, 1.0)
+    bg32 = _pack(bg[None, :] * 255.0 + 0.5)[0]
+    if out is not None and bgrx and out.shape == (H, W, 4) and out.dtype == np.uint8 and out.flags.c_contiguous:
+        out = out.reshape(-1).view("<u4")
+        out[gbuf.edge_pix] = bg32  # outlines reach past the fragments: start them afresh
+    else:
+        out = np.empty(H * W, dtype=np.uint32)
+        out[:] = bg32
+    if len(gbuf.pix):
+        colour = np.asarray(shader(gbuf.normal, l), dtype=np.float32)
+        # one summing pass: a NaN or an infinity anywhere makes the sum non-finite
+        if colour.shape != (len(gbuf.pix), 3) or not np.isfinite(colour.sum(dtype=np.float64)):
+            raise ValueError(
+                f"the display shader returned an array of shape {colour.shape} for {len(gbuf.pix)} "
+                "normals; it must return one finite RGB row per normal"
+            )
+        if not colour.flags.writeable or np.may_share_memory(colour, gbuf.normal):
+            colour = colour.copy()  # scaled in place below: never write into the buffer
+        scale = np.full((gbuf.n_layers, 3), 255.0, dtype=np.float32)
+        if tints is not None:
+            scale *= np.asarray(tints, dtype=np.float32).reshape(-1, 3)[: gbuf.n_layers]
+        b = gbuf.bounds
+        for li in range(gbuf.n_layers):  # fragments are grouped by layer: slices, no gather
+            if b[li + 1] > b[li]:
+                colour[b[li] : b[li + 1]] *= scale[li]
+        if isophotes > 0:
+            cov = isophote_coverage(gbuf, l, isophotes, line_width)
+            hit = np.nonzero(cov > 0)[0]
+            f = gbuf.front_frag[hit]
+            lc = np.asarray(line_colour, dtype=np.float32).reshape(3) * 255.0
+            colour[f] += (line_alpha * cov[hit])[:, None] * (lc - colour[f])
+        colour += 0.5
+        # every fragment's own colour first (most pixels hold one: done), then the pixels
+        # where several blend are overwritten below
+        out[gbuf.pix] = _pack(colour)
+        if len(gbuf.stack_pixels):
+            acc = np.empty((len(gbuf.stack_pixels), 3), dtype=np.float32)
+            acc[:] = bg * 255.0 + 0.5
+            fr, slot, sb = gbuf.stack_frag, gbuf.stack_slot, gbuf.stack_bounds
+            # A pixel holds at most one fragment per layer: blend layer by layer, back to front
+            # (stack_frag ascends, so it is grouped by layer).
+            for li in range(gbuf.n_layers):
+                k, q = fr[sb[li] : sb[li + 1]], slot[sb[li] : sb[li + 1]]
+                if len(k):
+                    acc[q] += gbuf.alpha[k, None] * (colour[k] - acc[q])
+            out[gbuf.stack_pixels] = _pack(acc)
+    if outline_alpha > 0 and len(gbuf.edge_pix):
+        cov = np.clip(np.float32(0.5 * outline_width + 0.5) - gbuf.edge_dist, 0.0, 1.0) * outline_alpha
+        hit = cov > 0
+        p = gbuf.edge_pix[hit]
+        px = out[p]
+        cur = np.column_stack([(px >> 16) & 255, (px >> 8) & 255, px & 255]).astype(np.float32)
+        lc = np.asarray(line_colour, dtype=np.float32).reshape(3) * 255.0
+        out[p] = _pack(cur + cov[hit, None] * (lc - cur) + 0.5)
+    bytes_ = out.view(np.uint8).reshape(H, W, 4)  # little-endian: B, G, R, 255
+    if bgrx:
+        return bytes_
+    return bytes_[:, :, 2::-1].copy()
+
+
+def _pack(c: np.ndarray) -> np.ndarray:
+    """(k, 3) float32 0..255.5 RGB (clipped in place) -> (k,) uint32 0xffRRGGBB (Qt's
+    Format_RGB32), written byte by byte (B, G, R, 255 in little-endian memory)."""
+    c = np.clip(c, 0.0, 255.0, out=c if c.dtype == np.float32 and c.flags.writeable else None)
+    c8 = c.astype(np.uint8)
+    p4 = np.empty((len(c8), 4), dtype=np.uint8)
+    p4[:, 0] = c8[:, 2]
+    p4[:, 1] = c8[:, 1]
+    p4[:, 2] = c8[:, 0]
+    p4[:, 3] = 255
+    return p4.view("<u4").ravel()
+
+
+def front_intensity(gbuf: GBuffer, light) -> tuple[np.ndarray, np.ndarray]:
+    """n·l of the front fragment per pixel and the front layer per pixel.
+
+    Returns
+    -------
+    E : (height, width) float32
+        Signed n·l of the layer in front at the pixel centre (NaN where no layer is).
+    owner : (height, width) int32
+        That layer's index, -1 where none.
+    """
+    view = gbuf.view
+    l = np.asarray(light, dtype=np.float32).reshape(3)
+    E = np.full(view.width * view.height, np.nan, dtype=np.float32)
+    ok = gbuf.front >= 0
+    E[ok] = _dot(gbuf.normal[gbuf.front_frag], l)
+    return E.reshape(view.height, view.width), gbuf.front_layer()
+
+
+def isophote_coverage(gbuf: GBuffer, light, K: int, width: float = 1.2) -> np.ndarray:
+    """Antialiased isophote lines n·l = j/(K+1) of the front layers, as coverage per owning
+    fragment (``gbuf.front_frag``).
+
+    The distance of a pixel to the nearest level, |E - c| / |∇E|, uses the screen-space gradient
+    of the front layer's own E (normal differences that never cross into another layer), so a
+    line keeps ``width`` pixels whatever the zoom, and stops where a layer in front begins.
+
+    Returns
+    -------
+    (f,) float32 in [0, 1]
+    """
+    l = np.asarray(light, dtype=np.float32).reshape(3)
+    K = int(K)
+    dn_dx, dn_dy, (nx, ny, nz), bound = gbuf._line_data()
+    t = nx * (l[0] * (K + 1))
+    t += ny * (l[1] * (K + 1))
+    t += nz * (l[2] * (K + 1))
+    d = np.abs(t - np.clip(np.rint(t), 1, K))  # distance to the nearest level, in level units
+    reach = np.float32(0.5 * width + 0.5)
+    # |∇t| <= (K + 1) * bound: pixels farther than ``reach`` from a line even at that slope are
+    # skipped (most of them), the others get the exact distance.
+    cand = np.nonzero(d < reach * (K + 1) * bound)[0]
+    cov = np.zeros(len(t), dtype=np.float32)
+    if len(cand):
+        gx = _dot(dn_dx[cand], l) * (K + 1)
+        gy = _dot(dn_dy[cand], l) * (K + 1)
+        g = np.sqrt(gx * gx + gy * gy)
+        cov[cand] = np.clip(reach - d[cand] / np.maximum(g, 1e-6), 0.0, 1.0)
+    return cov
+
+
+def _dot(N: np.ndarray, l: np.ndarray) -> np.ndarray:
+    """Row-wise N·l for (k, 3) N; column by column (numpy's float32 matvec is ~20x slower)."""
+    return N[:, 0] * l[0] + N[:, 1] * l[1] + N[:, 2] * l[2]
