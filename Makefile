@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 EXAMPLE ?= examples/creature.json
-PLUGINS := plugins/inflate plugins/isophote_tool plugins/assemble
+PLUGINS := plugins/inflate plugins/isophote_tool plugins/assemble plugins/animate
 
 .PHONY: run test venv bench screenshots clean
 
