@@ -20,7 +20,7 @@ from scipy.spatial import cKDTree
 from sketchforge.errors import ParameterError
 
 #: Polar iterations per local step (warm-started from the previous rotations).
-POLAR_ITERATIONS = 3
+POLAR_ITERATIONS = 1
 
 
 def edge_weights(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
