@@ -119,6 +119,13 @@ class Document:
             self._assembled_revision = self.geometry_revision
         return self._assembled
 
+    def offer_assembled(self, geometry_revision: int, mesh) -> None:
+        """A front end that assembled the visible layers on a worker thread hands the result
+        back, so exports and pins do not assemble the same layers again. Ignored when the
+        layers have changed since."""
+        if geometry_revision == self.geometry_revision:
+            self._assembled, self._assembled_revision = mesh, geometry_revision
+
     # --- mutators: commands only ------------------------------------------------------------------
     def _touch(self) -> None:
         self.revision += 1
