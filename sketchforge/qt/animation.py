@@ -451,3 +451,34 @@ class PinInteraction(QObject):
             gl.addItem(self._scatter)
         else:
             self._scatter.setData(pos=W, color=colours)
+
+
+class _DocumentValues:
+    """What a document exporter reads, taken on the GUI thread (immutable values), so the
+    export can run on a worker while the user goes on editing."""
+
+    def __init__(self, doc) -> None:
+        self._mesh = doc.export_mesh()
+        self._data = {k: doc.plugin_data(k) for k in doc.plugin_data_keys}
+
+    def export_mesh(self, layer_id=None):
+        return self._mesh
+
+    def plugin_data(self, key, default=None):
+        return self._data.get(key, default)
+
+
+def export_document_in_background(window, exporter, path) -> bool:
+    """Run ``exporter.write_document`` on a worker thread with the progress indicator."""
+    values = _DocumentValues(window.doc)  # may raise SketchforgeError: the caller shows it
+
+    def done(summary):
+        window.show_message(f"exported {path} ({summary})")
+
+    def failed(exc, tb):
+        from sketchforge.qt.errors_ui import show_error
+
+        show_error(window, "Cannot export", exc, tb)
+
+    window.jobs.start(lambda: exporter.write_document(path, values), done, failed, label="Exporting animation")
+    return True

@@ -674,7 +674,11 @@ class MainWindow(QMainWindow):
     def export_to(self, path: Path) -> bool:
         """Export the assembled model (the visible layers merged without an assembler)."""
         try:
-            exporter = self.host.exporter_for(path)
+            exporter = self.host.exporter_for(path, self.doc)
+            if exporter.write_document is not None:  # an animation: seconds of solving
+                from sketchforge.qt.animation import export_document_in_background
+
+                return export_document_in_background(self, exporter, path)
             mesh = self.doc.export_mesh()
             exporter.write(path, mesh)
         except SketchforgeError as exc:

@@ -86,6 +86,29 @@ def test_pins_drag_and_record_become_commands(ctl, qtbot):
     assert [p.id for p in Animation.of(doc).pins] == ["pin1", "pin2"]
 
 
+def test_window_exports_the_animation_off_the_gui_thread(make_window, host, qtbot, tmp_path):
+    from sketchforge_animate.gltf import read_glb
+
+    doc = Document(host=host)
+    doc.execute({"command": "add_layer", "id": "body", "name": "Body"})
+    doc.execute({"command": "set_contour", "layer": "body", "points": BLOB, "closed": True})
+    doc.execute({"command": "set_inflate_params", "layer": "body", "params": {"resolution": 0.08}})
+    V = doc.export_mesh().V
+    doc.execute({"command": "add_pin", "id": "a", "at": V[np.argmin(V[:, 0])].tolist()})
+    right = V[np.argmax(V[:, 0])]
+    doc.execute({"command": "add_pin", "id": "b", "at": right.tolist()})
+    wave = [(right + [0.0, 0.2 * np.sin(2 * np.pi * k / 12), 0.0]).tolist() for k in range(12)]
+    doc.execute({"command": "record_motion", "pin": "b", "start": 0, "samples": wave})
+    w = make_window(doc)
+    assert w.animation is not None  # the panel is there when the plugin is installed
+    out = tmp_path / "a.glb"
+    assert w.export_to(out)
+    qtbot.waitUntil(lambda: not w.jobs.running(), timeout=60000)
+    qtbot.waitUntil(out.exists, timeout=5000)
+    gltf, _ = read_glb(out.read_bytes())
+    assert len(gltf["meshes"][0]["primitives"][0]["targets"]) == 11  # a 12-frame loop
+
+
 def test_picking_projects_and_unprojects():
     # a simple perspective camera looking down -z from z = 5
     f = 2.0
