@@ -52,19 +52,24 @@ def edge_weights(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray, 
     return uniq // (len(V) + 1), uniq % (len(V) + 1), wsum
 
 
-def _quat_to_columns(q: np.ndarray) -> list[np.ndarray]:
-    """Unit quaternions q (4,n) (w, x, y, z) -> the three columns of their rotations, each (3,n)."""
+def _quat_to_columns(q: np.ndarray) -> np.ndarray:
+    """Unit quaternions q (4,n) (w, x, y, z) -> (3,3,n): [c] is column c of each rotation, (3,n)."""
     w, x, y, z = q
-    return [
-        np.stack([1 - 2 * (y * y + z * z), 2 * (x * y + w * z), 2 * (x * z - w * y)]),
-        np.stack([2 * (x * y - w * z), 1 - 2 * (x * x + z * z), 2 * (y * z + w * x)]),
-        np.stack([2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y)]),
-    ]
+    xx, yy, zz, xy, xz, yz, wx, wy, wz = x * x, y * y, z * z, x * y, x * z, y * z, w * x, w * y, w * z
+    R = np.empty((3, 3, q.shape[1]))
+    R[0, 0], R[0, 1], R[0, 2] = 1 - 2 * (yy + zz), 2 * (xy + wz), 2 * (xz - wy)
+    R[1, 0], R[1, 1], R[1, 2] = 2 * (xy - wz), 1 - 2 * (xx + zz), 2 * (yz + wx)
+    R[2, 0], R[2, 1], R[2, 2] = 2 * (xz + wy), 2 * (yz - wx), 1 - 2 * (xx + yy)
+    return R
 
 
 def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     """Cross products of (3,n) column stacks (np.cross on this layout is ~5x slower)."""
-    return np.stack([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+    out = np.empty_like(a)
+    out[0] = a[1] * b[2] - a[2] * b[1]
+    out[1] = a[2] * b[0] - a[0] * b[2]
+    out[2] = a[0] * b[1] - a[1] * b[0]
+    return out
 
 
 def polar_rotations(A_cols: list[np.ndarray], q: np.ndarray, iterations: int) -> np.ndarray:
@@ -124,7 +129,7 @@ class ArapSolver:
     handles : (k,) int64 distinct vertex indices, k >= 1.
     """
 
-    def __init__(self, V: np.ndarray, F: np.ndarray, handles, ordering: str = "MMD_AT_PLUS_A") -> None:
+    def __init__(self, V: np.ndarray, F: np.ndarray, handles, solver: str = "llt") -> None:
         V = np.ascontiguousarray(V, dtype=np.float64)
         F = np.ascontiguousarray(F, dtype=np.int64)
         handles = np.asarray(handles, dtype=np.int64).reshape(-1)
@@ -159,20 +164,41 @@ class ArapSolver:
         self._K = [sp.csr_matrix((W * E[:, b], (I, J)), shape=(n, n)) for b in range(3)]
         self._K = sp.vstack(self._K).tocsr()  # (3n, n): the three products in one call
         self._c = np.stack([np.bincount(I, weights=W * E[:, b], minlength=n) for b in range(3)])  # (3,n)
-        self._KT = [sp.csr_matrix((W * E[:, b], (I, J)), shape=(n, n)) for b in range(3)]
+        # [K_0 K_1 K_2] (n, 3n): the global step's three products in one call
+        self._Kh = sp.hstack([sp.csr_matrix((W * E[:, b], (I, J)), shape=(n, n)) for b in range(3)]).tocsr()
         free = np.setdiff1d(np.arange(n), fixed)
         self.free = free
         self._L_fb = L[free][:, fixed].tocsr()
         Lff = L[free][:, free].tocsc()
-        # The system is symmetric positive definite: a symmetric ordering without pivoting
-        # halves the factor's fill (and the per-frame solve) against COLAMD; see
-        # benchmarks/bench_animate.py for both.
-        if ordering == "COLAMD":
-            self._lu = sla.splu(Lff, permc_spec="COLAMD")
+        # The system is symmetric positive definite. "llt": libigl's sparse Cholesky (Eigen,
+        # AMD ordering) — its solve is ~2x faster than SuperLU's here; "splu": SuperLU in
+        # symmetric mode. benchmarks/bench_animate.py measures both.
+        self.solver = solver
+        if solver == "llt":
+            import igl
+
+            self._mq = igl.min_quad_with_fixed_data()
+            ok = igl.min_quad_with_fixed_precompute(
+                Lff, np.zeros(0, dtype=np.int64), sp.csc_matrix((0, len(free))), True, self._mq
+            )
+            if ok is False:
+                raise ParameterError("ARAP: the pinned system could not be factorised")
+            self._empty = np.zeros((0, 3))
+        elif solver == "splu":
+            self._lu = sla.splu(Lff, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, options={"SymmetricMode": True})
         else:
-            self._lu = sla.splu(Lff, permc_spec=ordering, diag_pivot_thresh=0.0, options={"SymmetricMode": True})
+            raise ParameterError(f"unknown ARAP linear solver {solver!r} (llt or splu)")
         self._q = np.zeros((4, n))
         self._q[0] = 1.0
+
+    def _linear_solve(self, b: np.ndarray) -> np.ndarray:
+        """x (f,3) with L_ff x = b (f,3)."""
+        if self.solver == "llt":
+            import igl
+
+            # min_quad_with_fixed minimises ½xᵀAx + xᵀB: A x = -B
+            return igl.min_quad_with_fixed_solve(self._mq, -b, self._empty, self._empty)
+        return self._lu.solve(b)
 
     @property
     def n_vertices(self) -> int:
@@ -203,8 +229,6 @@ class ArapSolver:
             self._q = polar_rotations(A_cols, self._q, POLAR_ITERATIONS)
             r = _quat_to_columns(self._q)
             # global: L p' = Σ_j w_ij/2 (R_i + R_j) e_ij
-            rhs = 0.5 * (r[0] * self._c[0] + r[1] * self._c[1] + r[2] * self._c[2]).T
-            for b in range(3):
-                rhs += 0.5 * (self._KT[b] @ r[b].T)
-            P[self.free] = self._lu.solve(rhs[self.free] - rhs_fixed)
+            rhs = 0.5 * ((r[0] * self._c[0] + r[1] * self._c[1] + r[2] * self._c[2]).T + self._Kh @ r.transpose(0, 2, 1).reshape(-1, 3))
+            P[self.free] = self._linear_solve(rhs[self.free] - rhs_fixed)
         return P
