@@ -32,6 +32,7 @@ bench: $(STAMP)
 screenshots: $(STAMP)
 	QT_QPA_PLATFORM=offscreen $(BIN)/python -m sketchforge.qt.screenshots $(EXAMPLE) docs/screenshots
 	xvfb-run -a env QT_QPA_PLATFORM=xcb $(BIN)/sketchforge --screenshot docs/screenshots/observation.png $(EXAMPLE) --mode observation
+	$(BIN)/python examples/make_animated.py --strip docs/screenshots/animation_strip.png
 
 clean:
 	rm -rf $(VENV) build *.egg-info plugins/*/*.egg-info

@@ -2,7 +2,7 @@
 
 A plugin is any object or module with functions decorated by ``@hookimpl`` whose names match
 the specifications below. Installed plugins register through the entry-point group
-``sketchforge`` (see ``plugins/inflate/pyproject.toml`` for a worked example); the three
+``sketchforge`` (see ``plugins/inflate/pyproject.toml`` for a worked example); the
 built-in plugins are loaded through exactly that path.
 
 Hooks are grouped by phase:

@@ -170,7 +170,7 @@ class View3D(QWidget):
             self._show([(l.mesh, CLAY) for l in layers], "the assembler returned nothing; showing the layers")
         else:
             self._show([(mesh, CLAY)], "")
-            self.model_item = self._items[0]
+            self.model_item = self._items[0] if self._items else None
         self.assembled_shown.emit(mesh)
 
     def _show(self, meshes, note: str) -> None:

@@ -10,6 +10,8 @@ animation (what ``replay --frame N`` and the glTF exporter compute), bit for bit
 
 from __future__ import annotations
 
+import atexit
+
 import numpy as np
 from scipy.spatial import cKDTree
 
@@ -83,6 +85,14 @@ class Animator:
 
 
 _last: Animator | None = None
+
+
+@atexit.register
+def _forget() -> None:
+    # libigl's factorisation object must go before the interpreter tears its bindings down
+    # (nanobind reports a leak otherwise)
+    global _last
+    _last = None
 
 
 def animator_for(mesh: Mesh, anim: Animation) -> Animator:
