@@ -72,15 +72,16 @@ def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return out
 
 
-def polar_rotations(A_cols: list[np.ndarray], q: np.ndarray, iterations: int) -> np.ndarray:
+def polar_rotations(A_cols: list[np.ndarray], q: np.ndarray, iterations: int, R: np.ndarray | None = None) -> np.ndarray:
     """Rotations maximising tr(Rᵀ A) per vertex, warm-started at q.
 
     A_cols: the three columns of A, each (3,n) float64; q (4,n) unit quaternions -> (4,n).
+    R: q's rotation columns (3,3,n) when the caller has them already.
     Structure-of-arrays on purpose: numpy's batched 3×3 matmul/SVD loop in C per matrix and
     cost ~10x more at 16k vertices.
     """
-    for _ in range(iterations):
-        r = _quat_to_columns(q)
+    for k in range(iterations):
+        r = R if (k == 0 and R is not None) else _quat_to_columns(q)
         num = _cross(r[0], A_cols[0]) + _cross(r[1], A_cols[1]) + _cross(r[2], A_cols[2])
         den = np.abs((r[0] * A_cols[0]).sum(0) + (r[1] * A_cols[1]).sum(0) + (r[2] * A_cols[2]).sum(0)) + 1e-12
         omega = num / den
@@ -190,6 +191,7 @@ class ArapSolver:
             raise ParameterError(f"unknown ARAP linear solver {solver!r} (llt or splu)")
         self._q = np.zeros((4, n))
         self._q[0] = 1.0
+        self._r = None  # the rotation columns of _q, once computed
 
     def _linear_solve(self, b: np.ndarray) -> np.ndarray:
         """x (f,3) with L_ff x = b (f,3)."""
@@ -206,8 +208,9 @@ class ArapSolver:
 
     def reset(self) -> None:
         """Forget the warm-start rotations (the next solve starts from the identity)."""
-        self._q[:] = 0.0
+        self._q = np.zeros_like(self._q)
         self._q[0] = 1.0
+        self._r = None
 
     def solve(self, targets: np.ndarray, init: np.ndarray, iterations: int) -> np.ndarray:
         """Positions (n,3) float64 with the handles at ``targets`` (k,3), after ``iterations``
@@ -226,8 +229,8 @@ class ArapSolver:
             KP = self._K @ P
             PT = P.T
             A_cols = [PT * self._c[b] - KP[b * n:(b + 1) * n].T for b in range(3)]
-            self._q = polar_rotations(A_cols, self._q, POLAR_ITERATIONS)
-            r = _quat_to_columns(self._q)
+            self._q = polar_rotations(A_cols, self._q, POLAR_ITERATIONS, self._r)
+            r = self._r = _quat_to_columns(self._q)
             # global: L p' = Σ_j w_ij/2 (R_i + R_j) e_ij
             rhs = 0.5 * ((r[0] * self._c[0] + r[1] * self._c[1] + r[2] * self._c[2]).T + self._Kh @ r.transpose(0, 2, 1).reshape(-1, 3))
             P[self.free] = self._linear_solve(rhs[self.free] - rhs_fixed)
