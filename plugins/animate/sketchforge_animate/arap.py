@@ -5,7 +5,7 @@ iterations per frame. The local step fits a rotation per vertex with the warm-st
 iteration of Müller et al. 2016 ("A robust method to extract the rotational part of
 deformations"): a handful of vectorised 3×3 operations instead of 16k SVDs (numpy's batched
 SVD alone costs ~55 ms at 16k vertices on this machine kind). It always yields a proper
-rotation, so no reflection fix-up is needed. Everything is plain float64 numpy/scipy with a
+rotation, so no reflection fix-up is needed. Everything is float64 numpy/scipy/libigl with a
 fixed iteration count, so a pose is a deterministic function of its inputs.
 """
 
