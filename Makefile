@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 EXAMPLE ?= examples/creature.json
-PLUGINS := plugins/inflate plugins/isophote_tool plugins/assemble
+PLUGINS := plugins/inflate plugins/isophote_tool plugins/assemble plugins/animate
 
 .PHONY: run deps test venv bench screenshots clean
 
@@ -51,6 +51,7 @@ screenshots: $(STAMP)
 	xvfb-run -a env QT_QPA_PLATFORM=xcb $(BIN)/sketchforge --screenshot docs/screenshots/drawing-7-observation.png $$tmp/creature.json --mode observation; \
 	rc=$$?; rm -rf $$tmp; exit $$rc
 	xvfb-run -a env QT_QPA_PLATFORM=xcb $(BIN)/sketchforge --screenshot docs/screenshots/observation.png $(EXAMPLE) --mode observation
+	$(BIN)/python examples/make_animated.py --strip docs/screenshots/animation_strip.png
 
 clean:
 	rm -rf $(VENV) build *.egg-info plugins/*/*.egg-info

@@ -31,12 +31,30 @@ def cmd_replay(args) -> int:
         if diffs:
             raise SketchforgeError(f"{args.doc}: replay differs from the saved snapshot: " + "; ".join(diffs))
         print("replay matches the snapshot", file=sys.stderr)
+    if args.frame is not None and not args.export:
+        raise SketchforgeError("--frame needs --export OUT (the file to write the posed frame to)")
     if args.export:
         out = Path(args.export)
-        exporter = doc.host.exporter_for(out)
-        mesh = doc.export_mesh(args.layer)
-        exporter.write(out, mesh)
-        print(f"wrote {out} ({mesh.n_vertices} vertices, {mesh.n_faces} triangles)", file=sys.stderr)
+        if args.frame is not None:
+            if args.layer:
+                raise SketchforgeError("--frame poses the assembled model; it cannot be combined with --layer")
+            if args.frame < 0:
+                raise SketchforgeError(f"--frame must be 0 or more, got {args.frame}")
+            exporter = doc.host.exporter_for(out)
+            mesh = doc.host.pose(doc, args.frame)
+            if mesh is None:
+                raise SketchforgeError("--frame needs an animation plugin (sketchforge-animate) and none is installed")
+            exporter.write(out, mesh)
+            print(f"wrote {out} (frame {args.frame}, {mesh.n_vertices} vertices, {mesh.n_faces} triangles)", file=sys.stderr)
+        else:
+            exporter = doc.host.exporter_for(out, None if args.layer else doc)
+            if exporter.write_document is not None and not args.layer and exporter.handles(doc):
+                summary = exporter.write_document(out, doc)
+                print(f"wrote {out} ({summary})", file=sys.stderr)
+            else:
+                mesh = doc.export_mesh(args.layer)
+                exporter.write(out, mesh)
+                print(f"wrote {out} ({mesh.n_vertices} vertices, {mesh.n_faces} triangles)", file=sys.stderr)
     if args.save:
         ff.save(doc, args.save)
     return 0
@@ -80,8 +98,9 @@ def build_parser() -> argparse.ArgumentParser:
     sub = p.add_subparsers(dest="cmd", required=True)
     r = sub.add_parser("replay", help="recompute a document from its journal, headlessly")
     r.add_argument("doc", type=Path)
-    r.add_argument("--export", help="write the result (.obj .ply .stl .glb .gltf)")
+    r.add_argument("--export", help="write the result (.obj .ply .stl .glb .gltf; an animated document's .glb holds its animation)")
     r.add_argument("--layer", help="export this layer's own mesh instead of the assembled model")
+    r.add_argument("--frame", type=int, help="export the model posed at this animation frame (24 fps)")
     r.add_argument("--check", action="store_true", help="compare the replay with the saved snapshot")
     r.add_argument("--save", help="save the replayed document (with a fresh snapshot)")
     r.add_argument("-v", "--verbose", action="store_true")

@@ -19,6 +19,12 @@ EXAMPLES = [
     {"command": "set_inflate_params", "layer": "body", "params": {"resolution": 0.05, "inflation": 1.2, "smoothing": 0.0}},
     {"command": "set_light", "direction": [0.6, 0.8, 0.0]},
     {"command": "sculpt_isophote", "layer": "body", "pick": [0.2, 0.1], "band": 0.3, "stroke": [[0.1, -0.3], [0.3, 0.3]]},
+    {"command": "add_pin", "id": "pin1", "at": [0.5, 0.25, 0.75]},
+    {"command": "move_pin", "pin": "pin1", "to": [0.5, 0.5, 1.0]},
+    {"command": "remove_pin", "pin": "pin1"},
+    {"command": "hold_pin", "pin": "pin1"},
+    {"command": "record_motion", "pin": "pin1", "start": 3, "samples": [[0.0, 0.0, 1.0], [0.125, 0.0, 1.0]]},
+    {"command": "copy_motion", "source": "pin1", "pin": "pin2"},
     {"command": "macro", "text": "Draw layer", "children": [
         {"command": "add_layer", "id": "a", "name": "A"},
         {"command": "set_contour", "layer": "a", "points": [[0.0, 0.0], [1.0, 0.0], [0.5, 1.0]]}]},

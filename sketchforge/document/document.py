@@ -12,6 +12,11 @@ reads it. Signals, emitted after the change:
 - ``light_changed(Light light)``
 - ``history_changed()`` (undo stack index, texts or clean state)
 - ``assembly_invalidated()`` (the assembled model must be recomputed)
+- ``plugin_data_changed(str key)`` (a plugin's document-level data, e.g. an animation)
+
+Plugin data: plugins that keep document-level state which is not a layer (the animation's
+pins and motions) store it as one JSON value per key (dicts, lists, strings, numbers, bools)
+through their own commands. It is saved in the snapshot and compared by ``differences``.
 """
 
 from __future__ import annotations
@@ -41,6 +46,7 @@ class Document:
         self.geometry_revision = 0  # bumped when layers change (not the light)
         self._assembled = None
         self._assembled_revision = -1
+        self._plugin_data: dict = {}
 
         self.layer_inserted = Signal(int, Layer, name="layer_inserted")
         self.layer_removed = Signal(int, Layer, name="layer_removed")
@@ -50,6 +56,7 @@ class Document:
         self.light_changed = Signal(Light, name="light_changed")
         self.history_changed = Signal(name="history_changed")
         self.assembly_invalidated = Signal(name="assembly_invalidated")
+        self.plugin_data_changed = Signal(str, name="plugin_data_changed")
         self.undo_stack = UndoStack(self)
 
     # --- queries --------------------------------------------------------------------------------
@@ -61,6 +68,14 @@ class Document:
     @property
     def light(self) -> Light:
         return self._light
+
+    def plugin_data(self, key: str, default=None):
+        """A plugin's document-level JSON value (treat as read-only), or ``default``."""
+        return self._plugin_data.get(key, default)
+
+    @property
+    def plugin_data_keys(self) -> list[str]:
+        return sorted(self._plugin_data)
 
     def layer_ids(self) -> list[str]:
         return [layer.id for layer in self._layers]
@@ -104,6 +119,13 @@ class Document:
             self._assembled_revision = self.geometry_revision
         return self._assembled
 
+    def offer_assembled(self, geometry_revision: int, mesh) -> None:
+        """A front end that assembled the visible layers on a worker thread hands the result
+        back, so exports and pins do not assemble the same layers again. Ignored when the
+        layers have changed since."""
+        if geometry_revision == self.geometry_revision:
+            self._assembled, self._assembled_revision = mesh, geometry_revision
+
     # --- mutators: commands only ------------------------------------------------------------------
     def _touch(self) -> None:
         self.revision += 1
@@ -141,6 +163,15 @@ class Document:
         self.revision += 1  # shading only: the assembled geometry does not depend on the light
         self.light_changed.emit(light)
 
+    def _set_plugin_data(self, key: str, value) -> None:
+        """Set (or, with None, remove) a plugin's value; the assembled geometry is unaffected."""
+        if value is None:
+            self._plugin_data.pop(key, None)
+        else:
+            self._plugin_data[key] = value
+        self.revision += 1
+        self.plugin_data_changed.emit(key)
+
     # --- comparison (tests, replay checks) --------------------------------------------------------
     def differences(self, other: "Document") -> list[str]:
         """What differs between the two states (empty when layers, meshes bit for bit, and
@@ -155,24 +186,34 @@ class Document:
             if not la.same_state(lb):
                 mesh_differs = (la.mesh is None) != (lb.mesh is None) or (la.mesh is not None and not la.mesh.identical(lb.mesh))
                 out.append(f"layer {la.id!r}: {'mesh' if mesh_differs else 'fields'} differ")
+        for key in sorted(set(self._plugin_data) | set(other._plugin_data)):
+            if self._plugin_data.get(key) != other._plugin_data.get(key):
+                out.append(f"plugin data {key!r} differs")
         return out
 
     def same_state(self, other: "Document") -> bool:
         return not self.differences(other)
 
-    def restore_state(self, layers, light: Light, initial_light: Light | None = None, base_journal=()) -> None:
-        """Set the whole state at once (opening a file): layers, current light, and the light
-        and journal that led to them. Not undoable: clears history; the result is clean."""
+    def restore_state(
+        self, layers, light: Light, initial_light: Light | None = None, base_journal=(), plugin_data=None
+    ) -> None:
+        """Set the whole state at once (opening a file): layers, current light, plugin data,
+        and the light and journal that led to them. Not undoable: clears history; the result
+        is clean."""
         self._layers = list(layers)
+        old_keys = set(self._plugin_data)
+        self._plugin_data = dict(plugin_data or {})
         self._light = light
         self.initial_light = light if initial_light is None else initial_light
         self.base_journal = [dict(e) for e in base_journal]
         self._touch()
+        for key in sorted(old_keys | set(self._plugin_data)):
+            self.plugin_data_changed.emit(key)
         self.undo_stack.clear()
 
     def adopt(self, other: "Document") -> None:
         """Take over another document's state (the app opening a file into its window)."""
-        self.restore_state(other.layers, other.light, other.initial_light, other.base_journal)
+        self.restore_state(other.layers, other.light, other.initial_light, other.base_journal, other._plugin_data)
 
     def export_mesh(self, layer_id: str | None = None):
         """The mesh to export: one layer's own front surface, else the assembled model, else

@@ -7,7 +7,8 @@
 - ``journal``: command dicts, each with a ``"command"`` name, in order; each acts with the light
   current at its place (``set_light`` entries change it).
 - ``snapshot`` (optional): the state after the journal: ``light`` and every layer (id, name,
-  visible, closed, points, params, edits, mesh). Mesh arrays are stored as base64 of their
+  visible, closed, points, params, edits, mesh) and, when a plugin keeps document-level data
+  (an animation), ``plugin_data``: {key: JSON value}. Mesh arrays are stored as base64 of their
   little-endian bytes, so a reopened file is bit-identical to the saved one.
 
 Opening uses the snapshot (a file reopens exactly as saved even after the solvers change);
@@ -119,6 +120,9 @@ def document_to_dict(doc: Document, snapshot: bool = True) -> dict:
     }
     if snapshot:
         out["snapshot"] = {"light": _light_list(doc.light), "layers": [_layer_to_dict(l) for l in doc.layers]}
+        keys = doc.plugin_data_keys
+        if keys:
+            out["snapshot"]["plugin_data"] = {k: doc.plugin_data(k) for k in keys}
     return out
 
 
@@ -209,7 +213,10 @@ def document_from_dict(data: Any, source: str = "document", host=None, use_snaps
     if len(set(ids)) != len(ids):
         raise DocumentFormatError(f"{source}: snapshot.layers has duplicate ids")
     cur_light = _parse_light(snap.get("light", data.get("light", [1.0, 0.0, 0.0])), f"{source}: snapshot.light")
-    doc.restore_state(layers, cur_light, light, journal)
+    plugin_data = snap.get("plugin_data", {})
+    if not isinstance(plugin_data, dict) or not all(isinstance(k, str) for k in plugin_data):
+        raise DocumentFormatError(f"{source}: snapshot.plugin_data must be an object")
+    doc.restore_state(layers, cur_light, light, journal, plugin_data)
     return doc
 
 

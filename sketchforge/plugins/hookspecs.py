@@ -2,7 +2,7 @@
 
 A plugin is any object or module with functions decorated by ``@hookimpl`` whose names match
 the specifications below. Installed plugins register through the entry-point group
-``sketchforge`` (see ``plugins/inflate/pyproject.toml`` for a worked example); the three
+``sketchforge`` (see ``plugins/inflate/pyproject.toml`` for a worked example); the
 built-in plugins are loaded through exactly that path.
 
 Hooks are grouped by phase:
@@ -13,6 +13,7 @@ then entry points sorted by name, so the choice never depends on installation or
 
 - :func:`sketchforge_inflate`
 - :func:`sketchforge_assemble`
+- :func:`sketchforge_pose`
 
 Registries (every implementation is called, results are collected; names must be unique):
 
@@ -82,6 +83,26 @@ def sketchforge_assemble(layers, params):
     """
 
 
+@hookspec(firstresult=True)
+def sketchforge_pose(doc, frame):
+    """The document's assembled model posed at animation frame ``frame`` (animation plugins).
+
+    Called by ``sketchforge replay DOC --frame N --export OUT``.
+
+    Parameters
+    ----------
+    doc : sketchforge.document.Document
+        Read-only.
+    frame : int
+        Frame number >= 0 (24 frames per second; frames past the loop wrap around it).
+
+    Returns
+    -------
+    sketchforge.geometry.Mesh
+        The posed model, with the static model's triangles (same connectivity).
+    """
+
+
 # --- registries ------------------------------------------------------------------------------
 
 
@@ -128,5 +149,7 @@ def sketchforge_exporters():
     """Return a list of exporters (``sketchforge.plugins.registry.Exporter``).
 
     An exporter has a ``name``, the file ``suffixes`` it writes (``".obj"``) and
-    ``write(path, mesh)``. OBJ, PLY, STL and glTF (``.glb``/``.gltf``) are built in.
+    ``write(path, mesh)``. OBJ, PLY, STL and glTF (``.glb``/``.gltf``) are built in. An
+    exporter of a whole document (an animated glTF) also sets ``write_document`` and
+    ``handles`` (see :class:`sketchforge.plugins.registry.Exporter`).
     """

@@ -130,12 +130,23 @@ class PluginHost:
     def exporters(self) -> dict:
         return self._collect(self.pm.hook.sketchforge_exporters, "exporter")
 
-    def exporter_for(self, path) -> "object":
+    def pose(self, doc, frame: int):
+        """The document's model posed at animation ``frame`` by an animation plugin (None:
+        no animation plugin is installed)."""
+        return self.pm.hook.sketchforge_pose(doc=doc, frame=int(frame))
+
+    def exporter_for(self, path, doc=None) -> "object":
+        """The exporter for ``path``'s suffix. With ``doc``, a document exporter that handles
+        it (an animation) is preferred, the most recently registered first."""
         from pathlib import Path
 
         from sketchforge.errors import ExportError
 
         suffix = Path(path).suffix.lower()
+        if doc is not None:
+            for exp in reversed(list(self.exporters.values())):
+                if suffix in exp.suffixes and exp.write_document is not None and exp.handles is not None and exp.handles(doc):
+                    return exp
         for exp in self.exporters.values():
             if suffix in exp.suffixes:
                 return exp

@@ -31,9 +31,15 @@ class Shader:
 
 @dataclass(frozen=True)
 class Exporter:
-    """A mesh file format: ``write(path: pathlib.Path, mesh: Mesh) -> None``."""
+    """A mesh file format: ``write(path: pathlib.Path, mesh: Mesh) -> None``.
+
+    An exporter of more than one mesh (an animation) also sets ``write_document(path, doc)
+    -> str`` (returns a one-line summary) and ``handles(doc) -> bool``; for a document it
+    handles, it is chosen over a plain mesh exporter of the same suffix."""
 
     name: str
     suffixes: tuple[str, ...]
     write: Callable
     description: str = ""
+    write_document: Callable | None = None
+    handles: Callable | None = None

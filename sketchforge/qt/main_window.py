@@ -186,6 +186,26 @@ class MainWindow(QMainWindow):
         return True
 
     # --- construction ---------------------------------------------------------------------------
+    def _build_animation(self, layout):
+        """Pins, posing and playback (sketchforge.qt.animation), when the animate plugin is
+        installed; None otherwise."""
+        if "add_pin" not in self.host.commands.names():
+            return None
+        from sketchforge.qt.animation import AnimationController, AnimationPanel, PinInteraction
+
+        ctl = AnimationController(self.doc, lambda cmd: self.runner.run(cmd, label="Animating"), self)
+        panel = AnimationPanel(ctl)
+        layout.addWidget(panel)
+        pins = PinInteraction(self.view3d, ctl, panel)
+        ctl.message.connect(self.show_message)
+
+        def shown(mesh):
+            ctl.set_mesh(mesh)
+            pins.install()
+
+        self.view3d.assembled_shown.connect(shown)
+        return ctl
+
     def _build_widgets(self) -> None:
         doc = self.doc
         self.canvas = Canvas(doc, self.host)
@@ -207,7 +227,13 @@ class MainWindow(QMainWindow):
         self.observe_note = QLabel("OBSERVATION: drag to orbit, wheel to zoom.\nThe left menu switches between the assembled model and each layer's mesh.")
         self.observe_note.setWordWrap(True)
         self.observe_note.setAlignment(Qt.AlignmentFlag.AlignTop)
-        self.controls.addWidget(self.observe_note)
+        self.observe_page = QWidget()
+        observe_lay = QVBoxLayout(self.observe_page)
+        observe_lay.setContentsMargins(0, 0, 0, 0)
+        observe_lay.addWidget(self.observe_note)
+        self.animation = self._build_animation(observe_lay)
+        observe_lay.addStretch(1)
+        self.controls.addWidget(self.observe_page)
         top = QWidget()
         top_lay = QVBoxLayout(top)
         top_lay.setContentsMargins(0, 0, 0, 0)
@@ -461,7 +487,7 @@ class MainWindow(QMainWindow):
         self.light_panel.setVisible(mode == "editing")
         if mode == "observation":
             self.center.setCurrentWidget(self.view3d)
-            self.controls.setCurrentWidget(self.observe_note)
+            self.controls.setCurrentWidget(self.observe_page)
             self.view3d.activate()
         else:
             self.view3d.deactivate()
@@ -877,7 +903,11 @@ class MainWindow(QMainWindow):
     def export_to(self, path: Path) -> bool:
         """Export the assembled model (the visible layers merged without an assembler)."""
         try:
-            exporter = self.host.exporter_for(path)
+            exporter = self.host.exporter_for(path, self.doc)
+            if exporter.write_document is not None:  # an animation: seconds of solving
+                from sketchforge.qt.animation import export_document_in_background
+
+                return export_document_in_background(self, exporter, path)
             mesh = self.doc.export_mesh()
             exporter.write(path, mesh)
         except SketchforgeError as exc:
@@ -947,6 +977,8 @@ class MainWindow(QMainWindow):
     def closeEvent(self, event) -> None:
         if getattr(self, "_closing_now", False) or self.maybe_save():
             self.runner.cancel()
+            if self.animation is not None:
+                self.animation.shutdown()
             self._autosave_timer.stop()
             self.autosaver.discard()  # a normal close: nothing to recover next time
             event.accept()

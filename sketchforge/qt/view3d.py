@@ -134,6 +134,9 @@ def gl_unavailable_reason() -> str | None:
 
 class View3D(QWidget):
     message = Signal(str)
+    #: the assembled model now on display (None: layers or nothing are shown); an animation
+    #: front end poses ``model_item`` (the model's GLMeshItem) from it
+    assembled_shown = Signal(object)
 
     def __init__(self, doc, jobs, parent=None) -> None:
         super().__init__(parent)
@@ -141,6 +144,7 @@ class View3D(QWidget):
         self.jobs = jobs
         self.source = "assembled"
         self.gl = None
+        self.model_item = None
         self._items: list = []
         self._job = None
         #: (doc.geometry_revision, mesh) of the last assembly, so that switching modes or the
@@ -270,6 +274,7 @@ class View3D(QWidget):
         def done(mesh):
             self._job = None
             self._assembled = (revision, mesh)
+            self.doc.offer_assembled(revision, mesh)  # export and pins need not assemble again
             self._show_assembled(mesh, layers)
 
         def failed(exc, tb):
@@ -284,6 +289,8 @@ class View3D(QWidget):
             self._show([(l.mesh, CLAY) for l in layers], "the assembler returned nothing; showing the layers")
         else:
             self._show([(mesh, CLAY)], "")
+            self.model_item = self._items[0] if self._items else None
+        self.assembled_shown.emit(mesh)
 
     def _show(self, meshes, note: str) -> None:
         import pyqtgraph.opengl as gl
@@ -293,6 +300,9 @@ class View3D(QWidget):
         for item in self._items:
             self.gl.removeItem(item)
         self._items = []
+        if self.model_item is not None:
+            self.model_item = None
+            self.assembled_shown.emit(None)
         allv = []
         item_class = _mesh_item_class()
         from sketchforge.geometry.normals import corner_normals

@@ -1,0 +1,52 @@
+"""The animation exporter (``.glb``) and the ``sketchforge_pose`` hook's work."""
+
+from __future__ import annotations
+
+from sketchforge.atomic import write_bytes_atomic
+from sketchforge.errors import SketchforgeError
+from sketchforge.exporters import write_gltf
+
+from .gltf import animated_glb_bytes
+from .pose import animator_for, posed_mesh
+from .state import FPS, Animation
+
+
+def has_animation(doc) -> bool:
+    """True when the document has pins (a pose or a motion) to export."""
+    return bool(Animation.of(doc).pins)
+
+
+def pose_document(doc, frame: int):
+    """The assembled model posed at ``frame`` (the static model when there are no pins)."""
+    return posed_mesh(doc.export_mesh(), Animation.of(doc), int(frame))
+
+
+def write_animation(path, doc, progress=None) -> str:
+    """Write the document's animation (every loop frame; one posed frame without a motion)
+    as an animated .glb. Returns a one-line summary."""
+    anim = Animation.of(doc)
+    mesh = doc.export_mesh()
+    count = anim.loop if anim.has_motion() else 1
+    frames = []
+    for f, P in enumerate(animator_for(mesh, anim).frames(anim, count)):
+        frames.append(P.copy())
+        if progress is not None:
+            progress(f + 1, count)
+    if str(path).lower().endswith(".gltf"):
+        raise SketchforgeError("an animation is written as .glb (binary glTF); choose a .glb file name")
+    write_bytes_atomic(path, animated_glb_bytes(mesh.F, frames))
+    secs = count / FPS
+    return f"{count} frames, {secs:.2f} s at {FPS} fps, {mesh.n_vertices} vertices, {mesh.n_faces} triangles"
+
+
+def exporter():
+    from sketchforge.plugins.registry import Exporter
+
+    return Exporter(
+        "gltf-animation",
+        (".glb",),
+        write_gltf,
+        "Animated glTF 2.0 (.glb, morph targets, 24 fps)",
+        write_document=write_animation,
+        handles=has_animation,
+    )

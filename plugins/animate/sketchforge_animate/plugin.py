@@ -1,0 +1,26 @@
+"""The animate plugin's hook implementations (entry point ``animate``)."""
+
+from __future__ import annotations
+
+from sketchforge.plugins.hookspecs import hookimpl
+
+
+@hookimpl
+def sketchforge_commands():
+    from .commands import ANIMATION_COMMANDS
+
+    return list(ANIMATION_COMMANDS)
+
+
+@hookimpl
+def sketchforge_exporters():
+    from .export import exporter
+
+    return [exporter()]
+
+
+@hookimpl
+def sketchforge_pose(doc, frame):
+    from .export import pose_document
+
+    return pose_document(doc, frame)
