@@ -16,6 +16,7 @@ import zlib
 import numpy as np
 
 from sketchforge.atomic import write_bytes_atomic
+from sketchforge.errors import LimitError
 from sketchforge.geometry.merge import merge_meshes
 from sketchforge.geometry.normals import vertex_normals
 from sketchforge.geometry.shaders import cel_shade, lambert_shade
@@ -27,6 +28,10 @@ LINE_COLOUR = np.array([0.12, 0.10, 0.10])
 LINE_ALPHA = 0.85
 # Upper bound on candidate pixels tested at once (memory ~ 60 bytes each).
 _CHUNK = 1 << 21
+#: Largest raster cost, pixels of the image plus the bounding-box pixels of every triangle (the
+#: candidate fragments: overdraw counts once per layer covering a pixel). About 2 GB and 20 s
+#: at most (benchmarks/bench_render_limits.py); a full-frame layer fits up to --size ~3000.
+MAX_RASTER_COST = 25_000_000
 
 
 def _frame(meshes, size: int, margin: float):
@@ -46,6 +51,7 @@ def render_top(
     cel: bool = False,
     background=BACKGROUND,
     margin: float = 0.05,
+    max_cost: int = MAX_RASTER_COST,
 ) -> np.ndarray:
     """Render meshes seen from above with an in-plane light.
 
@@ -65,6 +71,9 @@ def render_top(
     background : (3,) float in [0, 1]
     margin : float
         Fraction of the image left empty on each side, in [0, 0.5).
+    max_cost : int
+        Refuse (LimitError, before any fragment is made) when the image's pixels plus the
+        triangles' bounding-box pixels exceed this: memory and time grow with both.
 
     Returns
     -------
@@ -90,6 +99,8 @@ def render_top(
     meshes = [m for m in meshes if m is not None and m.n_faces > 0]
     if not meshes:
         return _to_uint8(image)
+    if size * size > max_cost:
+        raise LimitError(f"a {size}x{size} image is over the rendering limit of {max_cost:,} pixels; use a smaller size")
 
     centre, scale = _frame(meshes, size, margin)
     # One vertex/triangle list for every mesh; keep which mesh each triangle came from.
@@ -103,7 +114,7 @@ def render_top(
     # (c + 0.5, r + 0.5); y grows upwards, rows downwards.
     u = (V[:, 0] - centre[0]) * scale + 0.5 * size
     v = 0.5 * size - (V[:, 1] - centre[1]) * scale
-    pix, depth, tri, b1, b2 = _rasterise(u, v, V[:, 2], F, size)
+    pix, depth, tri, b1, b2 = _rasterise(u, v, V[:, 2], F, size, max_cost - size * size)
 
     if len(pix):
         # Per pixel the later mesh wins (meshes are layers back to front: a layer drawn in
@@ -145,8 +156,10 @@ def _to_uint8(image: np.ndarray) -> np.ndarray:
     return np.round(np.clip(image, 0.0, 1.0) * 255.0).astype(np.uint8)
 
 
-def _rasterise(u, v, z, F, size):
-    """Fragments (pixel index, depth, triangle, b1, b2) of all triangles at pixel centres."""
+def _rasterise(u, v, z, F, size, max_candidates=None):
+    """Fragments (pixel index, depth, triangle, b1, b2) of all triangles at pixel centres.
+    Raises LimitError, before making any, when the triangles' bounding boxes hold more than
+    ``max_candidates`` pixels."""
     P = np.stack([u, v], axis=1)
     tri = P[F]  # (m, 3, 2)
     a = tri[:, 0]
@@ -164,6 +177,13 @@ def _rasterise(u, v, z, F, size):
     bh = r1 - r0 + 1
     keep = (np.abs(det) > 1e-12) & (bw > 0) & (bh > 0)
     ids = np.nonzero(keep)[0]
+    if max_candidates is not None:
+        candidates = int(np.sum(bw[ids] * bh[ids]))
+        if candidates > max_candidates:
+            raise LimitError(
+                f"rendering {len(F):,} triangles at {size}x{size} would test {candidates:,} pixels "
+                f"(overlapping layers count once each); the limit is {max(max_candidates, 0):,}: use a smaller size"
+            )
     out = ([], [], [], [], [])
     if len(ids) == 0:
         return tuple(np.zeros(0, dtype=t) for t in (np.int64, float, np.int64, float, float))
