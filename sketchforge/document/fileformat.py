@@ -344,12 +344,13 @@ def _check_depth(data: Any, limit: int = MAX_JSON_DEPTH) -> None:
             stack.extend((x, depth + 1) for x in v if isinstance(x, (dict, list)))
 
 
-def read_regular_file(path, limit: int = MAX_FILE_BYTES) -> bytes:
+def read_regular_file(path, limit: int | None = None) -> bytes:
     """The bytes of ``path``, a regular file of at most ``limit`` bytes. A FIFO, a device
     (``/dev/zero``), a socket or a directory is refused before reading (opening a FIFO does not
     block: O_NONBLOCK), and at most ``limit + 1`` bytes are ever read, so a file that grows
     while being read cannot exhaust memory. Raises DocumentFormatError or LimitError."""
     path = Path(path)
+    limit = MAX_FILE_BYTES if limit is None else limit
     try:
         fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0))
     except FileNotFoundError:

@@ -83,6 +83,8 @@ def render_top(
     size = int(size)
     if size < 1:
         raise ValueError(f"image size must be at least 1 pixel, got {size}")
+    if size * size > max_cost:  # before the image is allocated (8192² is 1.6 GB of float64)
+        raise LimitError(f"a {size}x{size} image is over the rendering limit of {max_cost:,} pixels; use a smaller size")
     if not 0.0 <= margin < 0.5:
         raise ValueError(f"margin must be in [0, 0.5), got {margin}")
     K = int(isophotes)
@@ -99,8 +101,6 @@ def render_top(
     meshes = [m for m in meshes if m is not None and m.n_faces > 0]
     if not meshes:
         return _to_uint8(image)
-    if size * size > max_cost:
-        raise LimitError(f"a {size}x{size} image is over the rendering limit of {max_cost:,} pixels; use a smaller size")
 
     centre, scale = _frame(meshes, size, margin)
     # One vertex/triangle list for every mesh; keep which mesh each triangle came from.
