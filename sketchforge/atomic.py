@@ -114,6 +114,16 @@ def check_writable(path) -> os.stat_result | None:
     return st
 
 
+def check_target(path) -> None:
+    """Raise ExportError now if ``path`` cannot be written (no folder, a directory, a read-only
+    file): a command line checks its outputs before the work, so a refusal is its only line."""
+    path = Path(path)
+    folder = path.parent if str(path.parent) else Path(".")
+    if not folder.is_dir():
+        raise ExportError(f"cannot write {path}: the folder {folder} does not exist")
+    check_writable(path)
+
+
 def same_file(a, b) -> bool:
     """True when paths ``a`` and ``b`` name the same file (links and ``..`` resolved), or would."""
     a, b = Path(a), Path(b)

@@ -10,7 +10,7 @@ import sys
 import unicodedata
 from pathlib import Path
 
-from sketchforge.atomic import refuse_input_as_output
+from sketchforge.atomic import check_target, refuse_input_as_output
 from sketchforge.errors import SketchforgeError
 
 SUBCOMMANDS = ("replay", "info", "render")
@@ -35,6 +35,13 @@ def printable(text) -> str:
 def cmd_replay(args) -> int:
     from sketchforge.document import fileformat as ff
 
+    # Outputs are checked before any work, so a refusal is the only line printed.
+    for out, what in ((args.export, "export"), (args.save, "save")):
+        if out:
+            refuse_input_as_output(out, [args.doc], what)
+            check_target(out)
+    if args.export and args.save and Path(args.export).resolve() == Path(args.save).resolve():
+        raise SketchforgeError("--export and --save name the same file; choose two files")
     data = ff.read_json(args.doc)
     light, journal = ff.validate_header(data, str(args.doc))
 
@@ -49,11 +56,6 @@ def cmd_replay(args) -> int:
         if diffs:
             raise SketchforgeError(f"{args.doc}: replay differs from the saved snapshot: " + "; ".join(diffs))
         print("replay matches the snapshot", file=sys.stderr)
-    for out, what in ((args.export, "export"), (args.save, "save")):
-        if out:
-            refuse_input_as_output(out, [args.doc], what)
-    if args.export and args.save and Path(args.export).resolve() == Path(args.save).resolve():
-        raise SketchforgeError("--export and --save name the same file; choose two files")
     if args.export:
         out = Path(args.export)
         exporter = doc.host.exporter_for(out)
@@ -89,6 +91,7 @@ def cmd_render(args) -> int:
     if not 0 <= args.isophotes <= MAX_ISOPHOTES:
         raise SketchforgeError(f"--isophotes must be between 0 and {MAX_ISOPHOTES}, got {args.isophotes}")
     refuse_input_as_output(args.png, [args.doc], "PNG")
+    check_target(args.png)
     doc = ff.load(args.doc)
     meshes = [l.mesh for l in doc.layers if l.visible and l.mesh is not None]
     if not meshes:
