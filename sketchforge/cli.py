@@ -42,6 +42,10 @@ def cmd_replay(args) -> int:
             check_target(out)
     if args.export and args.save and Path(args.export).resolve() == Path(args.save).resolve():
         raise SketchforgeError("--export and --save name the same file; choose two files")
+    if args.export:
+        from sketchforge.plugins.manager import default_host
+
+        default_host().exporter_for(Path(args.export))  # an unknown format, before the replay
     data = ff.read_json(args.doc)
     light, journal = ff.validate_header(data, str(args.doc))
 
@@ -61,7 +65,7 @@ def cmd_replay(args) -> int:
         exporter = doc.host.exporter_for(out)
         mesh = doc.export_mesh(args.layer)
         exporter.write(out, mesh)
-        print(f"wrote {out} ({mesh.n_vertices} vertices, {mesh.n_faces} triangles)", file=sys.stderr)
+        print(f"wrote {printable(out)} ({mesh.n_vertices} vertices, {mesh.n_faces} triangles)", file=sys.stderr)
     if args.save:
         ff.save(doc, args.save)
     return 0
@@ -98,7 +102,7 @@ def cmd_render(args) -> int:
         raise SketchforgeError(f"{args.doc}: no visible layer with a mesh to render")
     img = render_top(meshes, doc.light.direction, size=args.size, isophotes=args.isophotes, cel=args.cel)
     write_png(args.png, img)
-    print(f"wrote {args.png} ({img.shape[1]}x{img.shape[0]})", file=sys.stderr)
+    print(f"wrote {printable(args.png)} ({img.shape[1]}x{img.shape[0]})", file=sys.stderr)
     return 0
 
 

@@ -49,7 +49,8 @@ from sketchforge.document import fileformat as ff
 
 #: Seconds between autosaves of a document with unsaved changes.
 DEFAULT_INTERVAL_S = 60.0
-#: The shortest interval honoured (a smaller setting is raised to it).
+#: The app's timer polls at least this often (every interval of 1 s or more is kept to within
+#: a second; shorter ones, used by tests, are polled at this rate).
 MIN_INTERVAL_S = 1.0
 #: Suffix of the side file that names the solve running when the autosave was flushed.
 PENDING_SUFFIX = ".pending"
@@ -61,20 +62,21 @@ _tokens = itertools.count(1)
 def autosave_interval(setting=None) -> float:
     """Seconds between autosaves: ``$SKETCHFORGE_AUTOSAVE_INTERVAL``, else ``setting`` (the
     app's stored preference), else :data:`DEFAULT_INTERVAL_S`. Invalid values (not a number,
-    not finite, <= 0) fall back; a positive value below :data:`MIN_INTERVAL_S` is raised to it."""
+    not finite, <= 0) fall back."""
     for raw in (os.environ.get("SKETCHFORGE_AUTOSAVE_INTERVAL"), setting):
         try:
             value = float(raw)
         except (TypeError, ValueError, OverflowError):
             continue
         if value > 0 and value != float("inf"):
-            return max(value, MIN_INTERVAL_S)
+            return value
     return DEFAULT_INTERVAL_S
 
 
 def poll_interval_ms(interval_s: float) -> int:
     """How often the app's timer calls :meth:`Autosaver.tick`: every 5 s, or the interval when it
-    is shorter, so an interval of 1 s is kept to within a second."""
+    is shorter (but not more often than every :data:`MIN_INTERVAL_S`), so an interval of 1 s
+    or more is kept to within a second."""
     return int(round(1000 * min(5.0, max(MIN_INTERVAL_S, float(interval_s)))))
 
 

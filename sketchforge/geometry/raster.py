@@ -28,10 +28,13 @@ LINE_COLOUR = np.array([0.12, 0.10, 0.10])
 LINE_ALPHA = 0.85
 # Upper bound on candidate pixels tested at once (memory ~ 60 bytes each).
 _CHUNK = 1 << 21
-#: Largest raster cost, pixels of the image plus the bounding-box pixels of every triangle (the
-#: candidate fragments: overdraw counts once per layer covering a pixel). About 2 GB and 20 s
-#: at most (benchmarks/bench_render_limits.py); a full-frame layer fits up to --size ~3000.
+#: Largest raster cost: twice the image's pixels (about 90 bytes each at the peak, with the
+#: isophote buffers) plus the bounding-box pixels of every triangle (the candidate fragments,
+#: about 50 bytes each: overdraw counts once per layer covering a pixel). At the cap a render
+#: peaks near 1.2 GB (benchmarks/bench_reliability.py); --size 3500 of examples/creature.json
+#: fits, 2000 overlapping full-frame triangles at 512 do not.
 MAX_RASTER_COST = 25_000_000
+_PIXEL_COST = 2
 
 
 def _frame(meshes, size: int, margin: float):
@@ -72,8 +75,8 @@ def render_top(
     margin : float
         Fraction of the image left empty on each side, in [0, 0.5).
     max_cost : int
-        Refuse (LimitError, before any fragment is made) when the image's pixels plus the
-        triangles' bounding-box pixels exceed this: memory and time grow with both.
+        Refuse (LimitError, before any fragment is made) when twice the image's pixels plus
+        the triangles' bounding-box pixels exceed this: memory and time grow with both.
 
     Returns
     -------
@@ -83,8 +86,10 @@ def render_top(
     size = int(size)
     if size < 1:
         raise ValueError(f"image size must be at least 1 pixel, got {size}")
-    if size * size > max_cost:  # before the image is allocated (8192² is 1.6 GB of float64)
-        raise LimitError(f"a {size}x{size} image is over the rendering limit of {max_cost:,} pixels; use a smaller size")
+    if _PIXEL_COST * size * size > max_cost:  # before the image is allocated (8192² is 1.6 GB of float64)
+        raise LimitError(
+            f"a {size}x{size} image is over the rendering limit of {max_cost // _PIXEL_COST:,} pixels; use a smaller size"
+        )
     if not 0.0 <= margin < 0.5:
         raise ValueError(f"margin must be in [0, 0.5), got {margin}")
     K = int(isophotes)
@@ -114,7 +119,7 @@ def render_top(
     # (c + 0.5, r + 0.5); y grows upwards, rows downwards.
     u = (V[:, 0] - centre[0]) * scale + 0.5 * size
     v = 0.5 * size - (V[:, 1] - centre[1]) * scale
-    pix, depth, tri, b1, b2 = _rasterise(u, v, V[:, 2], F, size, max_cost - size * size)
+    pix, depth, tri, b1, b2 = _rasterise(u, v, V[:, 2], F, size, max_cost - _PIXEL_COST * size * size)
 
     if len(pix):
         # Per pixel the later mesh wins (meshes are layers back to front: a layer drawn in

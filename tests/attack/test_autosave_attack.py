@@ -73,7 +73,7 @@ def window(qtbot, host, tmp_path, dialogs, monkeypatch):
         w.close_now()
 
 
-@pytest.mark.parametrize("setting, seconds, poll_ms", [(1, 1.0, 1000), (2.5, 2.5, 2500), (0.2, MIN_INTERVAL_S, 1000), (60, 60.0, 5000), ("junk", 60.0, 5000), (float("nan"), 60.0, 5000)])
+@pytest.mark.parametrize("setting, seconds, poll_ms", [(1, 1.0, 1000), (2.5, 2.5, 2500), (0.2, 0.2, MIN_INTERVAL_S * 1000), (60, 60.0, 5000), ("junk", 60.0, 5000), (float("nan"), 60.0, 5000)])
 def test_interval_is_honoured_down_to_one_second(monkeypatch, setting, seconds, poll_ms):
     monkeypatch.delenv("SKETCHFORGE_AUTOSAVE_INTERVAL", raising=False)
     assert autosave_interval(setting) == seconds

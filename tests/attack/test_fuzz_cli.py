@@ -25,7 +25,7 @@ json_values = st.recursive(json_scalars, lambda c: st.lists(c, max_size=4) | st.
 
 
 #: What a successful step may print before a later step fails (each its own single line).
-PROGRESS = ("replay matches the snapshot", "wrote ")
+PROGRESS = ("replay matches the snapshot", "wrote ", "replayed ")
 
 
 def _assert_clean(res):

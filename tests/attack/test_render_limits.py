@@ -61,7 +61,7 @@ def test_render_top_cost_accounts_for_overlap():
     from sketchforge.geometry.raster import render_top
 
     one = Mesh(np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0]], float), np.array([[0, 1, 2]]))
-    img = render_top([one], [1.0, 0.0, 0.0], size=256, max_cost=256 * 256 + 60_000)
+    img = render_top([one], [1.0, 0.0, 0.0], size=256, max_cost=2 * 256 * 256 + 60_000)
     assert (img != img[0, 0]).any(axis=2).sum() > 20_000  # the triangle covers about half
     with pytest.raises(LimitError):
-        render_top([one] * 20, [1.0, 0.0, 0.0], size=256, max_cost=256 * 256 + 60_000 * 10)
+        render_top([one] * 20, [1.0, 0.0, 0.0], size=256, max_cost=2 * 256 * 256 + 60_000 * 10)
