@@ -34,15 +34,8 @@ from PySide6.QtWidgets import (
 from sketchforge.atomic import refuse_input_as_output
 from sketchforge.document import commands as C
 from sketchforge.document import fileformat as ff
-from sketchforge.document.autosave import (
-    Autosaver,
-    autosave_interval,
-    describe_stop,
-    find_recoverable,
-    forget,
-    poll_interval_ms,
-    recover,
-)
+from sketchforge.document.autosave import Autosaver, autosave_interval, describe_stop, find_recoverable, forget, recover
+from sketchforge.document.autosave import poll_interval_ms
 from sketchforge.document.layer import Light
 from sketchforge.errors import SketchforgeError
 from sketchforge.qt.canvas import Canvas
