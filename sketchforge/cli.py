@@ -7,16 +7,45 @@ from __future__ import annotations
 
 import argparse
 import sys
+import unicodedata
 from pathlib import Path
 
+from sketchforge.atomic import check_target, refuse_input_as_output
 from sketchforge.errors import SketchforgeError
 
 SUBCOMMANDS = ("replay", "info", "render")
+#: ``render --isophotes``: more lines than this are closer than a pixel apart at any size.
+MAX_ISOPHOTES = 255
+
+
+def printable(text) -> str:
+    """``text`` safe for a terminal: control and format characters (escape sequences, line
+    breaks, bidi overrides) and lone surrogates are written as ``\\xNN`` / ``\\uNNNN``, so
+    a name can never fake or hide an output line, and printing never fails to encode."""
+    out = []
+    for ch in str(text):
+        if unicodedata.category(ch) in ("Cc", "Cf", "Cs", "Zl", "Zp"):
+            o = ord(ch)
+            out.append(f"\\x{o:02x}" if o < 0x100 else f"\\u{o:04x}")
+        else:
+            out.append(ch)
+    return "".join(out)
 
 
 def cmd_replay(args) -> int:
     from sketchforge.document import fileformat as ff
 
+    # Outputs are checked before any work, so a refusal is the only line printed.
+    for out, what in ((args.export, "export"), (args.save, "save")):
+        if out:
+            refuse_input_as_output(out, [args.doc], what)
+            check_target(out)
+    if args.export and args.save and Path(args.export).resolve() == Path(args.save).resolve():
+        raise SketchforgeError("--export and --save name the same file; choose two files")
+    if args.export:
+        from sketchforge.plugins.manager import default_host
+
+        default_host().exporter_for(Path(args.export))  # an unknown format, before the replay
     data = ff.read_json(args.doc)
     light, journal = ff.validate_header(data, str(args.doc))
 
@@ -45,16 +74,16 @@ def cmd_replay(args) -> int:
             if mesh is None:
                 raise SketchforgeError("--frame needs an animation plugin (sketchforge-animate) and none is installed")
             exporter.write(out, mesh)
-            print(f"wrote {out} (frame {args.frame}, {mesh.n_vertices} vertices, {mesh.n_faces} triangles)", file=sys.stderr)
+            print(f"wrote {printable(out)} (frame {args.frame}, {mesh.n_vertices} vertices, {mesh.n_faces} triangles)", file=sys.stderr)
         else:
             exporter = doc.host.exporter_for(out, None if args.layer else doc)
             if exporter.write_document is not None and not args.layer and exporter.handles(doc):
                 summary = exporter.write_document(out, doc)
-                print(f"wrote {out} ({summary})", file=sys.stderr)
+                print(f"wrote {printable(out)} ({summary})", file=sys.stderr)
             else:
                 mesh = doc.export_mesh(args.layer)
                 exporter.write(out, mesh)
-                print(f"wrote {out} ({mesh.n_vertices} vertices, {mesh.n_faces} triangles)", file=sys.stderr)
+                print(f"wrote {printable(out)} ({mesh.n_vertices} vertices, {mesh.n_faces} triangles)", file=sys.stderr)
     if args.save:
         ff.save(doc, args.save)
     return 0
@@ -65,7 +94,7 @@ def cmd_info(args) -> int:
 
     doc = ff.load(args.doc)
     l = doc.light
-    print(f"{args.doc}: {len(doc.layers)} layers, light ({l.x:.4f}, {l.y:.4f}, 0), {len(doc.journal())} journal entries")
+    print(f"{printable(args.doc)}: {len(doc.layers)} layers, light ({l.x:.4f}, {l.y:.4f}, 0), {len(doc.journal())} journal entries")
     for i, layer in enumerate(doc.layers):
         nv = layer.mesh.n_vertices if layer.mesh is not None else 0
         nf = layer.mesh.n_faces if layer.mesh is not None else 0
@@ -73,7 +102,7 @@ def cmd_info(args) -> int:
         free = layer.closed or (layer.mesh is not None and len(layer.mesh.junction) == 0)
         kind = "closed" if free else "open"
         vis = "" if layer.visible else " (hidden)"
-        print(f"  {i}: {layer.id} {layer.name!r}{vis} {kind}, {nv} vertices, {nf} triangles, {len(layer.edits)} sculpt edits")
+        print(f"  {i}: {printable(layer.id)} '{printable(layer.name)}'{vis} {kind}, {nv} vertices, {nf} triangles, {len(layer.edits)} sculpt edits")
     return 0
 
 
@@ -81,15 +110,19 @@ def cmd_render(args) -> int:
     from sketchforge.document import fileformat as ff
     from sketchforge.geometry.raster import render_top, write_png
 
+    if args.size < 16 or args.size > 8192:
+        raise SketchforgeError(f"--size must be between 16 and 8192, got {args.size}")
+    if not 0 <= args.isophotes <= MAX_ISOPHOTES:
+        raise SketchforgeError(f"--isophotes must be between 0 and {MAX_ISOPHOTES}, got {args.isophotes}")
+    refuse_input_as_output(args.png, [args.doc], "PNG")
+    check_target(args.png)
     doc = ff.load(args.doc)
     meshes = [l.mesh for l in doc.layers if l.visible and l.mesh is not None]
     if not meshes:
         raise SketchforgeError(f"{args.doc}: no visible layer with a mesh to render")
-    if args.size < 16 or args.size > 8192:
-        raise SketchforgeError(f"--size must be between 16 and 8192, got {args.size}")
     img = render_top(meshes, doc.light.direction, size=args.size, isophotes=args.isophotes, cel=args.cel)
     write_png(args.png, img)
-    print(f"wrote {args.png} ({img.shape[1]}x{img.shape[0]})", file=sys.stderr)
+    print(f"wrote {printable(args.png)} ({img.shape[1]}x{img.shape[0]})", file=sys.stderr)
     return 0
 
 
@@ -133,11 +166,13 @@ def main(argv=None) -> int:
             args = build_parser().parse_args(argv)
             return args.func(args)
         args = build_app_parser().parse_args(argv)
+        if args.screenshot and args.doc is not None:
+            refuse_input_as_output(args.screenshot, [args.doc], "screenshot")
         from sketchforge.qt.app import run_app
 
         return run_app(args.doc, screenshot=args.screenshot, mode=args.mode)
     except SketchforgeError as exc:
-        print(f"sketchforge: error: {exc}", file=sys.stderr)
+        print(f"sketchforge: error: {printable(exc)}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("sketchforge: interrupted", file=sys.stderr)

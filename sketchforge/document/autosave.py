@@ -49,6 +49,9 @@ from sketchforge.document import fileformat as ff
 
 #: Seconds between autosaves of a document with unsaved changes.
 DEFAULT_INTERVAL_S = 60.0
+#: The app's timer polls at least this often (every interval of 1 s or more is kept to within
+#: a second; shorter ones, used by tests, are polled at this rate).
+MIN_INTERVAL_S = 1.0
 #: Suffix of the side file that names the solve running when the autosave was flushed.
 PENDING_SUFFIX = ".pending"
 
@@ -58,15 +61,38 @@ _tokens = itertools.count(1)
 
 def autosave_interval(setting=None) -> float:
     """Seconds between autosaves: ``$SKETCHFORGE_AUTOSAVE_INTERVAL``, else ``setting`` (the
-    app's stored preference), else :data:`DEFAULT_INTERVAL_S`. Invalid values fall back."""
+    app's stored preference), else :data:`DEFAULT_INTERVAL_S`. Invalid values (not a number,
+    not finite, <= 0) fall back."""
     for raw in (os.environ.get("SKETCHFORGE_AUTOSAVE_INTERVAL"), setting):
         try:
             value = float(raw)
-        except (TypeError, ValueError):
+        except (TypeError, ValueError, OverflowError):
             continue
-        if value > 0:
+        if value > 0 and value != float("inf"):
             return value
     return DEFAULT_INTERVAL_S
+
+
+def poll_interval_ms(interval_s: float) -> int:
+    """How often the app's timer calls :meth:`Autosaver.tick`: every 5 s, or the interval when it
+    is shorter (but not more often than every :data:`MIN_INTERVAL_S`), so an interval of 1 s
+    or more is kept to within a second."""
+    return int(round(1000 * min(5.0, max(MIN_INTERVAL_S, float(interval_s)))))
+
+
+def _ensure_folder(folder: Path) -> None:
+    """Create the autosave folder; a clear ExportError when a file is in the way or the disk
+    refuses (the app shows it and retries at the next tick)."""
+    from sketchforge.errors import ExportError
+
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+    except (FileExistsError, NotADirectoryError):
+        raise ExportError(f"cannot autosave: {folder} (or a folder above it) is a file, not a folder") from None
+    except OSError as exc:
+        raise ExportError(f"cannot autosave to {folder}: {exc.strerror or exc}") from None
+    if not folder.is_dir():
+        raise ExportError(f"cannot autosave: {folder} is not a folder")
 
 
 def data_dir() -> Path:
@@ -169,7 +195,7 @@ class Autosaver:
             return False
         if self.doc.revision == self._last_revision:
             return False
-        self.folder.mkdir(parents=True, exist_ok=True)
+        _ensure_folder(self.folder)
         data = ff.document_to_dict(self.doc)
         data["autosave"] = {"original": self.original_path, "saved_at": time.time(), **this_writer()}
         write_bytes_atomic(self.path, json.dumps(data, separators=(",", ":")).encode("utf-8"))
@@ -246,7 +272,7 @@ class Autosaver:
         }
 
     def _write_pending(self) -> None:
-        self.folder.mkdir(parents=True, exist_ok=True)
+        _ensure_folder(self.folder)
         data = {
             "format": "sketchforge-pending",
             "original": self.original_path,

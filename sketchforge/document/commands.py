@@ -14,6 +14,8 @@ changing the inflation parameters can re-apply it.
 from __future__ import annotations
 
 import itertools
+import math
+import numbers
 from dataclasses import dataclass, field, replace
 from typing import Any, ClassVar
 
@@ -93,20 +95,44 @@ def parse_field(d: dict, key: str, kind: type | tuple, cmd: str, default: Any = 
         return default
     v = d[key]
     if kind is float and isinstance(v, int) and not isinstance(v, bool):
-        v = float(v)
+        v = _to_float(v, cmd, key)
     if not isinstance(v, kind) or (kind is int and isinstance(v, bool)):
         raise DocumentFormatError(f"command {cmd!r}: field {key!r} has the wrong type ({type(v).__name__})")
+    if kind is float and not math.isfinite(v):
+        raise DocumentFormatError(f"command {cmd!r}: field {key!r} must be a finite number, got {v}")
+    if kind is int and abs(v) > MAX_INDEX:
+        raise DocumentFormatError(f"command {cmd!r}: field {key!r} is out of range ({_digits(v)})")
     return v
+
+
+#: Integers in a journal are indices: anything beyond this is no index of a real document.
+MAX_INDEX = 10**9
+
+
+def _digits(v: int) -> str:
+    n = len(str(abs(v))) if abs(v) < 10**1000 else 1000
+    return f"{v}" if n <= 20 else f"an integer of {'over ' if n >= 1000 else ''}{n} digits"
+
+
+def _to_float(v, cmd: str, key: str) -> float:
+    try:
+        return float(v)
+    except OverflowError:
+        raise DocumentFormatError(f"command {cmd!r}: field {key!r} is too large for a number ({_digits(v)})") from None
 
 
 def parse_points(d: dict, cmd: str, key: str = "points") -> np.ndarray:
     raw = parse_field(d, key, list, cmd)
-    try:
-        arr = np.array(raw, dtype=np.float64)
-    except (TypeError, ValueError):
-        raise DocumentFormatError(f"command {cmd!r}: {key!r} must be a list of [x, y] number pairs") from None
-    if arr.ndim != 2 or arr.shape[1] != 2:
+    if not all(
+        isinstance(p, (list, tuple)) and len(p) == 2
+        and all(isinstance(x, numbers.Real) and not isinstance(x, (bool, np.bool_)) for x in p)
+        for p in raw
+    ):
         raise DocumentFormatError(f"command {cmd!r}: {key!r} must be a list of [x, y] number pairs")
+    try:
+        arr = np.array(raw, dtype=np.float64).reshape(-1, 2)
+    except (TypeError, ValueError, OverflowError):
+        raise DocumentFormatError(f"command {cmd!r}: {key!r} must be a list of [x, y] pairs of numbers within float range") from None
     return arr
 
 
@@ -114,7 +140,10 @@ def parse_vector(d: dict, key: str, cmd: str) -> list[float]:
     raw = parse_field(d, key, list, cmd)
     if len(raw) not in (2, 3) or not all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in raw):
         raise DocumentFormatError(f"command {cmd!r}: {key!r} must be 2 or 3 numbers")
-    return [float(x) for x in raw]
+    out = [_to_float(x, cmd, key) for x in raw]
+    if not all(math.isfinite(x) for x in out):
+        raise DocumentFormatError(f"command {cmd!r}: {key!r} must be finite numbers")
+    return out
 
 
 def inflate_layer(doc, layer: Layer) -> Layer:
@@ -550,10 +579,13 @@ class SetLight(Command):
     def text(self) -> str:
         return "Set light"
 
+    def __post_init__(self) -> None:
+        # Normalised once, here where the direction enters; the journal keeps the vector as
+        # used, and Light keeps an already-unit vector bit for bit, so a replay is exact.
+        self._new = Light.from_vector(self.direction)
+        self.direction = [float(v) for v in self._new.direction]
+
     def do(self, doc) -> None:
-        if self._new is None:
-            self._new = Light.from_vector(self.direction)
-            self.direction = [float(v) for v in self._new.direction]
         self._old = doc.light
         doc._set_light(self._new)
 
@@ -572,7 +604,10 @@ class SetLight(Command):
 
     @classmethod
     def from_dict(cls, d: dict) -> "SetLight":
-        return cls(direction=parse_vector(d, "direction", cls.name))
+        try:
+            return cls(direction=parse_vector(d, "direction", cls.name))
+        except ParameterError as exc:
+            raise DocumentFormatError(f"command {cls.name!r}: 'direction': {exc}") from None
 
 
 class MacroCommand(Command):
@@ -606,11 +641,21 @@ class MacroCommand(Command):
         return {"command": self.name, "text": self.text_, "children": [c.to_dict() for c in self.children]}
 
     @classmethod
-    def from_dict(cls, d: dict, registry=None) -> "MacroCommand":
+    def from_dict(cls, d: dict, registry=None, depth: int = 1) -> "MacroCommand":
         children = parse_field(d, "children", list, cls.name)
         if registry is None:
             raise DocumentFormatError("a macro needs a command registry to read its children")
-        return cls(text=parse_field(d, "text", str, cls.name, ""), children=[registry.from_dict(c) for c in children])
+        if depth > MAX_MACRO_DEPTH:
+            raise DocumentFormatError(f"macros are nested more than {MAX_MACRO_DEPTH} deep")
+        return cls(
+            text=parse_field(d, "text", str, cls.name, ""),
+            children=[registry.from_dict(c, depth=depth + 1) for c in children],
+        )
+
+
+#: Macros inside macros: the app makes two levels; deeper ones would reach Python's recursion
+#: limit in do/undo/to_dict.
+MAX_MACRO_DEPTH = 16
 
 
 #: The document's own commands, registered by the built-in plugin.
@@ -656,7 +701,7 @@ class CommandRegistry:
                 f"unknown command {name!r} (is the plugin that provides it installed? known: {known})"
             ) from None
 
-    def from_dict(self, d) -> Command:
+    def from_dict(self, d, depth: int = 1) -> Command:
         if not isinstance(d, dict):
             raise DocumentFormatError(f"a journal entry must be an object, got {type(d).__name__}")
         name = d.get("command")
@@ -664,10 +709,10 @@ class CommandRegistry:
             raise DocumentFormatError("a journal entry needs a string field 'command'")
         cls = self.get(name)
         if cls is MacroCommand:
-            return MacroCommand.from_dict(d, registry=self)
+            return MacroCommand.from_dict(d, registry=self, depth=depth)
         try:
             return cls.from_dict(d)
         except SketchforgeError:
             raise
-        except (TypeError, ValueError, KeyError) as exc:
+        except (TypeError, ValueError, KeyError, OverflowError) as exc:
             raise DocumentFormatError(f"command {name!r}: {exc}") from None

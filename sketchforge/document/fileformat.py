@@ -21,6 +21,8 @@ from __future__ import annotations
 import base64
 import json
 import math
+import os
+import stat
 from pathlib import Path
 from typing import Any
 
@@ -54,25 +56,51 @@ def encode_array(a: np.ndarray) -> dict:
     }
 
 
-def decode_array(d: Any, where: str) -> np.ndarray:
+#: Per mesh field: (dtype, trailing dimensions). Snapshots are checked as strictly as the
+#: journal: a float64 F would otherwise be reinterpreted as integers, a 100-dimensional or
+#: [0, 1e20] shape would reach numpy.
+_MESH_FIELDS = {"V": ("float64", (3,)), "F": ("int64", (3,)), "boundary": ("int64", ()), "junction": ("int64", ())}
+#: Vertices or triangles of one snapshot mesh: generous above what inflation makes (200 000).
+MAX_SNAPSHOT_ELEMENTS = 2_000_000
+
+
+def decode_array(d: Any, where: str, dtype: str | None = None, trailing: tuple | None = None) -> np.ndarray:
+    """A stored array. With ``dtype`` and ``trailing``, the stored dtype must be ``dtype`` and
+    the shape ``(k, *trailing)`` with k <= MAX_SNAPSHOT_ELEMENTS."""
     if not isinstance(d, dict) or not {"dtype", "shape", "data"} <= set(d):
         raise DocumentFormatError(f"{where}: expected an array object with dtype, shape and data")
     dt = {"float64": "<f8", "int64": "<i8"}.get(d["dtype"]) if isinstance(d["dtype"], str) else None
     shape = d["shape"]
     if dt is None:
-        raise DocumentFormatError(f"{where}: unsupported dtype {d['dtype']!r}")
-    if not isinstance(shape, list) or not all(isinstance(s, int) and not isinstance(s, bool) and s >= 0 for s in shape):
-        raise DocumentFormatError(f"{where}: bad shape {shape!r}")
+        raise DocumentFormatError(f"{where}: unsupported dtype {_short(d['dtype'])}")
+    if dtype is not None and d["dtype"] != dtype:
+        raise DocumentFormatError(f"{where}: dtype must be {dtype}, got {d['dtype']}")
+    if (
+        not isinstance(shape, list)
+        or len(shape) > 8
+        or not all(isinstance(s, int) and not isinstance(s, bool) and 0 <= s <= MAX_SNAPSHOT_ELEMENTS for s in shape)
+    ):
+        raise DocumentFormatError(f"{where}: bad shape {_short(shape)}")
+    if trailing is not None and (len(shape) != 1 + len(trailing) or tuple(shape[1:]) != tuple(trailing)):
+        want = ", ".join(["k"] + [str(t) for t in trailing])
+        raise DocumentFormatError(f"{where}: shape must be [{want}], got {_short(shape)}")
     if not isinstance(d["data"], str):
         raise DocumentFormatError(f"{where}: data must be a base64 string")
+    count = math.prod(shape)
+    if len(d["data"]) != 4 * ((count * 8 + 2) // 3):
+        raise DocumentFormatError(f"{where}: data has {len(d['data'])} base64 characters, shape {shape} needs {4 * ((count * 8 + 2) // 3)}")
     try:
         raw = base64.b64decode(d["data"], validate=True)
     except (ValueError, TypeError):
         raise DocumentFormatError(f"{where}: data is not valid base64") from None
-    count = math.prod(shape)
     if len(raw) != count * 8:
         raise DocumentFormatError(f"{where}: data has {len(raw)} bytes, shape {shape} needs {count * 8}")
     return np.frombuffer(raw, dtype=dt).astype(np.float64 if dt == "<f8" else np.int64).reshape(shape)
+
+
+def _short(v: Any, n: int = 60) -> str:
+    text = repr(v)
+    return text if len(text) <= n else text[: n - 3] + "..."
 
 
 def encode_mesh(m: Mesh) -> dict:
@@ -80,11 +108,25 @@ def encode_mesh(m: Mesh) -> dict:
 
 
 def decode_mesh(d: Any, where: str) -> Mesh:
+    """A snapshot mesh, validated: dtypes and shapes, finite coordinates within the drawing
+    range, indices in range, no triangle of zero area in the drawing plane (the sculpt builds
+    cotangent operators there), boundary and junction without repeats."""
+    from sketchforge.geometry import guard
+
     if not isinstance(d, dict):
         raise DocumentFormatError(f"{where}: a mesh must be an object")
-    arrays = {k: decode_array(d.get(k), f"{where}.{k}") for k in ("V", "F", "boundary", "junction")}
-    if not np.all(np.isfinite(arrays["V"])):
-        raise DocumentFormatError(f"{where}.V: has non-finite coordinates")
+    arrays = {k: decode_array(d.get(k), f"{where}.{k}", *_MESH_FIELDS[k]) for k in _MESH_FIELDS}
+    try:
+        guard.mesh(arrays["V"], arrays["F"], f"{where}", planar=True)
+    except SketchforgeError as exc:
+        raise DocumentFormatError(str(exc)) from None
+    n = len(arrays["V"])
+    for k in ("boundary", "junction"):
+        idx = arrays[k]
+        if idx.size and (idx.min() < 0 or idx.max() >= n):
+            raise DocumentFormatError(f"{where}.{k}: refers to a vertex outside 0..{n - 1}")
+        if len(np.unique(idx)) != len(idx):
+            raise DocumentFormatError(f"{where}.{k}: lists a vertex twice")
     try:
         return Mesh(**arrays)
     except ValueError as exc:
@@ -137,7 +179,35 @@ def _parse_light(v: Any, where: str) -> Light:
         raise DocumentFormatError(f"{where}: {exc}") from None
 
 
-def _layer_from_dict(d: Any, where: str) -> Layer:
+def _check_edits(edits: list, where: str, registry) -> None:
+    """Each stored sculpt edit must be a journal entry of an edit command (one that can be
+    re-applied) that parses, with an optional ``light`` of 3 finite numbers: a garbage edit
+    would otherwise be accepted and fail at the next parameter change."""
+    from sketchforge.document.commands import Command
+
+    for i, e in enumerate(edits):
+        at = f"{where}.edits[{i}]"
+        try:
+            cls = registry.get(e.get("command")) if isinstance(e.get("command"), str) else None
+            if cls is None:
+                raise DocumentFormatError("needs a string field 'command'")
+            if getattr(cls.reapply, "__func__", None) is Command.reapply.__func__:
+                raise DocumentFormatError(f"{cls.name!r} is not a sculpt edit")
+            registry.from_dict(e)
+        except SketchforgeError as exc:
+            raise DocumentFormatError(f"{at}: {exc}") from None
+        if "light" in e:
+            lv = e["light"]
+            if not (
+                isinstance(lv, list)
+                and len(lv) == 3
+                and all(isinstance(x, float) and math.isfinite(x) for x in lv)
+                and math.hypot(lv[0], lv[1]) > 0.5
+            ):
+                raise DocumentFormatError(f"{at}.light: must be a unit direction of 3 finite numbers")
+
+
+def _layer_from_dict(d: Any, where: str, registry=None) -> Layer:
     if not isinstance(d, dict):
         raise DocumentFormatError(f"{where}: a layer must be an object")
     try:
@@ -150,10 +220,10 @@ def _layer_from_dict(d: Any, where: str) -> Layer:
     if pts is not None:
         try:
             pts = np.array(pts, dtype=np.float64)
-        except (TypeError, ValueError):
-            raise DocumentFormatError(f"{where}.points: must be [x, y] pairs") from None
-        if pts.ndim != 2 or pts.shape[1] != 2:
-            raise DocumentFormatError(f"{where}.points: must be [x, y] pairs")
+        except (TypeError, ValueError, OverflowError):
+            raise DocumentFormatError(f"{where}.points: must be [x, y] pairs of finite numbers") from None
+        if pts.ndim != 2 or pts.shape[1] != 2 or not np.isfinite(pts).all():
+            raise DocumentFormatError(f"{where}.points: must be [x, y] pairs of finite numbers")
     params = d.get("params", {})
     edits = d.get("edits", [])
     if not isinstance(params, dict) or not isinstance(edits, list) or not all(isinstance(e, dict) for e in edits):
@@ -165,6 +235,8 @@ def _layer_from_dict(d: Any, where: str) -> Layer:
     visible, closed = d.get("visible", True), d.get("closed", False)
     if not isinstance(visible, bool) or not isinstance(closed, bool):
         raise DocumentFormatError(f"{where}: visible and closed must be true or false")
+    if registry is not None:
+        _check_edits(edits, where, registry)
     mesh = d.get("mesh")
     mesh = None if mesh is None else decode_mesh(mesh, f"{where}.mesh")
     return Layer(id=lid, name=name, visible=visible, points=pts, closed=closed, params=params, mesh=mesh, edits=tuple(edits))
@@ -208,7 +280,7 @@ def document_from_dict(data: Any, source: str = "document", host=None, use_snaps
             doc.host.commands.from_dict(entry)
         except SketchforgeError as exc:
             raise DocumentFormatError(f"{source}: journal entry {i}: {exc}") from None
-    layers = [_layer_from_dict(l, f"{source}: snapshot.layers[{i}]") for i, l in enumerate(snap["layers"])]
+    layers = [_layer_from_dict(l, f"{source}: snapshot.layers[{i}]", doc.host.commands) for i, l in enumerate(snap["layers"])]
     ids = [l.id for l in layers]
     if len(set(ids)) != len(ids):
         raise DocumentFormatError(f"{source}: snapshot.layers has duplicate ids")
@@ -248,15 +320,46 @@ def compare(a: Document, b: Document) -> list[str]:
 # --- files ----------------------------------------------------------------------------------
 
 
-def read_json(path) -> Any:
+#: Nesting of JSON arrays and objects: a real document needs about 40 (macros of macros).
+MAX_JSON_DEPTH = 100
+#: Digits of a JSON integer: no field of a document needs more (coordinates above 1e308
+#: cannot even be a float).
+MAX_INT_DIGITS = 308
+
+
+def _parse_int(text: str) -> int:
+    digits = len(text.lstrip("-"))
+    if digits > MAX_INT_DIGITS:
+        raise DocumentFormatError(f"an integer of {digits} digits is too large (at most {MAX_INT_DIGITS} digits)")
+    return int(text)
+
+
+def _parse_constant(name: str):
+    raise DocumentFormatError(f"{name} is not a number a document may contain (numbers must be finite)")
+
+
+def _check_depth(data: Any, limit: int = MAX_JSON_DEPTH) -> None:
+    # Iterative: a recursive walk would hit the very recursion limit this check is for.
+    stack = [(data, 1)]
+    while stack:
+        v, depth = stack.pop()
+        if depth > limit:
+            raise LimitError(f"JSON nested more than {limit} levels deep")
+        if isinstance(v, dict):
+            stack.extend((x, depth + 1) for x in v.values() if isinstance(x, (dict, list)))
+        elif isinstance(v, list):
+            stack.extend((x, depth + 1) for x in v if isinstance(x, (dict, list)))
+
+
+def read_regular_file(path, limit: int | None = None) -> bytes:
+    """The bytes of ``path``, a regular file of at most ``limit`` bytes. A FIFO, a device
+    (``/dev/zero``), a socket or a directory is refused before reading (opening a FIFO does not
+    block: O_NONBLOCK), and at most ``limit + 1`` bytes are ever read, so a file that grows
+    while being read cannot exhaust memory. Raises DocumentFormatError or LimitError."""
     path = Path(path)
+    limit = MAX_FILE_BYTES if limit is None else limit
     try:
-        if path.is_dir():
-            raise DocumentFormatError(f"cannot open {path}: it is a directory")
-        size = path.stat().st_size
-        if size > MAX_FILE_BYTES:
-            raise LimitError(f"cannot open {path}: {size} bytes is over the limit of {MAX_FILE_BYTES}")
-        raw = path.read_bytes()
+        fd = os.open(path, os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_CLOEXEC", 0))
     except FileNotFoundError:
         raise DocumentFormatError(f"cannot open {path}: no such file") from None
     except PermissionError:
@@ -266,15 +369,49 @@ def read_json(path) -> Any:
     except OSError as exc:
         raise DocumentFormatError(f"cannot open {path}: {exc.strerror or exc}") from None
     try:
+        st = os.fstat(fd)
+        if stat.S_ISDIR(st.st_mode):
+            raise DocumentFormatError(f"cannot open {path}: it is a directory")
+        if not stat.S_ISREG(st.st_mode):
+            raise DocumentFormatError(f"cannot open {path}: not a regular file (a pipe, device or socket)")
+        if st.st_size > limit:
+            raise LimitError(f"cannot open {path}: {st.st_size} bytes is over the limit of {limit}")
+        chunks, total = [], 0
+        while total <= limit:
+            chunk = os.read(fd, min(1 << 22, limit + 1 - total))
+            if not chunk:
+                break
+            chunks.append(chunk)
+            total += len(chunk)
+        if total > limit:
+            raise LimitError(f"cannot open {path}: more than {limit} bytes, the limit")
+        return b"".join(chunks)
+    except OSError as exc:
+        raise DocumentFormatError(f"cannot open {path}: {exc.strerror or exc}") from None
+    finally:
+        os.close(fd)
+
+
+def read_json(path) -> Any:
+    path = Path(path)
+    raw = read_regular_file(path)
+    try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:
         raise DocumentFormatError(f"cannot open {path}: not UTF-8 text (byte {exc.start})") from None
     try:
-        return json.loads(text)
+        data = json.loads(text, parse_int=_parse_int, parse_constant=_parse_constant)
     except json.JSONDecodeError as exc:
         raise DocumentFormatError(f"cannot open {path}: invalid JSON at line {exc.lineno}, column {exc.colno} ({exc.msg})") from None
     except RecursionError:
         raise DocumentFormatError(f"cannot open {path}: JSON nested too deeply") from None
+    except SketchforgeError as exc:
+        raise DocumentFormatError(f"cannot open {path}: {exc}") from None
+    try:
+        _check_depth(data)
+    except LimitError as exc:
+        raise LimitError(f"cannot open {path}: {exc}") from None
+    return data
 
 
 def load(path, host=None, use_snapshot: bool = True) -> Document:

@@ -141,6 +141,8 @@ def decimate(P, spacing: float) -> np.ndarray:
         w = min(5, len(P))
         smooth = np.vstack([P[: w // 2], (c[w:] - c[:-w]) / w, P[len(P) - (w - 1 - w // 2) :]])
         s = _arclength(smooth)
+        if not s[-1] / spacing < 2.0**53:  # bins finer than float resolution (a 1e-300 spacing)
+            break
         bucket = np.floor(s / spacing).astype(np.int64)
         starts = np.flatnonzero(np.concatenate([[True], bucket[1:] > bucket[:-1]]))
         if len(starts) > 0.9 * len(P):

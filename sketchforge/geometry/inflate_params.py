@@ -16,6 +16,11 @@ from sketchforge.errors import ParameterError
 DEFAULT_INFLATE_PARAMS: Mapping[str, float] = MappingProxyType({"resolution": 0.03, "inflation": 1.0, "smoothing": 0.5})
 
 
+#: Upper bound of resolution and inflation: the drawing's coordinate range (±1e9), beyond
+#: which heights and areas overflow.
+MAX_PARAM = 1e9
+
+
 def check_inflate_params(params: Mapping | None) -> dict:
     """Defaults filled in, values checked; unknown keys ignored.
 
@@ -37,14 +42,21 @@ def check_inflate_params(params: Mapping | None) -> dict:
                 v = params[key]
                 if isinstance(v, bool) or not isinstance(v, numbers.Real):
                     raise ParameterError(f"inflation parameter {key!r} must be a number, got {v!r}")
-                out[key] = float(v)
+                try:
+                    out[key] = float(v)
+                except OverflowError:
+                    raise ParameterError(f"inflation parameter {key!r} is too large for a number") from None
     for key, v in out.items():
         if not math.isfinite(v):
             raise ParameterError(f"inflation parameter {key!r} must be a finite number, got {v}")
     if out["resolution"] <= 0:
         raise ParameterError(f"resolution (target edge length) must be > 0, got {out['resolution']}")
+    if out["resolution"] > MAX_PARAM:
+        raise ParameterError(f"resolution (target edge length) must be at most {MAX_PARAM:.0e}, got {out['resolution']:.3g}")
     if out["inflation"] < 0:
         raise ParameterError(f"inflation must be >= 0, got {out['inflation']}")
+    if out["inflation"] > MAX_PARAM:
+        raise ParameterError(f"inflation must be at most {MAX_PARAM:.0e}, got {out['inflation']:.3g}")
     if not 0.0 <= out["smoothing"] < 1.0:
         raise ParameterError(f"smoothing (fairing weight α) must be in [0, 1), got {out['smoothing']}")
     return out

@@ -14,6 +14,7 @@ import zlib
 import numpy as np
 
 from sketchforge.atomic import write_bytes_atomic
+from sketchforge.errors import LimitError
 from sketchforge.geometry.gbuffer import View, rasterise, shade
 from sketchforge.geometry.shaders import cel_shade, lambert_shade
 
@@ -22,6 +23,13 @@ BACKGROUND = (0.95, 0.94, 0.92)
 #: Isophote line colour and opacity.
 LINE_COLOUR = np.array([0.12, 0.10, 0.10])
 LINE_ALPHA = 0.85
+#: Largest raster cost: twice the image's pixels plus the bounding-box pixels of every
+#: triangle (the candidate fragments; overdraw counts once per layer covering a pixel),
+#: checked before anything of the image's size exists. At the cap a render peaks near
+#: 1.2 GB (benchmarks/bench_reliability.py); 2000 overlapping full-frame triangles at 512 do
+#: not fit.
+MAX_RASTER_COST = 25_000_000
+_PIXEL_COST = 2
 
 
 def render_top(
@@ -34,6 +42,7 @@ def render_top(
     margin: float = 0.05,
     shader=None,
     tints=None,
+    max_cost: int = MAX_RASTER_COST,
 ) -> np.ndarray:
     """Render meshes seen from above with an in-plane light.
 
@@ -58,6 +67,9 @@ def render_top(
         shader's ``shade``); None: Lambert or cel as ``cel`` says.
     tints : (len(meshes), 3) float or None
         Per-layer colour multipliers.
+    max_cost : int
+        Refuse (LimitError, before any fragment is made) when twice the image's pixels plus
+        the triangles' bounding-box pixels exceed this: memory and time grow with both.
 
     Returns
     -------
@@ -67,6 +79,10 @@ def render_top(
     size = int(size)
     if size < 1:
         raise ValueError(f"image size must be at least 1 pixel, got {size}")
+    if _PIXEL_COST * size * size > max_cost:  # before the image is allocated (8192² is 1.6 GB of float64)
+        raise LimitError(
+            f"a {size}x{size} image is over the rendering limit of {max_cost // _PIXEL_COST:,} pixels; use a smaller size"
+        )
     if not 0.0 <= margin < 0.5:
         raise ValueError(f"margin must be in [0, 0.5), got {margin}")
     K = int(isophotes)
@@ -84,6 +100,7 @@ def render_top(
         image[:] = bg
         return _to_uint8(image)
     view = View.framing(shown, size, size, margin)
+    check_raster_cost(shown, view, max_cost)
     gbuf = rasterise(list(meshes), view)
     if shader is None:
         shader = cel_shade if cel else lambert_shade
@@ -92,6 +109,24 @@ def render_top(
 
 def _to_uint8(image: np.ndarray) -> np.ndarray:
     return np.round(np.clip(image, 0.0, 1.0) * 255.0).astype(np.uint8)
+
+
+def check_raster_cost(meshes, view, max_cost: int = MAX_RASTER_COST) -> None:
+    """Refuse (LimitError) a render whose cost, twice the view's pixels plus the pixels of every
+    triangle's bounding box inside the view, exceeds ``max_cost``: memory and time grow with both."""
+    W, H = int(view.width), int(view.height)
+    cost = _PIXEL_COST * W * H
+    for m in meshes:
+        P = view.to_pixels(np.asarray(m.V))
+        T = P[np.asarray(m.F, dtype=np.int64)]
+        lo = np.clip(np.floor(T.min(axis=1)), 0, [W, H])
+        hi = np.clip(np.ceil(T.max(axis=1)), 0, [W, H])
+        cost += int(np.prod(np.maximum(hi - lo, 0.0), axis=1).sum())
+        if cost > max_cost:
+            raise LimitError(
+                f"this render would test about {cost / 1e6:.0f} M pixels, over the rendering limit of "
+                f"{max_cost / 1e6:.0f} M (overlapping layers count once each): use a smaller size"
+            )
 
 
 def _png_chunk(kind: bytes, data: bytes) -> bytes:

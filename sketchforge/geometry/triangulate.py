@@ -51,8 +51,14 @@ def max_triangle_area(edge_length: float) -> float:
 
 
 def estimate_vertex_count(area: float, perimeter: float, edge_length: float) -> int:
-    """Vertices a quality mesh of a polygon with this area and perimeter will have (±20%)."""
-    return int(_VERTICES_PER_MAX_AREA * area / max_triangle_area(edge_length) + perimeter / edge_length) + 1
+    """Vertices a quality mesh of a polygon with this area and perimeter will have (±20%).
+    An edge length so small that the estimate overflows (1e-300) counts as 10**18 vertices."""
+    cap = 10**18
+    tri = max_triangle_area(edge_length)
+    if not (edge_length > 0 and tri > 0):
+        return cap
+    est = _VERTICES_PER_MAX_AREA * area / tri + perimeter / edge_length
+    return int(est) + 1 if math.isfinite(est) and est < cap else cap
 
 
 def check_vertex_budget(area: float, perimeter: float, edge_length: float, max_vertices: int = MAX_VERTICES) -> int:

@@ -32,9 +32,11 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
+from sketchforge.atomic import refuse_input_as_output
 from sketchforge.document import commands as C
 from sketchforge.document import fileformat as ff
 from sketchforge.document.autosave import Autosaver, autosave_interval, describe_stop, find_recoverable, forget, recover
+from sketchforge.document.autosave import poll_interval_ms
 from sketchforge.document.layer import Light
 from sketchforge.errors import EditsDoNotApplyError, SketchforgeError
 from sketchforge.geometry.parts import part_at
@@ -121,15 +123,27 @@ class MainWindow(QMainWindow):
         # Autosave of unsaved work (the Autosaver decides when; the timer only polls).
         self.autosaver = Autosaver(doc, interval_s=autosave_interval(self.settings.value("autosave/interval_s")))
         self._autosave_timer = QTimer(self)
-        self._autosave_timer.setInterval(5000)
+        self._autosave_timer.setInterval(poll_interval_ms(self.autosaver.interval_s))
         self._autosave_timer.timeout.connect(self._autosave)
         self._autosave_timer.start()
+        #: The autosave failure being shown (shown once, not at every retry), or None.
+        self.autosave_error: str | None = None
 
     def _autosave(self) -> None:
+        """Timer tick. A failure (full disk, a file where the data folder should be) is shown
+        once in the status bar, where it stays, and the autosave is retried at every interval;
+        the first success after it says so."""
         try:
-            self.autosaver.tick()
+            wrote = self.autosaver.tick()
         except (SketchforgeError, OSError) as exc:
-            self.show_message(f"autosave failed: {error_text(exc)}")
+            text = f"autosave failed: {error_text(exc)} (retrying every {self.autosaver.interval_s:g} s)"
+            if text != self.autosave_error:
+                self.autosave_error = text
+                self.statusBar().showMessage(text)  # no timeout: it stays until the next message
+            return
+        if self.autosave_error is not None and (wrote or self.doc.undo_stack.is_clean()):
+            self.autosave_error = None
+            self.show_message("autosave works again")
 
     def offer_recovery(self) -> bool:
         """At start: offer the newest autosave left by a session that did not end normally,
@@ -903,6 +917,7 @@ class MainWindow(QMainWindow):
     def export_to(self, path: Path) -> bool:
         """Export the assembled model (the visible layers merged without an assembler)."""
         try:
+            refuse_input_as_output(path, [self.path], "export")  # never over the open document
             exporter = self.host.exporter_for(path, self.doc)
             if exporter.write_document is not None:  # an animation: seconds of solving
                 from sketchforge.qt.animation import export_document_in_background

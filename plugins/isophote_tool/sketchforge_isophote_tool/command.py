@@ -77,10 +77,13 @@ class SculptIsophote(ReplaceLayerCommand):
         pick = parse_vector(d, "pick", cls.name)
         if len(pick) != 2:
             raise DocumentFormatError(f"command {cls.name!r}: 'pick' must be 2 numbers [x, y]")
+        band = parse_field(d, "band", float, cls.name)
+        if band > 1e9:  # the pipeline's MAX_BAND (not imported here: it pulls in jax)
+            raise DocumentFormatError(f"command {cls.name!r}: 'band' is {band:.3g}; it must be at most 1e+09 drawing units")
         return cls(
             layer=parse_field(d, "layer", str, cls.name),
             pick=pick,
-            band=parse_field(d, "band", float, cls.name),
+            band=band,
             stroke=parse_points(d, cls.name, "stroke").tolist(),
             model=parse_field(d, "model", str, cls.name, "lambertian"),
         )

@@ -177,7 +177,14 @@ def _band_radius(band) -> float:
         raise SculptError(f"the band radius must be a number, got {band!r}") from None
     if not (np.isfinite(r) and r > 0):
         raise SculptError(f"the band radius must be a positive number, got {band}")
+    if r > MAX_BAND:
+        # GEOS buffers with NaN beyond ~1e300; no layer is anywhere near this wide.
+        raise SculptError(f"the band radius {r:.3g} is too large; it must be at most {MAX_BAND:.0e} drawing units")
     return r
+
+
+#: Largest band radius: the drawing's coordinate range (sketchforge.geometry.contour.MAX_COORDINATE).
+MAX_BAND = 1e9
 
 
 _PICKS: "OrderedDict[tuple, tuple]" = OrderedDict()

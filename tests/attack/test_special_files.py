@@ -1,0 +1,71 @@
+"""Documents that are not regular files, or too large: refused before reading (once a FIFO
+blocked forever and /dev/zero was read until MemoryError at 9 GB)."""
+
+from __future__ import annotations
+
+import os
+import subprocess
+import sys
+
+import pytest
+
+from attack_helpers import MAX_RSS_GROWTH, assert_one_line_error, peak_rss_bytes, run_cli
+
+
+def test_fifo_is_refused_without_blocking(tmp_path):
+    fifo = tmp_path / "doc.json"
+    os.mkfifo(fifo)
+    # A subprocess: a regression would block forever, and the timeout turns that into a failure.
+    res = subprocess.run([sys.executable, "-m", "sketchforge", "info", str(fifo)], capture_output=True, text=True, timeout=60)
+    assert res.returncode == 2 and res.stderr.count("\n") == 1
+    assert "not a regular file" in res.stderr
+
+
+@pytest.mark.parametrize("device", ["/dev/zero", "/dev/urandom"])
+def test_devices_are_refused_before_reading(device):
+    if not os.path.exists(device):
+        pytest.skip(f"no {device}")
+    before = peak_rss_bytes()
+    for cmd in ("info", "replay", "render"):
+        argv = [cmd, device] + (["--png", "/nonexistent-folder/x.png"] if cmd == "render" else [])
+        res = run_cli(*argv)
+        if cmd == "render":
+            assert res.rc == 2
+            continue
+        assert_one_line_error(res, "not a regular file")
+        assert res.seconds < 1.0
+    assert peak_rss_bytes() - before < MAX_RSS_GROWTH
+
+
+def test_directory_is_refused(tmp_path):
+    assert_one_line_error(run_cli("info", tmp_path), "it is a directory")
+
+
+def test_size_cap_is_checked_before_reading(tmp_path, monkeypatch):
+    from sketchforge.document import fileformat as ff
+
+    big = tmp_path / "big.json"
+    big.write_bytes(b" " * 5000)
+    monkeypatch.setattr(ff, "MAX_FILE_BYTES", 4096)
+    read = []
+    real_read = os.read
+    monkeypatch.setattr(ff.os, "read", lambda fd, n: read.append(n) or real_read(fd, n))
+    assert_one_line_error(run_cli("info", big), "5000 bytes is over the limit of 4096")
+    assert read == []  # refused on its size, nothing read
+
+
+def test_a_file_growing_while_read_is_cut_at_the_cap(tmp_path, monkeypatch):
+    """st_size can lie (a file being appended to, /proc files): never read past the cap."""
+    from sketchforge.document import fileformat as ff
+
+    p = tmp_path / "doc.json"
+    p.write_bytes(b" " * 3000)
+    real_fstat = os.fstat
+
+    class Small:
+        def __init__(self, st):
+            self.st_mode, self.st_size = st.st_mode, 10
+
+    monkeypatch.setattr(ff.os, "fstat", lambda fd: Small(real_fstat(fd)))
+    with pytest.raises(ff.LimitError, match="more than 1000 bytes"):
+        ff.read_regular_file(p, limit=1000)
