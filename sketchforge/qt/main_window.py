@@ -400,6 +400,10 @@ class MainWindow(QMainWindow):
         self.creation_panel.params_edited.connect(self.set_params)
         self.creation_panel.shader_changed.connect(self._shader_changed)
         self.creation_panel.isolines_changed.connect(self.canvas.set_isoline_count)
+        # the 3D view's isophote style follows the same count, live (0 lines: keep its last count)
+        self.creation_panel.isolines_changed.connect(
+            lambda k: self.view3d.set_style(self.view3d.style, k) if k > 0 else None
+        )
         self.sculpt_panel.radius_changed.connect(self.sculpt.set_radius)
         self.sculpt_panel.show_changed.connect(lambda s, r: self.sculpt.set_show(s, r))
         self.sculpt_panel.preview_changed.connect(self.sculpt.set_preview)

@@ -27,3 +27,4 @@ def test_undone_rows_are_greyed_from_the_first_one(make_window):
         assert h.currentRow() == h.count() - 1 - undone
     w.redo()
     assert [_undone(h.item(i)) for i in range(h.count())] == [False, False, True, True]
+
