@@ -40,21 +40,18 @@ def cmd_replay(args) -> int:
                 raise SketchforgeError("--frame poses the assembled model; it cannot be combined with --layer")
             if args.frame < 0:
                 raise SketchforgeError(f"--frame must be 0 or more, got {args.frame}")
-            exporter = doc.host.exporter_for(out)
+            doc.host.exporter_for(out)  # an unknown suffix fails before the pose solve
             mesh = doc.host.pose(doc, args.frame)
             if mesh is None:
                 raise SketchforgeError("--frame needs an animation plugin (sketchforge-animate) and none is installed")
-            exporter.write(out, mesh)
+            doc.host.export(out, mesh=mesh)  # atomic, one-line errors naming the plugin
             print(f"wrote {out} (frame {args.frame}, {mesh.n_vertices} vertices, {mesh.n_faces} triangles)", file=sys.stderr)
         else:
-            exporter = doc.host.exporter_for(out, None if args.layer else doc)
-            if exporter.write_document is not None and not args.layer and exporter.handles(doc):
-                summary = exporter.write_document(out, doc)
-                print(f"wrote {out} ({summary})", file=sys.stderr)
+            if args.layer:
+                summary = doc.host.export(out, mesh=doc.export_mesh(args.layer))
             else:
-                mesh = doc.export_mesh(args.layer)
-                exporter.write(out, mesh)
-                print(f"wrote {out} ({mesh.n_vertices} vertices, {mesh.n_faces} triangles)", file=sys.stderr)
+                summary = doc.host.export(out, doc=doc)
+            print(f"wrote {out} ({summary})", file=sys.stderr)
     if args.save:
         ff.save(doc, args.save)
     return 0

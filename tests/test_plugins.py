@@ -31,7 +31,8 @@ class ThirdParty:
     def sketchforge_reflectance_models(self):
         import jax.numpy as jnp
 
-        return [ReflectanceModel("half_lambert", lambda n, l: 0.5 * jnp.dot(n, l) + 0.5)]
+        # Signed, as the contract asks (a half-Lambert 0.5 n·l + 0.5 is positive in shadow).
+        return [ReflectanceModel("dim_lambert", lambda n, l: 0.5 * jnp.dot(n, l))]
 
 
 def test_third_party_exporter_is_used_by_suffix(tmp_path):
@@ -51,7 +52,7 @@ def test_third_party_reflectance_model_is_registered_and_differentiable():
 
     jax.config.update("jax_enable_x64", True)
     host = make_test_host(ThirdParty())
-    model = host.reflectance_models["half_lambert"]
+    model = host.reflectance_models["dim_lambert"]
     n = jnp.array([0.0, 0.6, 0.8])
     l = jnp.array([1.0, 0.0, 0.0])
     g = jax.grad(model.R)(n, l)
@@ -65,8 +66,10 @@ def test_duplicate_names_are_refused():
             return [Exporter("obj", (".obj",), lambda p, m: None)]
 
     host = make_test_host(Clash())
-    with pytest.raises(ValueError, match="two plugins register the exporter 'obj'"):
-        host.exporters
+    # The clash is refused, named with both plugins, and the first registration (the core's)
+    # stays in use.
+    assert host.exporters["obj"].write is not None and host.provider_of(host.exporters["obj"]) == "sketchforge-core"
+    assert any("'sketchforge-core'" in p and "'plugin-0-Clash'" in p and "'obj'" in p for p in host.problems)
 
 
 def test_unknown_export_suffix_is_a_clear_error():

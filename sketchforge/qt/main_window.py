@@ -117,6 +117,7 @@ class MainWindow(QMainWindow):
         self._connect()
         self._sync_all()
         self.set_state("creation")
+        self._report_plugin_problems()
 
         # Autosave of unsaved work (the Autosaver decides when; the timer only polls).
         self.autosaver = Autosaver(doc, interval_s=autosave_interval(self.settings.value("autosave/interval_s")))
@@ -124,6 +125,15 @@ class MainWindow(QMainWindow):
         self._autosave_timer.setInterval(5000)
         self._autosave_timer.timeout.connect(self._autosave)
         self._autosave_timer.start()
+
+    def _report_plugin_problems(self) -> None:
+        """Plugins left out at start-up (import failed, a hook raised, a contract broken): one
+        status-bar line naming them; the details went to the log and stderr."""
+        skipped = dict(getattr(self.host, "skipped", {}) or {})
+        problems = list(getattr(self.host, "problems", []) or [])
+        if skipped or problems:
+            names = ", ".join(sorted(skipped)) or "none disabled"
+            self.show_message(f"plugin problems ({names}): {problems[0] if problems else next(iter(skipped.values()))}")
 
     def _autosave(self) -> None:
         try:
@@ -908,12 +918,11 @@ class MainWindow(QMainWindow):
                 from sketchforge.qt.animation import export_document_in_background
 
                 return export_document_in_background(self, exporter, path)
-            mesh = self.doc.export_mesh()
-            exporter.write(path, mesh)
+            summary = self.host.export(path, mesh=self.doc.export_mesh())  # atomic, errors name the plugin
         except SketchforgeError as exc:
             show_error(self, "Cannot export", exc)
             return False
-        self.show_message(f"exported {path} ({mesh.n_vertices} vertices, {mesh.n_faces} triangles)")
+        self.show_message(f"exported {path} ({summary})")
         return True
 
     def reference_dialog(self) -> None:
