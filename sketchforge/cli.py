@@ -19,6 +19,10 @@ def cmd_replay(args) -> int:
 
     data = ff.read_json(args.doc)
     light, journal = ff.validate_header(data, str(args.doc))
+    from sketchforge.document.provenance import check_available
+    from sketchforge.plugins.manager import default_host
+
+    check_available(data, default_host(), str(args.doc))  # names every missing plugin at once
 
     def progress(i, n):
         if args.verbose:

@@ -245,3 +245,62 @@ def test_plugin_exporter_is_atomic_and_errors_are_one_line(tmp_path):
     assert "'broken'" in msg and "plugin 'plugin-1-ExportPlugin'" in msg and "ran out of ideas" in msg and "\n" not in msg
     assert old.read_text() == "old content"  # the half-written file never replaced it
     assert sorted(p.name for p in tmp_path.iterdir()) == ["keep.brk", "pts.xyz"]
+
+
+# --- provenance ----------------------------------------------------------------------------------
+
+
+@dataclass
+class Tag(ReplaceLayerCommand):
+    name: ClassVar[str] = "tag_layer"
+    tag: str = ""
+
+    def compute(self, doc, old):
+        return _renamed(old) if not self.tag else old.evolve(name=self.tag)
+
+    def to_dict(self):
+        return {"command": self.name, "layer": self.layer, "tag": self.tag}
+
+    @classmethod
+    def from_dict(cls, d):
+        from sketchforge.plugin_api import parse_field
+
+        return cls(layer=parse_field(d, "layer", str, cls.name), tag=parse_field(d, "tag", str, cls.name))
+
+
+class TagPlugin:
+    @hookimpl
+    def sketchforge_commands(self):
+        return [Tag]
+
+
+def test_documents_record_providers_and_name_missing_plugins_once():
+    import json
+
+    from sketchforge.document import fileformat as ff
+
+    doc = fan_doc(TagPlugin())
+    doc.execute({"command": "tag_layer", "layer": "a", "tag": "head"})
+    doc.execute({"command": "tag_layer", "layer": "a", "tag": "torso"})
+    data = json.loads(ff.dumps(doc))
+    assert data["providers"]["commands"]["tag_layer"] == {"plugin": "plugin-1-TagPlugin", "version": None}
+    assert data["providers"]["commands"]["set_contour"]["plugin"] == "sketchforge-core"
+    data["providers"]["commands"]["tag_layer"]["version"] = "2.1.0"  # as an installed package records it
+    assert ff.document_from_dict(json.loads(json.dumps(data)), "tagged.json", host=doc.host).layer("a").name == "torso"
+
+    without = make_test_host(FanInflater())
+    with pytest.raises(SketchforgeError) as info:
+        ff.document_from_dict(data, "tagged.json", host=without)
+    msg = str(info.value)
+    assert msg == (
+        "tagged.json needs plugins that are not installed: "
+        "unknown command 'tag_layer' (from plugin 'plugin-1-TagPlugin' version 2.1.0)"
+    )
+    assert msg.count("tag_layer") == 1  # two entries, said once
+
+
+def test_provider_version_of_an_installed_plugin_is_its_distribution_version(real_host):
+    from importlib.metadata import version
+
+    assert real_host.provider_version("inflate") == version("sketchforge-inflate")
+    assert real_host.provider_version("sketchforge-core") == version("sketchforge")

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 from PySide6.QtCore import QSettings, Qt, QTimer
-from PySide6.QtGui import QAction, QActionGroup, QKeySequence
+from PySide6.QtGui import QAction, QActionGroup, QIcon, QKeySequence
 from PySide6.QtWidgets import (
     QFileDialog,
     QLabel,
@@ -113,6 +113,7 @@ class MainWindow(QMainWindow):
 
         self._build_widgets()
         self._build_menus()
+        self._build_tool_palette()
         self._build_status_bar()
         self._connect()
         self._sync_all()
@@ -349,6 +350,43 @@ class MainWindow(QMainWindow):
         self._action(h, "&Gestures and keys", self.toggle_help, ["F1", "?"])
         self.update_recent_menu()
 
+    def _build_tool_palette(self) -> None:
+        """Every registered tool, in the SCULPTURE panel's palette and a Tools menu with its
+        shortcut (a tool's ``shortcut`` that the window already uses is dropped, with a
+        message naming the plugin)."""
+        entries = self.sculpt.tool_entries()
+        taken = {a.shortcut().toString() for a in self.findChildren(QAction) if not a.shortcut().isEmpty()}
+        menu = self.menuBar().addMenu("&Tools")
+        self.tool_actions: dict[str, QAction] = {}
+        usable = []
+        icons = {}
+        for name, label, shortcut in entries:
+            cls = self.host.tools[name]
+            icon_path = getattr(cls, "icon", "") or ""
+            if icon_path and Path(icon_path).is_file():
+                icons[name] = QIcon(str(icon_path))
+            key = QKeySequence(shortcut).toString() if shortcut else ""
+            if key and key in taken:
+                who = self.host.provider_of(cls) if hasattr(self.host, "provider_of") else None
+                self.show_message(f"tool {name!r} (plugin {who!r}): shortcut {shortcut} is already used; choose it from the Tools menu")
+                key = ""
+            taken.add(key)
+            act = self._action(menu, label, lambda _=False, n=name: self.select_tool(n), key or None)
+            if name in icons:
+                act.setIcon(icons[name])
+            self.tool_actions[name] = act
+            usable.append((name, label, key))
+        if not entries:
+            menu.addAction("(no tool plugin installed)").setEnabled(False)
+        self.sculpt_panel.set_tools(usable, self.sculpt.tool_name, icons)
+
+    def select_tool(self, name: str) -> None:
+        """Switch to SCULPTURE with the tool ``name`` (palette, Tools menu, shortcut)."""
+        if self.mode != "editing" or self.state != "sculpture":
+            self.set_mode("sculpture")
+        if self.sculpt.select_tool(name):
+            self.sculpt_panel.show_state(self.sculpt)
+
     def _build_status_bar(self) -> None:
         sb = self.statusBar()
         self.progress = QProgressBar()
@@ -400,6 +438,7 @@ class MainWindow(QMainWindow):
         self.sculpt_panel.show_changed.connect(lambda s, r: self.sculpt.set_show(s, r))
         self.sculpt_panel.preview_changed.connect(self.sculpt.set_preview)
         self.sculpt_panel.model_changed.connect(self._model_changed)
+        self.sculpt_panel.tool_selected.connect(self.select_tool)
         self.light_panel.angle_edited.connect(self.set_light_angle)
 
         lp = self.layers_panel
