@@ -22,6 +22,7 @@ from PySide6.QtWidgets import (
     QFileDialog,
     QLabel,
     QMainWindow,
+    QMenu,
     QMessageBox,
     QProgressBar,
     QPushButton,
@@ -356,7 +357,9 @@ class MainWindow(QMainWindow):
         message naming the plugin)."""
         entries = self.sculpt.tool_entries()
         taken = {a.shortcut().toString() for a in self.findChildren(QAction) if not a.shortcut().isEmpty()}
-        menu = self.menuBar().addMenu("&Tools")
+        menu = QMenu("&Tools", self)
+        help_menu = next((a for a in self.menuBar().actions() if a.text() == "&Help"), None)
+        self.menuBar().insertMenu(help_menu, menu) if help_menu is not None else self.menuBar().addMenu(menu)
         self.tool_actions: dict[str, QAction] = {}
         usable = []
         icons = {}
