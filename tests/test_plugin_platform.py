@@ -304,3 +304,33 @@ def test_provider_version_of_an_installed_plugin_is_its_distribution_version(rea
 
     assert real_host.provider_version("inflate") == version("sketchforge-inflate")
     assert real_host.provider_version("sketchforge-core") == version("sketchforge")
+
+
+# --- the pytest plugin for plugin authors -------------------------------------------------------
+
+
+def test_pytest_fixtures_are_installed_and_strict(tmp_path):
+    """A plugin author's test file, run by pytest in a subprocess: the fixtures come from the
+    ``pytest11`` entry point, and a strict host fails the test with the host's message."""
+    (tmp_path / "test_author.py").write_text(
+        "import jax.numpy as jnp\n"
+        "from sketchforge.plugin_api import ReflectanceModel, hookimpl\n"
+        "from sketchforge.plugins.testing import FanInflater\n"
+        "class Clamped:\n"
+        "    @hookimpl\n"
+        "    def sketchforge_reflectance_models(self):\n"
+        "        return [ReflectanceModel('clamped', lambda n, l: jnp.maximum(jnp.dot(n, l), 0.0))]\n"
+        "def test_strict(make_sketchforge_host):\n"
+        "    make_sketchforge_host(Clamped())\n"
+        "def test_document_and_replay(make_sketchforge_host, make_sketchforge_document, assert_replays):\n"
+        "    doc = make_sketchforge_document(make_sketchforge_host(FanInflater()))\n"
+        "    doc.execute({'command': 'set_light', 'direction': [0.0, 1.0, 0.0]})\n"
+        "    assert assert_replays(doc).layer('a').mesh.n_vertices == 49\n"
+    )
+    res = subprocess.run(
+        [sys.executable, "-m", "pytest", "-q", "-p", "no:randomly", "-p", "no:cacheprovider", str(tmp_path)],
+        capture_output=True, text=True, timeout=300, cwd=tmp_path,
+    )
+    out = res.stdout + res.stderr
+    assert "1 failed, 1 passed" in out, out
+    assert "the host refused plugin contributions" in out and "'clamped' must be signed" in out
