@@ -104,7 +104,7 @@ def test_clamped_and_numpy_reflectance_models_are_refused_with_the_reason():
     host = make_test_host(models_plugin(clamped, numpy_model, signed))
     assert set(host.reflectance_models) == {"lambertian", "wrapped"}
     text = "\n".join(host.problems)
-    assert "'clamped' must be signed" in text and "R = 0" in text
+    assert "'clamped' must be signed, not clamped: it is flat in shadow (R = 0, |∇R| = 0" in text
     assert "'numpy' cannot be differentiated by JAX" in text and "jax.numpy" in text
     assert text.count("plugin 'plugin-0-Models'") == 2
 
@@ -333,4 +333,4 @@ def test_pytest_fixtures_are_installed_and_strict(tmp_path):
     )
     out = res.stdout + res.stderr
     assert "1 failed, 1 passed" in out, out
-    assert "the host refused plugin contributions" in out and "'clamped' must be signed" in out
+    assert "the host refused plugin contributions" in out and "'clamped' must be signed, not clamped" in out

@@ -31,8 +31,7 @@ class ThirdParty:
     def sketchforge_reflectance_models(self):
         import jax.numpy as jnp
 
-        # Signed, as the contract asks (a half-Lambert 0.5 n·l + 0.5 is positive in shadow).
-        return [ReflectanceModel("dim_lambert", lambda n, l: 0.5 * jnp.dot(n, l))]
+        return [ReflectanceModel("half_lambert", lambda n, l: 0.5 * jnp.dot(n, l) + 0.5)]
 
 
 def test_third_party_exporter_is_used_by_suffix(tmp_path):
@@ -52,7 +51,7 @@ def test_third_party_reflectance_model_is_registered_and_differentiable():
 
     jax.config.update("jax_enable_x64", True)
     host = make_test_host(ThirdParty())
-    model = host.reflectance_models["dim_lambert"]
+    model = host.reflectance_models["half_lambert"]
     n = jnp.array([0.0, 0.6, 0.8])
     l = jnp.array([1.0, 0.0, 0.0])
     g = jax.grad(model.R)(n, l)

@@ -81,9 +81,12 @@ def check_exporter(exp, plugin: str) -> None:
 
 def check_reflectance_model(model, plugin: str) -> None:
     """Probe ``R`` where the height solve will use it: at slopes in the shadow of three
-    lights in the drawing plane it must be finite, negative (signed, not clamped) and have a
-    finite, non-zero slope gradient from ``jax.grad`` (so it is written with ``jax.numpy``).
-    The core's Lambertian model is trusted (it is the reference)."""
+    lights in the drawing plane it must be finite and have a finite, non-zero slope gradient
+    from ``jax.grad`` (so it is written with ``jax.numpy``, and not clamped: a ``max(n·l, 0)``
+    is flat there). Negative values in shadow are the documented convention but not
+    enforced: a model that is a monotone function of n·l (a squared half-Lambert) has the
+    same isophotes as Lambert and sculpts correctly in its own units. The core's Lambertian
+    model is trusted (it is the reference)."""
     from sketchforge.geometry.reflectance_model import ReflectanceModel
 
     if not isinstance(model, ReflectanceModel) or not callable(model.R):
@@ -107,10 +110,10 @@ def check_reflectance_model(model, plugin: str) -> None:
                 )
             if not all(np.isfinite(v) for v in (r, rp, rq)):
                 _fail(plugin, f"reflectance model {model.name!r} gives a non-finite value or gradient at n·l = {-k / np.hypot(1, k):.2f} (ignored)")
-            if r >= 0 or abs(rp) + abs(rq) < 1e-12:
+            if abs(rp) + abs(rq) < 1e-12:
                 _fail(
                     plugin,
-                    f"reflectance model {model.name!r} must be signed: negative with a non-zero gradient in shadow, "
-                    f"got R = {r:.3g}, |∇R| = {abs(rp) + abs(rq):.3g} at n·l = {-k / np.hypot(1, k):.2f} "
-                    "(do not clamp with max(·, 0); ignored)",
+                    f"reflectance model {model.name!r} must be signed, not clamped: it is flat in shadow "
+                    f"(R = {r:.3g}, |∇R| = {abs(rp) + abs(rq):.3g} at n·l = {-k / np.hypot(1, k):.2f}), so the "
+                    "height solve cannot move its isophotes there; do not use max(·, 0) (ignored)",
                 )

@@ -130,8 +130,8 @@ def sketchforge_reflectance_models():
     A model wraps ``R(n, l) -> float`` written with ``jax.numpy`` (n, l: (3,) unit vectors,
     float64), signed (negative in shadow, never clamped) so that R_p, R_q from automatic
     differentiation exist everywhere. Lambertian (``n·l``) is built in. Probed at
-    registration: a model ``jax.grad`` cannot trace, or that is not negative with a non-zero
-    gradient in shadow, is refused.
+    registration: a model ``jax.grad`` cannot trace, or one that is flat in shadow (zero
+    gradient: clamped), is refused.
     """
 
 
