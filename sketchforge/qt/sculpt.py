@@ -363,7 +363,8 @@ class SculptController(QObject):
                 self.preview_result = None
                 # A SketchforgeError is the edit's own answer; anything else is a plugin bug,
                 # said as such rather than leaving a stale preview on screen.
-                text = str(exc) if isinstance(exc, SketchforgeError) else f"the preview failed ({exc!r}); see the log"
+                who = getattr(self.host, "provider_of", lambda c: None)(type(self.tool)) if self.tool is not None else None
+                text = str(exc) if isinstance(exc, SketchforgeError) else f"the preview of plugin {who!r} failed ({exc!r}); see the log"
                 self._set_status(f"preview: {text}")
                 if not isinstance(exc, SketchforgeError):
                     self.message.emit(text)

@@ -95,3 +95,58 @@ def test_a_plugin_whose_hook_raises_is_named_in_the_status_bar_and_the_app_start
     text = w.statusBar().currentMessage()
     assert "plugin-1-BrokenTools" in text and "brushes.json" in text
     assert w.sculpt_panel.tool.count() == 0 and not dialogs.calls
+
+
+def test_a_plugin_command_that_fails_on_the_worker_names_its_plugin(qtbot, tmp_path, dialogs):
+    from dataclasses import dataclass
+    from typing import ClassVar
+
+    from PySide6.QtCore import QSettings
+
+    from sketchforge.document.document import Document
+    from sketchforge.plugin_api import ReplaceLayerCommand, Tool, hookimpl
+    from sketchforge.plugins.testing import FanInflater, make_test_host
+    from sketchforge.qt.main_window import MainWindow
+
+    @dataclass
+    class Crash(ReplaceLayerCommand):
+        name: ClassVar[str] = "crash_brush"
+
+        def compute(self, doc, old):
+            return 1 / 0  # a bug, on the worker thread
+
+        def to_dict(self):
+            return {"command": self.name, "layer": self.layer}
+
+        @classmethod
+        def from_dict(cls, d):
+            return cls(layer=d["layer"])
+
+    class CrashTool(Tool):
+        name, label = "crash_brush", "Crash brush"
+
+        def release(self, pos):
+            return self.doc.push(Crash(layer="a"))
+
+    class CrashPlugin:
+        @hookimpl
+        def sketchforge_commands(self):
+            return [Crash]
+
+        @hookimpl
+        def sketchforge_tools(self):
+            return [CrashTool]
+
+    host = make_test_host(FanInflater(), CrashPlugin())
+    doc = Document(host=host)
+    doc.execute({"command": "add_layer", "id": "a"})
+    doc.execute({"command": "set_contour", "layer": "a", "points": [[0, 0], [1, 0], [0, 1]]})
+    before = doc.layer("a")
+    w = MainWindow(doc, host=host, settings=QSettings(str(tmp_path / "s.ini"), QSettings.Format.IniFormat))
+    qtbot.addWidget(w)
+    w.select_tool("crash_brush")
+    w.sculpt.stroke_press(np.array([0.2, 0.2]))
+    w.sculpt.stroke_release(np.array([0.2, 0.2]))
+    wait_idle(qtbot, w)
+    assert "command 'crash_brush' (from plugin 'plugin-1-CrashPlugin') failed: ZeroDivisionError" in w.sculpt.status
+    assert doc.layer("a") is before and doc.undo_stack.count() == 2
