@@ -334,3 +334,17 @@ def test_pytest_fixtures_are_installed_and_strict(tmp_path):
     out = res.stdout + res.stderr
     assert "1 failed, 1 passed" in out, out
     assert "the host refused plugin contributions" in out and "'clamped' must be signed, not clamped" in out
+
+
+def test_a_solver_hook_bug_names_its_plugin_and_changes_nothing():
+    class BadInflater:
+        @hookimpl
+        def sketchforge_inflate(self, points, closed, params):
+            return np.linalg.inv(np.zeros((2, 2)))  # LinAlgError: a bug, not a user error
+
+    doc = Document(host=make_test_host(BadInflater()))
+    doc.execute({"command": "add_layer", "id": "a"})
+    with pytest.raises(PluginError) as info:
+        doc.execute({"command": "set_contour", "layer": "a", "points": TRIANGLE})
+    assert "the sketchforge_inflate hook of plugin 'plugin-0-BadInflater' failed: LinAlgError" in str(info.value)
+    assert doc.layer("a").mesh is None and doc.undo_stack.count() == 1

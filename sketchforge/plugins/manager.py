@@ -22,7 +22,7 @@ from typing import Iterable
 
 import pluggy
 
-from sketchforge.errors import PluginError
+from sketchforge.errors import PluginError, SketchforgeError
 from sketchforge.plugins import contracts, hookspecs
 
 log = logging.getLogger("sketchforge.plugins")
@@ -93,14 +93,31 @@ class PluginHost:
         return [name for name, _ in self.pm.list_name_plugin()]
 
     # solvers
+    def _solve(self, hookname: str, **kwargs):
+        """A ``firstresult`` hook called implementation by implementation (pluggy's order:
+        last registered first), so a bug in one (an exception that is not a SketchforgeError)
+        becomes a PluginError naming that plugin."""
+        for impl in reversed(getattr(self.pm.hook, hookname).get_hookimpls()):
+            if getattr(impl, "hookwrapper", False) or getattr(impl, "wrapper", False):
+                continue
+            try:
+                result = impl.function(*[kwargs[a] for a in impl.argnames])
+            except SketchforgeError:
+                raise
+            except Exception as exc:  # noqa: BLE001 - foreign code: named, not hidden
+                raise PluginError(f"the {hookname} hook of plugin {impl.plugin_name!r} failed: {type(exc).__name__}: {exc}") from exc
+            if result is not None:
+                return result
+        return None
+
     def inflate(self, points, closed: bool, params: dict):
-        return self.pm.hook.sketchforge_inflate(points=points, closed=closed, params=params)
+        return self._solve("sketchforge_inflate", points=points, closed=closed, params=params)
 
     def has_assembler(self) -> bool:
         return bool(self.pm.hook.sketchforge_assemble.get_hookimpls())
 
     def assemble(self, layers, params: dict | None = None):
-        return self.pm.hook.sketchforge_assemble(layers=list(layers), params=dict(params or {}))
+        return self._solve("sketchforge_assemble", layers=list(layers), params=dict(params or {}))
 
     # registries
     @property
@@ -277,7 +294,7 @@ class PluginHost:
     def pose(self, doc, frame: int):
         """The document's model posed at animation ``frame`` by an animation plugin (None:
         no animation plugin is installed)."""
-        return self.pm.hook.sketchforge_pose(doc=doc, frame=int(frame))
+        return self._solve("sketchforge_pose", doc=doc, frame=int(frame))
 
     def exporter_for(self, path, doc=None) -> "object":
         """The exporter for ``path``'s suffix. With ``doc``, a document exporter that handles
@@ -289,8 +306,18 @@ class PluginHost:
         suffix = Path(path).suffix.lower()
         if doc is not None:
             for exp in reversed(list(self.exporters.values())):
-                if suffix in exp.suffixes and exp.write_document is not None and exp.handles is not None and exp.handles(doc):
-                    return exp
+                if suffix in exp.suffixes and exp.write_document is not None and exp.handles is not None:
+                    try:
+                        handles = exp.handles(doc)
+                    except SketchforgeError:
+                        raise
+                    except Exception as exc:  # noqa: BLE001 - foreign code
+                        raise ExportError(
+                            f"exporter {exp.name!r} (plugin {self.provider_of(exp)!r}) failed to inspect the document: "
+                            f"{type(exc).__name__}: {exc}"
+                        ) from exc
+                    if handles:
+                        return exp
         for exp in self.exporters.values():
             if suffix in exp.suffixes:
                 return exp
