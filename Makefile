@@ -5,6 +5,9 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 EXAMPLE ?= examples/creature.json
 PLUGINS := plugins/inflate plugins/isophote_tool plugins/assemble plugins/animate
+# Example plugin packages (a BRDF, a brush, an exporter): installed like any plugin so that
+# `make test` runs their own tests (pyproject's testpaths) against sketchforge's fixtures.
+EXAMPLE_PLUGINS := examples/plugins/soft_brdf examples/plugins/bump_brush examples/plugins/off_exporter
 
 .PHONY: run deps test venv bench screenshots clean
 
@@ -18,10 +21,10 @@ SUDO := $(shell [ "$$(id -u)" -eq 0 ] || echo sudo)
 venv: $(STAMP)
 
 # Re-install whenever a pyproject changes (a new dependency lands with its commit).
-$(STAMP): pyproject.toml $(addsuffix /pyproject.toml,$(PLUGINS))
+$(STAMP): pyproject.toml $(addsuffix /pyproject.toml,$(PLUGINS) $(EXAMPLE_PLUGINS))
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip
-	$(BIN)/python -m pip install -q -e '.[test]' $(addprefix -e ,$(PLUGINS))
+	$(BIN)/python -m pip install -q -e '.[test]' $(addprefix -e ,$(PLUGINS) $(EXAMPLE_PLUGINS))
 	touch $@
 
 # Checks first that a window can open (display, xcb libraries): if not, the last line says
@@ -54,4 +57,4 @@ screenshots: $(STAMP)
 	$(BIN)/python examples/make_animated.py --strip docs/screenshots/animation_strip.png
 
 clean:
-	rm -rf $(VENV) build *.egg-info plugins/*/*.egg-info
+	rm -rf $(VENV) build *.egg-info plugins/*/*.egg-info examples/plugins/*/*.egg-info

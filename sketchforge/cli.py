@@ -48,6 +48,10 @@ def cmd_replay(args) -> int:
         default_host().exporter_for(Path(args.export))  # an unknown format, before the replay
     data = ff.read_json(args.doc)
     light, journal = ff.validate_header(data, str(args.doc))
+    from sketchforge.document.provenance import check_available
+    from sketchforge.plugins.manager import default_host
+
+    check_available(data, default_host(), str(args.doc))  # names every missing plugin at once
 
     def progress(i, n):
         if args.verbose:
@@ -69,21 +73,18 @@ def cmd_replay(args) -> int:
                 raise SketchforgeError("--frame poses the assembled model; it cannot be combined with --layer")
             if args.frame < 0:
                 raise SketchforgeError(f"--frame must be 0 or more, got {args.frame}")
-            exporter = doc.host.exporter_for(out)
+            doc.host.exporter_for(out)  # an unknown suffix fails before the pose solve
             mesh = doc.host.pose(doc, args.frame)
             if mesh is None:
                 raise SketchforgeError("--frame needs an animation plugin (sketchforge-animate) and none is installed")
-            exporter.write(out, mesh)
+            doc.host.export(out, mesh=mesh)  # atomic, one-line errors naming the plugin
             print(f"wrote {printable(out)} (frame {args.frame}, {mesh.n_vertices} vertices, {mesh.n_faces} triangles)", file=sys.stderr)
         else:
-            exporter = doc.host.exporter_for(out, None if args.layer else doc)
-            if exporter.write_document is not None and not args.layer and exporter.handles(doc):
-                summary = exporter.write_document(out, doc)
-                print(f"wrote {printable(out)} ({summary})", file=sys.stderr)
+            if args.layer:
+                summary = doc.host.export(out, mesh=doc.export_mesh(args.layer))
             else:
-                mesh = doc.export_mesh(args.layer)
-                exporter.write(out, mesh)
-                print(f"wrote {printable(out)} ({mesh.n_vertices} vertices, {mesh.n_faces} triangles)", file=sys.stderr)
+                summary = doc.host.export(out, doc=doc)
+            print(f"wrote {printable(out)} ({summary})", file=sys.stderr)
     if args.save:
         ff.save(doc, args.save)
     return 0

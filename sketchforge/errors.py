@@ -60,3 +60,8 @@ class GeometryError(SketchforgeError, ValueError):
 
 class EditsDoNotApplyError(SketchforgeError):
     """A redrawn outline's sculpt edits do not apply to its new surface (nothing changed)."""
+
+
+class PluginError(SketchforgeError):
+    """A plugin misbehaved (a hook raised, returned the wrong type, broke a contract); the
+    message names the plugin. The document is left as it was before."""

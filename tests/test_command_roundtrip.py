@@ -25,6 +25,8 @@ EXAMPLES = [
     {"command": "hold_pin", "pin": "pin1"},
     {"command": "record_motion", "pin": "pin1", "start": 3, "samples": [[0.0, 0.0, 1.0], [0.125, 0.0, 1.0]]},
     {"command": "copy_motion", "source": "pin1", "pin": "pin2"},
+    # examples/plugins/bump_brush (installed by `make`, as a third-party brush would be)
+    {"command": "bump_brush", "layer": "body", "center": [0.25, -0.5], "radius": 0.3, "height": 0.125},
     {"command": "macro", "text": "Draw layer", "children": [
         {"command": "add_layer", "id": "a", "name": "A"},
         {"command": "set_contour", "layer": "a", "points": [[0.0, 0.0], [1.0, 0.0], [0.5, 1.0]]}]},

@@ -65,8 +65,10 @@ def test_duplicate_names_are_refused():
             return [Exporter("obj", (".obj",), lambda p, m: None)]
 
     host = make_test_host(Clash())
-    with pytest.raises(ValueError, match="two plugins register the exporter 'obj'"):
-        host.exporters
+    # The clash is refused, named with both plugins, and the first registration (the core's)
+    # stays in use.
+    assert host.exporters["obj"].write is not None and host.provider_of(host.exporters["obj"]) == "sketchforge-core"
+    assert any("'sketchforge-core'" in p and "'plugin-0-Clash'" in p and "'obj'" in p for p in host.problems)
 
 
 def test_unknown_export_suffix_is_a_clear_error():

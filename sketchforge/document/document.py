@@ -172,6 +172,35 @@ class Document:
         self.revision += 1
         self.plugin_data_changed.emit(key)
 
+    # --- all-or-nothing commands (the undo stack's guard) ---------------------------------------
+    def _snapshot(self):
+        """The state a command may change, cheaply: layers are immutable values, so a tuple of
+        references; plugin data is copied deeply (a buggy command may mutate it in place)."""
+        import copy
+
+        return (tuple(self._layers), self._light, copy.deepcopy(self._plugin_data))
+
+    def _restore_snapshot(self, snap) -> None:
+        """Put back a :meth:`_snapshot` after a command failed part-way, emitting the signals
+        of what really changed so views follow."""
+        layers, light, plugin_data = snap
+        if len(layers) != len(self._layers) or any(a is not b for a, b in zip(layers, self._layers)):
+            same_ids = [l.id for l in layers] == self.layer_ids()
+            if same_ids:
+                for layer in layers:
+                    if layer is not self._layers[self.index_of(layer.id)]:
+                        self._replace_layer(layer)
+            else:
+                while self._layers:
+                    self._remove_layer(len(self._layers) - 1)
+                for i, layer in enumerate(layers):
+                    self._insert_layer(i, layer)
+        if light != self._light:
+            self._set_light(light)
+        for key in sorted(set(plugin_data) | set(self._plugin_data)):
+            if plugin_data.get(key) != self._plugin_data.get(key):
+                self._set_plugin_data(key, plugin_data.get(key))
+
     # --- comparison (tests, replay checks) --------------------------------------------------------
     def differences(self, other: "Document") -> list[str]:
         """What differs between the two states (empty when layers, meshes bit for bit, and

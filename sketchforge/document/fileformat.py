@@ -6,6 +6,9 @@
 - ``light``: the light at the start of the journal.
 - ``journal``: command dicts, each with a ``"command"`` name, in order; each acts with the light
   current at its place (``set_light`` entries change it).
+- ``providers`` (optional, written since plugins record provenance): which plugin and version
+  provided each command and reflectance model the document uses
+  (:mod:`sketchforge.document.provenance`); only read to name missing plugins.
 - ``snapshot`` (optional): the state after the journal: ``light`` and every layer (id, name,
   visible, closed, points, params, edits, mesh) and, when a plugin keeps document-level data
   (an animation), ``plugin_data``: {key: JSON value}. Mesh arrays are stored as base64 of their
@@ -29,6 +32,7 @@ from typing import Any
 import numpy as np
 
 from sketchforge.atomic import write_bytes_atomic
+from sketchforge.document import provenance
 from sketchforge.document.document import Document
 from sketchforge.document.layer import Layer, Light
 from sketchforge.errors import DocumentFormatError, ExportError, LimitError, SketchforgeError
@@ -165,6 +169,7 @@ def document_to_dict(doc: Document, snapshot: bool = True) -> dict:
         keys = doc.plugin_data_keys
         if keys:
             out["snapshot"]["plugin_data"] = {k: doc.plugin_data(k) for k in keys}
+    out["providers"] = provenance.record(doc)
     return out
 
 
@@ -268,6 +273,11 @@ def validate_header(data: Any, source: str) -> tuple[Light, list]:
 def document_from_dict(data: Any, source: str = "document", host=None, use_snapshot: bool = True) -> Document:
     """Validate and build a document. Uses the snapshot when there is one, else replays."""
     light, journal = validate_header(data, source)
+    if host is None:
+        from sketchforge.plugins.manager import default_host
+
+        host = default_host()
+    provenance.check_available(data, host, source)  # every missing plugin, in one message
     snap = data.get("snapshot") if use_snapshot else None
     if snap is None:
         return replay_journal(light, journal, source, host)

@@ -18,6 +18,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 from sketchforge.document.events import Signal
+from sketchforge.errors import PluginError, SketchforgeError
 
 if TYPE_CHECKING:  # pragma: no cover
     from sketchforge.document.commands import Command
@@ -98,11 +99,31 @@ class UndoStack:
             self._doc.history_changed.emit()
 
     # --- mutation -----------------------------------------------------------------------------
+    def _run(self, command: "Command", method: str) -> None:
+        """Call ``command.do``/``undo`` all-or-nothing: if it raises, whatever it changed is
+        put back from a snapshot taken before (layers are immutable values, so this is a few
+        references), whatever the command's code did. A :class:`SketchforgeError` (the
+        command's own answer to bad input) propagates as it is; anything else is a bug of the
+        plugin that provides the command and becomes a PluginError naming it."""
+        snap = self._doc._snapshot()
+        try:
+            getattr(command, method)(self._doc)
+        except BaseException as exc:
+            self._doc._restore_snapshot(snap)
+            if isinstance(exc, SketchforgeError) or not isinstance(exc, Exception):
+                raise
+            host = getattr(self._doc, "host", None)
+            who = host.provider_of(type(command)) if host is not None and hasattr(host, "provider_of") else None
+            by = f" (from plugin {who!r})" if who else ""
+            raise PluginError(
+                f"command {command.name!r}{by} failed in {method}: {type(exc).__name__}: {exc}; the document is unchanged"
+            ) from exc
+
     def push(self, command: "Command") -> "Command":
-        """Run ``command`` and record it. If it raises, nothing is recorded (the command
-        guarantees the document is unchanged) and the error propagates."""
+        """Run ``command`` and record it. If it raises, nothing is recorded, the document is
+        restored to its state before (see :meth:`_run`) and the error propagates."""
         before = self._state()
-        command.do(self._doc)
+        self._run(command, "do")
         if self._macros:
             macro = self._macros[-1]
             if not (macro.children and macro.children[-1].try_merge(command)):
@@ -126,7 +147,7 @@ class UndoStack:
         if not self.can_undo():
             return
         before = self._state()
-        self._commands[self._index - 1].undo(self._doc)
+        self._run(self._commands[self._index - 1], "undo")
         self._index -= 1
         self._emit_changes(before)
 
@@ -134,7 +155,7 @@ class UndoStack:
         if not self.can_redo():
             return
         before = self._state()
-        self._commands[self._index].do(self._doc)
+        self._run(self._commands[self._index], "do")
         self._index += 1
         self._emit_changes(before)
 

@@ -1,6 +1,6 @@
 """Solver-side reflectance models R(n, l) and their slope form R(p, q; l) with gradients.
 
-A model is a :class:`~sketchforge.plugins.registry.ReflectanceModel` whose ``R(n, l)`` is
+A model is a :class:`~sketchforge.geometry.reflectance_model.ReflectanceModel` whose ``R(n, l)`` is
 written with ``jax.numpy``. It must be signed (negative in shadow, never ``max(·, 0)``): the
 height solve follows ∇R and the c = 0 isophote edit needs a gradient in the shadow too
 (thesis ch. 4 intro). R_p and R_q come from ``jax.grad`` of R composed with
@@ -22,7 +22,7 @@ enable_x64()
 import jax  # noqa: E402  (x64 must be switched on before JAX makes any array)
 import jax.numpy as jnp  # noqa: E402
 
-from sketchforge.plugins.registry import ReflectanceModel  # noqa: E402
+from sketchforge.geometry.reflectance_model import ReflectanceModel  # noqa: E402
 
 
 def lambertian(n, l):

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from sketchforge.plugins.registry import Shader
+from sketchforge.geometry.reflectance_model import Shader
 
 #: Warm clay base colour, linear RGB in [0, 1].
 CLAY = np.array([0.84, 0.74, 0.62])

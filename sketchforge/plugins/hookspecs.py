@@ -19,6 +19,11 @@ Registries (every implementation is called, results are collected; names must be
 
 - :func:`sketchforge_tools`, :func:`sketchforge_reflectance_models`,
   :func:`sketchforge_shaders`, :func:`sketchforge_commands`, :func:`sketchforge_exporters`
+
+Each registry hook must return a list. The host calls them plugin by plugin: one that raises
+disables its plugin; each contribution is checked (:mod:`sketchforge.plugins.contracts`) and
+refused with a message naming the plugin if it breaks its contract (``host.problems``).
+Public types for plugin code: :mod:`sketchforge.plugin_api`.
 """
 
 from __future__ import annotations
@@ -111,18 +116,22 @@ def sketchforge_tools():
     """Return a list of tool classes (``sketchforge.tools.Tool`` subclasses).
 
     A tool turns press/move/release gestures in document coordinates into commands. Called
-    once when the host starts; a tool's ``name`` must be unique.
+    once when the host starts; a tool's ``name`` must be unique. ``label``, optional
+    ``shortcut`` (``"Shift+B"``) and ``icon`` (an image path) show in the app's tool palette;
+    the commands it pushes are prepared on a worker thread there (README, Plugin guide).
     """
 
 
 @hookspec
 def sketchforge_reflectance_models():
     """Return a list of solver-side reflectance models
-    (``sketchforge.plugins.registry.ReflectanceModel``).
+    (``sketchforge.plugin_api.ReflectanceModel``).
 
     A model wraps ``R(n, l) -> float`` written with ``jax.numpy`` (n, l: (3,) unit vectors,
     float64), signed (negative in shadow, never clamped) so that R_p, R_q from automatic
-    differentiation exist everywhere. Lambertian (``n·l``) is built in.
+    differentiation exist everywhere. Lambertian (``n·l``) is built in. Probed at
+    registration: a model ``jax.grad`` cannot trace, or one that is flat in shadow (zero
+    gradient: clamped), is refused.
     """
 
 
@@ -148,8 +157,10 @@ def sketchforge_commands():
 def sketchforge_exporters():
     """Return a list of exporters (``sketchforge.plugins.registry.Exporter``).
 
-    An exporter has a ``name``, the file ``suffixes`` it writes (``".obj"``) and
-    ``write(path, mesh)``. OBJ, PLY, STL and glTF (``.glb``/``.gltf``) are built in. An
-    exporter of a whole document (an animated glTF) also sets ``write_document`` and
-    ``handles`` (see :class:`sketchforge.plugins.registry.Exporter`).
+    An exporter has a ``name``, the file ``suffixes`` it writes (lower case with a dot:
+    ``".obj"``) and ``write(path, mesh)``. OBJ, PLY, STL and glTF (``.glb``/``.gltf``) are
+    built in. An exporter of a whole document (an animated glTF) also sets ``write_document``
+    and ``handles`` (see :class:`sketchforge.plugins.registry.Exporter`). The host
+    (``host.export``) passes a path in a private temp folder and moves the finished file into
+    place atomically; errors become one line naming the plugin.
     """

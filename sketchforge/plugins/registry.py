@@ -5,28 +5,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Callable
 
+# The value types live below the host (the geometry core uses them); re-exported here, their
+# historical path.
+from sketchforge.geometry.reflectance_model import ReflectanceModel, Shader
 
-@dataclass(frozen=True)
-class ReflectanceModel:
-    """Solver-side reflectance.
-
-    ``R(n, l)``: n, l (3,) float64 unit vectors as ``jax.numpy`` arrays -> scalar, written with
-    ``jax.numpy`` so the strip solver can differentiate it. Signed: negative in shadow.
-    """
-
-    name: str
-    R: Callable
-    description: str = ""
-
-
-@dataclass(frozen=True)
-class Shader:
-    """Display-side shading: ``shade(normals (n,3) float64, light (3,) float64) -> (n,3) float64``
-    colours in [0, 1]. Never used by a solver."""
-
-    name: str
-    shade: Callable
-    description: str = ""
+__all__ = ["Exporter", "ReflectanceModel", "Shader"]
 
 
 @dataclass(frozen=True)

@@ -469,7 +469,8 @@ class _DocumentValues:
 
 
 def export_document_in_background(window, exporter, path) -> bool:
-    """Run ``exporter.write_document`` on a worker thread with the progress indicator."""
+    """Run ``exporter.write_document`` on a worker thread with the progress indicator, through
+    the host (temp file, atomic rename, one-line errors naming the plugin)."""
     values = _DocumentValues(window.doc)  # may raise SketchforgeError: the caller shows it
 
     def done(summary):
@@ -480,5 +481,5 @@ def export_document_in_background(window, exporter, path) -> bool:
 
         show_error(window, "Cannot export", exc, tb)
 
-    window.jobs.start(lambda: exporter.write_document(path, values), done, failed, label="Exporting animation")
+    window.jobs.start(lambda: window.host.export(path, doc=values), done, failed, label="Exporting animation")
     return True

@@ -18,13 +18,16 @@ WINDOW_SIZE = (1280, 800)
 
 
 def plugin_host():
-    """Every installed plugin that imports; a broken one is left out (reported on stderr) so
-    the app still starts. ``SKETCHFORGE_PLUGINS`` limits which entry points are tried."""
+    """Every installed plugin that imports and whose hooks run; a broken one is left out
+    (reported on stderr, and by the window in its status bar) so the app still starts.
+    ``SKETCHFORGE_PLUGINS`` limits which entry points are tried."""
     from sketchforge.plugins.manager import PluginHost
 
     host = PluginHost.create(skip_broken=True)
     for name, reason in host.skipped.items():
         print(f"sketchforge: plugin {name!r} not loaded ({reason})", file=sys.stderr)
+    for text in host.validate():  # every registry now: a hook that raises disables its plugin
+        print(f"sketchforge: {text}", file=sys.stderr)
     return host
 
 

@@ -120,7 +120,7 @@ class CommandRunner(QObject):
             self._job = None
             self._close_macro(abort=True)
             self.busy_changed.emit(False)
-            self._report(exc, tb, cmd, on_error)
+            self._report(self._named(exc, cmd), tb, cmd, on_error)
 
         def work():
             try:
@@ -155,6 +155,20 @@ class CommandRunner(QObject):
             self.doc.undo_stack.abort_macro()
         else:
             self.doc.undo_stack.end_macro()
+
+    def _named(self, exc, cmd):
+        """A bug in a command's ``prepare`` (not a SketchforgeError) as a PluginError naming the
+        plugin that provides the command (the traceback still goes to the dialog's details)."""
+        from sketchforge.errors import PluginError, SketchforgeError
+
+        if isinstance(exc, SketchforgeError) or not isinstance(exc, Exception):
+            return exc
+        host = getattr(self.doc, "host", None)
+        who = host.provider_of(type(cmd)) if hasattr(host, "provider_of") else None
+        by = f" (from plugin {who!r})" if who else ""
+        err = PluginError(f"command {getattr(cmd, 'name', '?')!r}{by} failed: {type(exc).__name__}: {exc}; the document is unchanged")
+        err.__cause__ = exc
+        return err
 
     def _report(self, exc, tb, cmd, on_error) -> None:
         if on_error is not None and on_error(exc):

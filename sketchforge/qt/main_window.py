@@ -17,11 +17,12 @@ from pathlib import Path
 
 import numpy as np
 from PySide6.QtCore import QSettings, Qt, QTimer
-from PySide6.QtGui import QAction, QActionGroup, QKeySequence
+from PySide6.QtGui import QAction, QActionGroup, QIcon, QKeySequence
 from PySide6.QtWidgets import (
     QFileDialog,
     QLabel,
     QMainWindow,
+    QMenu,
     QMessageBox,
     QProgressBar,
     QPushButton,
@@ -115,10 +116,12 @@ class MainWindow(QMainWindow):
 
         self._build_widgets()
         self._build_menus()
+        self._build_tool_palette()
         self._build_status_bar()
         self._connect()
         self._sync_all()
         self.set_state("creation")
+        self._report_plugin_problems()
 
         # Autosave of unsaved work (the Autosaver decides when; the timer only polls).
         self.autosaver = Autosaver(doc, interval_s=autosave_interval(self.settings.value("autosave/interval_s")))
@@ -128,6 +131,15 @@ class MainWindow(QMainWindow):
         self._autosave_timer.start()
         #: The autosave failure being shown (shown once, not at every retry), or None.
         self.autosave_error: str | None = None
+
+    def _report_plugin_problems(self) -> None:
+        """Plugins left out at start-up (import failed, a hook raised, a contract broken): one
+        status-bar line naming them; the details went to the log and stderr."""
+        skipped = dict(getattr(self.host, "skipped", {}) or {})
+        problems = list(getattr(self.host, "problems", []) or [])
+        if skipped or problems:
+            names = ", ".join(sorted(skipped)) or "none disabled"
+            self.show_message(f"plugin problems ({names}): {problems[0] if problems else next(iter(skipped.values()))}")
 
     def _autosave(self) -> None:
         """Timer tick. A failure (full disk, a file where the data folder should be) is shown
@@ -353,6 +365,45 @@ class MainWindow(QMainWindow):
         self._action(h, "&Gestures and keys", self.toggle_help, ["F1", "?"])
         self.update_recent_menu()
 
+    def _build_tool_palette(self) -> None:
+        """Every registered tool, in the SCULPTURE panel's palette and a Tools menu with its
+        shortcut (a tool's ``shortcut`` that the window already uses is dropped, with a
+        message naming the plugin)."""
+        entries = self.sculpt.tool_entries()
+        taken = {a.shortcut().toString() for a in self.findChildren(QAction) if not a.shortcut().isEmpty()}
+        menu = QMenu("&Tools", self)
+        help_menu = next((a for a in self.menuBar().actions() if a.text() == "&Help"), None)
+        self.menuBar().insertMenu(help_menu, menu) if help_menu is not None else self.menuBar().addMenu(menu)
+        self.tool_actions: dict[str, QAction] = {}
+        usable = []
+        icons = {}
+        for name, label, shortcut in entries:
+            cls = self.host.tools[name]
+            icon_path = getattr(cls, "icon", "") or ""
+            if icon_path and Path(icon_path).is_file():
+                icons[name] = QIcon(str(icon_path))
+            key = QKeySequence(shortcut).toString() if shortcut else ""
+            if key and key in taken:
+                who = self.host.provider_of(cls) if hasattr(self.host, "provider_of") else None
+                self.show_message(f"tool {name!r} (plugin {who!r}): shortcut {shortcut} is already used; choose it from the Tools menu")
+                key = ""
+            taken.add(key)
+            act = self._action(menu, label, lambda _=False, n=name: self.select_tool(n), key or None)
+            if name in icons:
+                act.setIcon(icons[name])
+            self.tool_actions[name] = act
+            usable.append((name, label, key))
+        if not entries:
+            menu.addAction("(no tool plugin installed)").setEnabled(False)
+        self.sculpt_panel.set_tools(usable, self.sculpt.tool_name, icons)
+
+    def select_tool(self, name: str) -> None:
+        """Switch to SCULPTURE with the tool ``name`` (palette, Tools menu, shortcut)."""
+        if self.mode != "editing" or self.state != "sculpture":
+            self.set_mode("sculpture")
+        if self.sculpt.select_tool(name):
+            self.sculpt_panel.show_state(self.sculpt)
+
     def _build_status_bar(self) -> None:
         sb = self.statusBar()
         self.progress = QProgressBar()
@@ -408,6 +459,7 @@ class MainWindow(QMainWindow):
         self.sculpt_panel.show_changed.connect(lambda s, r: self.sculpt.set_show(s, r))
         self.sculpt_panel.preview_changed.connect(self.sculpt.set_preview)
         self.sculpt_panel.model_changed.connect(self._model_changed)
+        self.sculpt_panel.tool_selected.connect(self.select_tool)
         self.light_panel.angle_edited.connect(self.set_light_angle)
 
         lp = self.layers_panel
@@ -927,12 +979,11 @@ class MainWindow(QMainWindow):
                 from sketchforge.qt.animation import export_document_in_background
 
                 return export_document_in_background(self, exporter, path)
-            mesh = self.doc.export_mesh()
-            exporter.write(path, mesh)
+            summary = self.host.export(path, mesh=self.doc.export_mesh())  # atomic, errors name the plugin
         except SketchforgeError as exc:
             show_error(self, "Cannot export", exc)
             return False
-        self.show_message(f"exported {path} ({mesh.n_vertices} vertices, {mesh.n_faces} triangles)")
+        self.show_message(f"exported {path} ({summary})")
         return True
 
     def reference_dialog(self) -> None:

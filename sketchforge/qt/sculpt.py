@@ -17,6 +17,14 @@ The gesture's logic (pick, isophote, band, options, building the command) is the
 ``SculptIsophoteTool`` (``host.tools["sculpt_isophote"]``); this controller only draws its
 ``overlay`` on the canvas, runs the command on a worker thread, replaces the last attempt and
 reports status. Without the plugin the panel says the tool is not installed.
+
+Any other registered tool (``host.tools``, chosen in the panel's tool palette or by its
+shortcut) is driven through the same plumbing: press/move/release in document coordinates,
+its ``overlay`` polylines drawn on the canvas, and the command its ``release`` pushes is
+prepared on a worker thread (progress + cancel) and pushed on the GUI thread as one undo step
+(:class:`DeferredPushDocument`). A tool that also has ``pick_at``/``command_for`` (a
+"picking" tool, like the isophote tool) gets clicks as picks, the band radius, live previews
+through ``preview_job`` and replace-the-last-attempt.
 """
 
 from __future__ import annotations
@@ -32,6 +40,39 @@ TOOL_NAME = "sculpt_isophote"
 PLUGIN_MISSING = "isophote tool plugin not installed: isophotes cannot be picked or redrawn"
 #: Band radius limits, drawing units.
 MIN_RADIUS, MAX_RADIUS = 0.005, 2.0
+
+
+class DeferredPushDocument:
+    """The document as a plugin tool sees it in the app: every read goes to the document; the
+    commands the tool pushes are collected instead, so the controller can prepare them on a
+    worker (progress, cancel) and push them on the GUI thread as one undo step."""
+
+    def __init__(self, doc) -> None:
+        self._doc = doc
+        self.pushed: list = []
+
+    def __getattr__(self, name):
+        return getattr(self._doc, name)
+
+    def push(self, command):
+        self.pushed.append(command)
+        return command
+
+    def execute(self, entry: dict):
+        return self.push(self._doc.host.commands.from_dict(entry))
+
+    def take(self) -> list:
+        out, self.pushed = self.pushed, []
+        return out
+
+
+def is_picking_tool(tool) -> bool:
+    """A tool with the isophote tool's richer protocol (click to pick, then stroke)."""
+    return all(callable(getattr(tool, m, None)) for m in ("pick_at", "end_stroke", "command_for"))
+
+
+def tool_shortcut(cls) -> str:
+    return getattr(cls, "shortcut", "") or ""
 
 
 class SculptController(QObject):
@@ -51,6 +92,10 @@ class SculptController(QObject):
         self.status = ""
         self._last_attempt = None
         self.last_info: dict = {}
+        self._options: dict = {}
+        tools = self._tools()
+        self.tool_name = TOOL_NAME if TOOL_NAME in tools or not tools else next(iter(tools))
+        self._proxy = None
         self.tool = self._make_tool()
         self._preview_job = None  # the job in flight (never cancelled: its native code runs on)
         self._preview_pending = None  # the latest stroke, waiting for the job in flight
@@ -62,12 +107,52 @@ class SculptController(QObject):
         #: the last preview's SculptResult (for tests and the status line), None if none shown
         self.preview_result = None
 
-    def _make_tool(self):
+    def _tools(self) -> dict:
         try:
-            cls = (getattr(self.host, "tools", None) or {}).get(TOOL_NAME)
+            return dict(getattr(self.host, "tools", None) or {})
         except SketchforgeError:
-            cls = None
-        return None if cls is None else cls(self.doc, band=self.radius)
+            return {}
+
+    def tool_entries(self) -> list[tuple[str, str, str]]:
+        """(name, label, shortcut) of every registered tool, for the palette."""
+        return [(name, getattr(cls, "label", "") or name, tool_shortcut(cls)) for name, cls in self._tools().items()]
+
+    def _make_tool(self):
+        cls = self._tools().get(self.tool_name)
+        self._proxy = None
+        if cls is None:
+            return None
+        if all(callable(getattr(cls, m, None)) for m in ("pick_at", "end_stroke", "command_for")):
+            tool = cls(self.doc, band=self.radius)
+            if self._options and callable(getattr(tool, "set_options", None)):
+                tool.set_options(self._options)
+            return tool
+        self._proxy = DeferredPushDocument(self.doc)
+        return cls(self._proxy)
+
+    def select_tool(self, name: str) -> bool:
+        """Make ``name`` the active tool (the palette, a shortcut); False if it is unknown."""
+        if name not in self._tools():
+            self.message.emit(f"no tool {name!r} is installed")
+            return False
+        if name == self.tool_name and self.tool is not None:
+            return True
+        if self.tool is not None:
+            self.cancel()
+        self.tool_name = name
+        try:
+            self.tool = self._make_tool()
+        except Exception as exc:  # noqa: BLE001 - a plugin's constructor
+            who = getattr(self.host, "provider_of", lambda c: None)(self._tools().get(name))
+            self.tool = None
+            self._fail(SketchforgeError(f"tool {name!r} (plugin {who!r}) could not start: {type(exc).__name__}: {exc}"))
+            return False
+        self.reset()
+        return True
+
+    @property
+    def picking(self) -> bool:
+        return self.tool is not None and is_picking_tool(self.tool)
 
     # --- availability -----------------------------------------------------------------------
     def available(self) -> bool:
@@ -76,37 +161,47 @@ class SculptController(QObject):
     # --- the tool's state, for the panel, the window and tests ---------------------------------
     @property
     def layer_id(self) -> str | None:
-        return None if self.tool is None else self.tool.layer_id
+        return getattr(self.tool, "layer_id", None)
 
     @property
     def pick_point(self) -> np.ndarray | None:
-        return None if self.tool is None else self.tool.pick
+        return getattr(self.tool, "pick", None) if self.picking else None
 
     @property
     def _isophote(self) -> np.ndarray | None:
-        return None if self.tool is None else self.tool.isophote
+        return getattr(self.tool, "isophote", None)
 
     def set_options(self, options: dict) -> None:
         """Extra command fields from the panel (the reflectance model); re-shows the pick."""
-        if self.tool is None:
+        if self.tool is None or not callable(getattr(self.tool, "set_options", None)):
+            self._options = dict(options)  # for the picking tool, when it is chosen again
             return
         try:
             self.tool.set_options(options)
         except SketchforgeError as exc:
             self._fail(exc)
             return
+        self._options = dict(options)
         self._show_pick()
 
     # --- state ------------------------------------------------------------------------------------
     def reset(self) -> None:
         self.stop_preview()
         if self.tool is not None:
-            self.tool.reset()
+            (getattr(self.tool, "reset", None) or self.tool.cancel)()
         self._last_attempt = None
         self.last_info = {}
         for name in ("isophote", "band", "stroke", "strips", "regions"):
             self.canvas.set_overlay(name, [])
-        self._set_status("click on a shape to pick an isophote" if self.available() else PLUGIN_MISSING)
+        if not self.available():
+            self._set_status(PLUGIN_MISSING)
+        elif self.picking:
+            self._set_status("click on a shape to pick an isophote")
+        else:
+            self._set_status(f"{self.tool_label()}: drag on the drawing")
+
+    def tool_label(self) -> str:
+        return (getattr(self.tool, "label", "") or self.tool_name) if self.tool is not None else ""
 
     def _set_status(self, text: str) -> None:
         self.status = text
@@ -116,7 +211,7 @@ class SculptController(QObject):
         r = float(np.clip(radius, MIN_RADIUS, MAX_RADIUS))
         if r == self.radius:
             return
-        if self.tool is not None and not self.tool.set_band(r):
+        if self.picking and callable(getattr(self.tool, "set_band", None)) and not self.tool.set_band(r):
             self.message.emit(self.tool.message)
             return
         self.radius = r
@@ -132,7 +227,7 @@ class SculptController(QObject):
 
     # --- overlays from the tool ---------------------------------------------------------------
     def _show_band(self) -> None:
-        ov = {} if self.tool is None else self.tool.overlay
+        ov = {} if not self.picking else self.tool.overlay
         self.canvas.set_overlay("band", list(ov.get("band", [])))
 
     def _show_pick(self) -> None:
@@ -142,6 +237,9 @@ class SculptController(QObject):
         self._show_band()
 
     def _show_stroke(self) -> None:
+        if self.tool is not None and not self.picking:
+            self.canvas.set_overlay("stroke", overlay_lines(self.tool.overlay))
+            return
         stroke = None if self.tool is None else self.tool.overlay.get("stroke")
         self.canvas.set_overlay("stroke", [] if stroke is None else [stroke])
 
@@ -151,6 +249,10 @@ class SculptController(QObject):
             self.message.emit(PLUGIN_MISSING)
             self._set_status(PLUGIN_MISSING)
             return False
+        if not self.picking:  # a click is a press and release in place
+            self._tool_call(self.tool.press, point)
+            self.stroke_release(point)
+            return True
         self.stop_preview()
         self._last_attempt = None
         self.last_info = {}
@@ -170,15 +272,32 @@ class SculptController(QObject):
         return True
 
     # --- stroke -------------------------------------------------------------------------------
+    def _tool_call(self, fn, pos) -> bool:
+        """A plugin tool's gesture method: its error goes to the status bar, naming the
+        plugin when it is a bug rather than the tool's own answer."""
+        try:
+            fn(pos)
+            return True
+        except SketchforgeError as exc:
+            self._fail(exc)
+        except Exception as exc:  # noqa: BLE001 - foreign code must not end the gesture loop
+            who = getattr(self.host, "provider_of", lambda c: None)(type(self.tool))
+            self._fail(SketchforgeError(f"tool {self.tool_name!r} (plugin {who!r}) failed: {type(exc).__name__}: {exc}"))
+        if self._proxy is not None:
+            self._proxy.take()
+        return False
+
     def stroke_press(self, pos) -> None:
         if self.tool is not None:
-            self.tool.press(pos)
+            self._tool_call(self.tool.press, pos)
             self._show_stroke()
 
     def stroke_move(self, pos) -> None:
         if self.tool is not None:
-            self.tool.move(pos)
+            self._tool_call(self.tool.move, pos)
             self._show_stroke()
+            if not self.picking:
+                return
             stroke = self.tool.overlay.get("stroke")
             if self.live_preview and self.tool.pick is not None and stroke is not None and len(stroke) >= 2:
                 self._request_preview(np.array(stroke))
@@ -186,7 +305,12 @@ class SculptController(QObject):
     def cancel(self) -> None:
         self.stop_preview()
         if self.tool is not None:
-            self.tool.cancel()
+            try:
+                self.tool.cancel()
+            except Exception:  # noqa: BLE001 - Esc must always work
+                self.tool.overlay = {}
+        if self._proxy is not None:
+            self._proxy.take()
         self.canvas.set_overlay("stroke", [])
 
     # --- live preview ---------------------------------------------------------------------------
@@ -210,6 +334,8 @@ class SculptController(QObject):
         latest stroke waits (moves in between are skipped: the solve is the throttle)."""
         if self._preview_job is not None:
             self._preview_pending = stroke
+            return
+        if not callable(getattr(self.tool, "preview_job", None)):
             return
         try:
             job = self.tool.preview_job(stroke, self._base_mesh())
@@ -237,7 +363,8 @@ class SculptController(QObject):
                 self.preview_result = None
                 # A SketchforgeError is the edit's own answer; anything else is a plugin bug,
                 # said as such rather than leaving a stale preview on screen.
-                text = str(exc) if isinstance(exc, SketchforgeError) else f"the preview failed ({exc!r}); see the log"
+                who = getattr(self.host, "provider_of", lambda c: None)(type(self.tool)) if self.tool is not None else None
+                text = str(exc) if isinstance(exc, SketchforgeError) else f"the preview of plugin {who!r} failed ({exc!r}); see the log"
                 self._set_status(f"preview: {text}")
                 if not isinstance(exc, SketchforgeError):
                     self.message.emit(text)
@@ -269,6 +396,9 @@ class SculptController(QObject):
             self.message.emit(PLUGIN_MISSING)
             self._set_status(PLUGIN_MISSING)
             return
+        if not self.picking:
+            self._release_plain(pos)
+            return
         stroke = self.tool.end_stroke(pos)
         self.stop_preview()
         if not len(stroke):
@@ -281,7 +411,23 @@ class SculptController(QObject):
             return
         self.apply(cmd)
 
-    def apply(self, cmd) -> None:
+    def _release_plain(self, pos) -> None:
+        """A plain tool's release: the command(s) it pushes are prepared on a worker and
+        pushed as one undo step (a macro named after the tool when there are several)."""
+        from sketchforge.document.commands import MacroCommand
+
+        ok = self._tool_call(self.tool.release, pos)
+        pushed = self._proxy.take() if self._proxy is not None else []
+        self._show_stroke()
+        if not ok:
+            return
+        if not pushed:
+            self._set_status(getattr(self.tool, "message", "") or f"{self.tool_label()}: nothing to apply")
+            return
+        cmd = pushed[0] if len(pushed) == 1 else MacroCommand(text=self.tool_label(), children=pushed)
+        self.apply(cmd, replace_attempt=False)
+
+    def apply(self, cmd, replace_attempt: bool = True) -> None:
         """Replace the last attempt (if it is still on top of the history) with ``cmd``."""
         if self.runner.busy:
             self.message.emit("a solve is already running")
@@ -293,7 +439,8 @@ class SculptController(QObject):
         token = guard.before(cmd) if guard is not None else None
         replaced = None
         if (
-            self._last_attempt is not None
+            replace_attempt
+            and self._last_attempt is not None
             and stack.index > 0
             and stack.command(stack.index - 1) is self._last_attempt
         ):
@@ -319,6 +466,11 @@ class SculptController(QObject):
                 # The isophote as it now runs (white), over the stroke that asked for it (cyan).
                 self.canvas.set_overlay("isophote", r.new_isophotes())
             moved = f"{r.describe()}; " if callable(getattr(r, "describe", None)) else ""
+            if not replace_attempt:
+                self._last_attempt = None
+                self.canvas.set_overlay("stroke", [])
+                self._set_status(f"applied {done_cmd.text()}: {moved}drag again for another")
+                return
             self._set_status(f"applied: {moved}draw again to replace this attempt, or click to pick another isophote")
 
         self._set_status("sculpting…")
@@ -362,6 +514,18 @@ class SculptController(QObject):
                 rings.extend(polygon_rings(geom) if hasattr(geom, "geom_type") else [np.asarray(geom)])
         self.canvas.set_overlay("strips", strips)
         self.canvas.set_overlay("regions", rings)
+
+
+def overlay_lines(overlay: dict) -> list:
+    """Every polyline of a tool's overlay ((k, 2) arrays, alone or in lists), for the canvas."""
+    lines: list = []
+    for value in overlay.values():
+        items = value if isinstance(value, (list, tuple)) else [value]
+        for item in items:
+            a = np.asarray(item) if isinstance(item, (np.ndarray, list, tuple)) else None
+            if a is not None and a.ndim == 2 and a.shape[1] >= 2 and len(a) >= 1 and np.issubdtype(a.dtype, np.number):
+                lines.append(a[:, :2].astype(np.float64))
+    return lines
 
 
 def result_info(cmd) -> dict:

@@ -6,6 +6,7 @@ from __future__ import annotations
 import math
 
 from PySide6.QtCore import Qt, Signal
+from PySide6.QtGui import QColor, QFont, QIcon, QPainter, QPixmap
 from PySide6.QtWidgets import QCheckBox, QComboBox, QDoubleSpinBox, QFormLayout, QGroupBox, QLabel, QSlider
 
 from sketchforge.qt.sculpt import MAX_RADIUS, MIN_RADIUS
@@ -13,7 +14,28 @@ from sketchforge.qt.sculpt import MAX_RADIUS, MIN_RADIUS
 _STEPS = 1000
 
 
+def letter_icon(label: str, size: int = 20) -> QIcon:
+    """A tool without its own icon gets its label's first letter in a rounded square."""
+    pix = QPixmap(size, size)
+    pix.fill(Qt.GlobalColor.transparent)
+    p = QPainter(pix)
+    p.setRenderHint(QPainter.RenderHint.Antialiasing)
+    p.setBrush(QColor("#3b6ea5"))
+    p.setPen(Qt.PenStyle.NoPen)
+    p.drawRoundedRect(0, 0, size, size, 4, 4)
+    p.setPen(QColor("white"))
+    font = QFont()
+    font.setBold(True)
+    font.setPixelSize(int(size * 0.7))
+    p.setFont(font)
+    p.drawText(pix.rect(), Qt.AlignmentFlag.AlignCenter, (label.strip()[:1] or "?").upper())
+    p.end()
+    return QIcon(pix)
+
+
 class SculptPanel(QGroupBox):
+    #: the palette's choice (a tool's registry name)
+    tool_selected = Signal(str)
     radius_changed = Signal(float)
     model_changed = Signal(str)
     show_changed = Signal(bool, bool)  # characteristics, edit region
@@ -23,8 +45,8 @@ class SculptPanel(QGroupBox):
         super().__init__("Sculpture", parent)
         form = QFormLayout(self)
         self.tool = QComboBox()
-        self.tool.addItem("Redraw isophote")
-        self.tool.setToolTip("Sculpt tools from plugins (thesis 4.1: one tool so far)")
+        self.tool.setToolTip("Every tool the installed plugins provide (Tools menu: the same list, with shortcuts)")
+        self.tool.currentIndexChanged.connect(self._tool_chosen)
         form.addRow("Tool", self.tool)
         self.model = QComboBox()
         self.model.setToolTip("Reflectance model the height solve inverts (plugins can add models)")
@@ -61,6 +83,32 @@ class SculptPanel(QGroupBox):
         self.regions.toggled.connect(lambda _: self.show_changed.emit(self.strips.isChecked(), self.regions.isChecked()))
         self.preview.toggled.connect(self.preview_changed.emit)
 
+    def set_tools(self, entries, current: str | None = None, icons: dict | None = None) -> None:
+        """The palette: ``entries`` = [(name, label, shortcut)]; ``icons`` {name: QIcon} for
+        tools that bring one (the others get their label's letter)."""
+        self.tool.blockSignals(True)
+        self.tool.clear()
+        for name, label, shortcut in entries:
+            icon = (icons or {}).get(name) or letter_icon(label)
+            self.tool.addItem(icon, f"{label} ({shortcut})" if shortcut else label, name)
+        if current is not None:
+            i = self.tool.findData(current)
+            if i >= 0:
+                self.tool.setCurrentIndex(i)
+        self.tool.blockSignals(False)
+
+    def show_tool(self, name: str) -> None:
+        i = self.tool.findData(name)
+        if i >= 0 and i != self.tool.currentIndex():
+            self.tool.blockSignals(True)
+            self.tool.setCurrentIndex(i)
+            self.tool.blockSignals(False)
+
+    def _tool_chosen(self, index: int) -> None:
+        name = self.tool.itemData(index)
+        if name:
+            self.tool_selected.emit(name)
+
     def set_models(self, names) -> None:
         self.model.blockSignals(True)
         self.model.clear()
@@ -87,7 +135,12 @@ class SculptPanel(QGroupBox):
             self.spin.setValue(controller.radius)
             self.status.setText(controller.status)
             self.setEnabled(True)
-            self.tool.setEnabled(controller.available())
-            self.model.setEnabled(controller.available())
+            self.tool.setEnabled(self.tool.count() > 0)
+            self.show_tool(controller.tool_name)
+            # Radius and reflectance belong to a picking tool (the isophote tool).
+            plain = controller.available() and not controller.picking
+            self.model.setEnabled(controller.available() and not plain)
+            self.slider.setEnabled(not plain)
+            self.spin.setEnabled(not plain)
         finally:
             self._updating = False
