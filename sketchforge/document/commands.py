@@ -122,7 +122,7 @@ def inflate_layer(doc, layer: Layer) -> Layer:
     edits re-applied in order. Raises before anything changes."""
     if layer.points is None:
         return layer.evolve(mesh=None, edits=())
-    mesh = doc.host.inflate(layer.points, layer.closed, dict(layer.params))
+    mesh = doc.host.inflate(layer.points, layer.closed, dict(layer.params), holes=[np.asarray(h) for h in layer.holes])
     if mesh is None:
         raise SketchforgeError("no inflate plugin is installed, so a contour cannot become a mesh")
     if not np.all(np.isfinite(mesh.V)):
@@ -288,22 +288,30 @@ class SetContour(ReplaceLayerCommand):
     (they were drawn on the old shape; the app asks first). With ``keep_edits`` the edits are
     re-applied to the new surface in order; if one no longer applies, nothing changes and
     :class:`~sketchforge.errors.EditsDoNotApplyError` says which (the app then asks whether
-    to redraw without them)."""
+    to redraw without them).
+
+    ``holes`` are the part's inner rings (any orientation), replacing the ones it had: the
+    surface keeps height 0 on each. A hole that crosses the outline or another hole, lies
+    outside, or is too small for the resolution is refused with a message naming it (1-based)
+    and nothing changes. Cutting a hole into a drawn part is this command with the same
+    points, the old holes plus the new one and ``keep_edits``."""
 
     name: ClassVar[str] = "set_contour"
     points: Any = None  # (n,2) float64
     closed: bool = False
     keep_edits: bool = False
+    holes: Any = ()  # sequence of (n_i,2) float64
 
     def __post_init__(self) -> None:
         self.points = np.array(self.points, dtype=np.float64)
         self.points.setflags(write=False)
+        self.holes = Layer(id="", name="", holes=self.holes).holes  # checked, read-only copies
 
     def text(self) -> str:
         return "Draw contour"
 
     def compute(self, doc, old: Layer) -> Layer:
-        base = inflate_layer(doc, old.evolve(points=self.points, closed=bool(self.closed), edits=()))
+        base = inflate_layer(doc, old.evolve(points=self.points, closed=bool(self.closed), edits=(), holes=self.holes))
         if not (self.keep_edits and old.edits):
             return base
         try:
@@ -319,15 +327,20 @@ class SetContour(ReplaceLayerCommand):
             d["closed"] = True
         if self.keep_edits:
             d["keep_edits"] = True
+        if self.holes:
+            d["holes"] = [h.tolist() for h in self.holes]
         return d
 
     @classmethod
     def from_dict(cls, d: dict) -> "SetContour":
+        raw = parse_field(d, "holes", list, cls.name, [])
+        holes = [parse_points({"hole": h}, cls.name, key="hole") for h in raw]
         return cls(
             layer=parse_field(d, "layer", str, cls.name),
             points=parse_points(d, cls.name),
             closed=parse_field(d, "closed", bool, cls.name, False),
             keep_edits=parse_field(d, "keep_edits", bool, cls.name, False),
+            holes=holes,
         )
 
 

@@ -76,7 +76,10 @@ def decode_array(d: Any, where: str) -> np.ndarray:
 
 
 def encode_mesh(m: Mesh) -> dict:
-    return {k: encode_array(getattr(m, k)) for k in ("V", "F", "boundary", "junction")}
+    out = {k: encode_array(getattr(m, k)) for k in ("V", "F", "boundary", "junction")}
+    if m.holes:
+        out["holes"] = [encode_array(h) for h in m.holes]
+    return out
 
 
 def decode_mesh(d: Any, where: str) -> Mesh:
@@ -85,6 +88,10 @@ def decode_mesh(d: Any, where: str) -> Mesh:
     arrays = {k: decode_array(d.get(k), f"{where}.{k}") for k in ("V", "F", "boundary", "junction")}
     if not np.all(np.isfinite(arrays["V"])):
         raise DocumentFormatError(f"{where}.V: has non-finite coordinates")
+    holes = d.get("holes", [])
+    if not isinstance(holes, list):
+        raise DocumentFormatError(f"{where}.holes: must be a list of arrays")
+    arrays["holes"] = tuple(decode_array(h, f"{where}.holes[{i}]") for i, h in enumerate(holes))
     try:
         return Mesh(**arrays)
     except ValueError as exc:
@@ -105,6 +112,7 @@ def _layer_to_dict(layer: Layer) -> dict:
         "visible": layer.visible,
         "closed": layer.closed,
         "points": None if layer.points is None else layer.points.tolist(),
+        **({"holes": [h.tolist() for h in layer.holes]} if layer.holes else {}),
         "params": dict(layer.params),
         "edits": [dict(e) for e in layer.edits],
         "mesh": None if layer.mesh is None else encode_mesh(layer.mesh),
@@ -154,6 +162,13 @@ def _layer_from_dict(d: Any, where: str) -> Layer:
             raise DocumentFormatError(f"{where}.points: must be [x, y] pairs") from None
         if pts.ndim != 2 or pts.shape[1] != 2:
             raise DocumentFormatError(f"{where}.points: must be [x, y] pairs")
+    holes = d.get("holes", [])
+    try:
+        holes = [np.array(h, dtype=np.float64) for h in holes] if isinstance(holes, list) else None
+    except (TypeError, ValueError):
+        holes = None
+    if holes is None or any(h.ndim != 2 or h.shape[1] != 2 for h in holes):
+        raise DocumentFormatError(f"{where}.holes: must be a list of rings of [x, y] pairs")
     params = d.get("params", {})
     edits = d.get("edits", [])
     if not isinstance(params, dict) or not isinstance(edits, list) or not all(isinstance(e, dict) for e in edits):
@@ -167,7 +182,8 @@ def _layer_from_dict(d: Any, where: str) -> Layer:
         raise DocumentFormatError(f"{where}: visible and closed must be true or false")
     mesh = d.get("mesh")
     mesh = None if mesh is None else decode_mesh(mesh, f"{where}.mesh")
-    return Layer(id=lid, name=name, visible=visible, points=pts, closed=closed, params=params, mesh=mesh, edits=tuple(edits))
+    return Layer(id=lid, name=name, visible=visible, points=pts, closed=closed, params=params, mesh=mesh, edits=tuple(edits),
+                 holes=tuple(holes))
 
 
 def validate_header(data: Any, source: str) -> tuple[Light, list]:

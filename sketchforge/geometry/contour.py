@@ -253,7 +253,9 @@ def prepare_outline(points, resolution: float, closed: bool = False) -> Outline:
                 f"the straight line closing the stroke (from its end back to its start) crosses the "
                 f"stroke near {format_point(x)}; draw the stroke so that its ends face each other"
             )
+        _refuse_slit_ring(P, h)  # an inner ring drawn the same way round crosses its way back
         raise ContourError(f"the outline crosses itself near {format_point(x)} (a figure eight cannot be inflated)")
+    _refuse_slit_ring(P, h)
 
     gap = float(np.linalg.norm(P[-1] - P[0]))
     is_open = (not closed) and (not trimmed) and gap > JUNCTION_GAP_EDGES * h
@@ -265,6 +267,59 @@ def prepare_outline(points, resolution: float, closed: bool = False) -> Outline:
         P = P[::-1].copy()
     h = min(h, perimeter / MIN_BOUNDARY_EDGES)
     return Outline(np.ascontiguousarray(P), is_open, abs(area), perimeter, h)
+
+
+#: Two stretches of an outline far apart along it but closer than SLIT_WIDTH_EDGES edge
+#: lengths, or than SLIT_WIDTH_FRACTION of the size (square root of the area) of the loop they
+#: cut off, pinch it; a pinch that cuts the ring into one loop inside the other is a slit ring.
+#: The search radius is capped at SLIT_MAX_EDGES edge lengths to keep the search O(n log n).
+SLIT_WIDTH_EDGES = 0.5
+SLIT_WIDTH_FRACTION = 0.15
+SLIT_MAX_EDGES = 8.0
+
+
+def _refuse_slit_ring(P, h: float) -> None:
+    """Refuse an outer and an inner ring concatenated into one stroke (an "O" or "&" drawn in
+    one go): the ring then runs out along a thin channel, round the hole and back, and would
+    inflate into a ring with a slit. Drawn holes go in the ``holes`` field instead.
+
+    P (k, 2) float64, the thinned ring; h the edge length. Raises ContourError."""
+    k = len(P)
+    if k < 8:
+        return
+    Q = np.vstack([P, P[:1]])
+    segs = shapely.linestrings(np.stack([Q[:-1], Q[1:]], axis=1))
+    size = np.sqrt(abs(signed_area(P)))
+    reach = max(SLIT_WIDTH_EDGES * h, min(SLIT_WIDTH_FRACTION * size, SLIT_MAX_EDGES * h))
+    i, j = shapely.STRtree(segs).query(segs, predicate="dwithin", distance=reach)
+    s = _arclength(Q)
+    total = s[-1]
+    along = np.abs(s[j] - s[i])
+    keep = (i < j) & (np.minimum(along, total - along) > 4.0 * h)
+    if not keep.any():
+        return
+    cand = np.column_stack([i[keep], j[keep]])
+    # The closest pair first: a pinch is where the channel is narrowest. A bounded number of
+    # candidates keeps a wiggly stroke O(n log n).
+    dist = shapely.distance(segs[cand[:, 0]], segs[cand[:, 1]])
+    order = np.argsort(dist, kind="stable")[:16]
+    for (a, b), d in zip(cand[order], dist[order]):
+        inner, outer = P[a + 1 : b + 1], np.vstack([P[b + 1 :], P[: a + 1]])
+        if len(inner) < 3 or len(outer) < 3:
+            continue
+        pa, pb = shapely.Polygon(inner).buffer(0), shapely.Polygon(outer).buffer(0)
+        if pa.is_empty or pb.is_empty:
+            continue
+        small = min(pa.area, pb.area)
+        if d > max(SLIT_WIDTH_EDGES * h, SLIT_WIDTH_FRACTION * np.sqrt(small)):
+            continue
+        if pb.contains(pa.representative_point()) or pa.contains(pb.representative_point()):
+            x = 0.5 * (Q[a] + Q[b + 1])
+            raise ContourError(
+                f"the outline runs out to an inner ring and back along a slit near {format_point(x)}: "
+                "draw the hole as a hole (the 'holes' field of set_contour, or Alt+drag in the app), "
+                "not as part of the outline"
+            )
 
 
 def _trim_overshoot(P):
@@ -440,3 +495,112 @@ def resample_outline(outline: Outline, smooth: bool = True) -> Contour:
 def clean_contour(points, resolution: float, closed: bool = False, smooth: bool = True) -> Contour:
     """:func:`prepare_outline` then :func:`resample_outline` (no mesh-size check in between)."""
     return resample_outline(prepare_outline(points, resolution, closed), smooth=smooth)
+
+
+# --- holes -------------------------------------------------------------------------------------
+
+#: A hole must measure at least this many edge lengths across (4·area/perimeter, the diameter
+#: for a disk): a smaller one would be a ring of a few slivers.
+MIN_HOLE_EDGES = 2.0
+#: Rings (a hole and the outline, or two holes) must stay this many edge lengths apart, so the
+#: band between them gets at least one row of well-shaped triangles.
+MIN_RING_GAP_EDGES = 0.5
+
+
+def _ring_polygon(P) -> shapely.Polygon:
+    return shapely.Polygon(np.asarray(P, dtype=np.float64))
+
+
+def prepare_holes(holes, contour: Contour) -> list[np.ndarray]:
+    """Validate and resample the inner rings (holes) of an outline.
+
+    Parameters
+    ----------
+    holes : sequence of (n_i, 2) array-like of float
+        The holes as drawn, any orientation, closing point optional.
+    contour : Contour
+        The resampled outer ring they must lie inside; its ``edge_length`` is used for them.
+
+    Returns
+    -------
+    rings : list of (k_i, 2) float64
+        Each hole resampled at the contour's edge length, clockwise (the surface lies to the
+        left of every ring), first point not repeated; in the order given.
+
+    Raises
+    ------
+    ContourError
+        Naming the hole (1-based, in the order given): not a list of points, fewer than 3
+        distinct points or no area, crossing itself, too small (less than MIN_HOLE_EDGES edge
+        lengths across), crossing or touching the outline or another hole, outside the
+        outline, inside another hole, or closer than MIN_RING_GAP_EDGES edge lengths to
+        either.
+    """
+    if holes is None:
+        return []
+    h = float(contour.edge_length)
+    outer = _ring_polygon(contour.points)
+    gap = MIN_RING_GAP_EDGES * h
+    rings: list[np.ndarray] = []
+    polys: list = []
+    for n, raw in enumerate(holes, start=1):
+        name = f"hole {n}"
+        P = validate_stroke(raw, what=name)
+        if len(P):
+            P = P[np.concatenate([[True], np.any(np.diff(P, axis=0) != 0, axis=1)])]
+        if len(P) > 1 and np.all(P[-1] == P[0]):
+            P = P[:-1]
+        if len(np.unique(P, axis=0)) < 3:
+            raise ContourError(f"{name} has fewer than 3 distinct points, so it encloses no area")
+        P = decimate(P, h / 4.0)
+        if len(P) < 3:
+            raise ContourError(f"{name} is too small: fewer than 3 distinct points remain at resolution {h:.3g}")
+        crossings = segment_crossings(P, closed=True)
+        if len(crossings):
+            i, j = crossings[0]
+            Q = np.vstack([P, P[:1]])
+            x = intersection_point(Q[i], Q[i + 1], Q[j], Q[j + 1])
+            raise ContourError(f"{name} crosses itself near {format_point(x)}")
+        area = signed_area(P)
+        perimeter = float(_arclength(np.vstack([P, P[:1]]))[-1])
+        across = 4.0 * abs(area) / perimeter
+        if across < MIN_HOLE_EDGES * h:
+            raise ContourError(
+                f"{name} is too small: about {across:.3g} across, less than {MIN_HOLE_EDGES:g} edge lengths "
+                f"({MIN_HOLE_EDGES * h:.3g}) at resolution {h:.3g}; draw it larger or use a finer resolution"
+            )
+        if area < 0:
+            P = P[::-1].copy()
+        try:
+            ring = resample_outline(Outline(np.ascontiguousarray(P), False, abs(area), perimeter, h)).points
+        except ContourError as exc:
+            raise ContourError(f"{name}: {exc}") from None
+        ring = np.ascontiguousarray(ring[::-1])  # clockwise: the surface on its left
+        poly = _ring_polygon(ring)
+        where = format_point(np.asarray(poly.representative_point().coords[0]))
+        if not outer.intersects(poly):
+            raise ContourError(f"{name} near {where} lies outside the outline; a hole must be drawn inside its part")
+        if outer.exterior.intersects(poly.exterior):
+            x = shapely.get_coordinates(outer.exterior.intersection(poly.exterior)).mean(axis=0)
+            raise ContourError(f"{name} crosses the outline near {format_point(x)}; a hole must lie inside its part")
+        if not outer.contains(poly):
+            raise ContourError(f"{name} near {where} lies outside the outline; a hole must be drawn inside its part")
+        d = poly.exterior.distance(outer.exterior)
+        if d < gap:
+            raise ContourError(
+                f"{name} comes within {d:.3g} of the outline near {where}; keep holes at least "
+                f"{gap:.3g} (half an edge length) inside"
+            )
+        for m, other in enumerate(polys, start=1):
+            if poly.exterior.intersects(other.exterior):
+                x = shapely.get_coordinates(poly.exterior.intersection(other.exterior)).mean(axis=0)
+                raise ContourError(f"{name} crosses hole {m} near {format_point(x)}; holes must not overlap")
+            if poly.contains(other) or other.contains(poly):
+                inner, outer_n = (m, n) if poly.contains(other) else (n, m)
+                raise ContourError(f"hole {inner} lies inside hole {outer_n}; holes must not overlap")
+            d = poly.exterior.distance(other.exterior)
+            if d < gap:
+                raise ContourError(f"{name} comes within {d:.3g} of hole {m} near {where}; keep holes at least {gap:.3g} apart")
+        rings.append(ring)
+        polys.append(poly)
+    return rings
