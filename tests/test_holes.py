@@ -127,3 +127,31 @@ def test_holes_journal_save_reopen_and_replay_bit_identical(tmp_path, real_host)
     assert doc.layer("o") is before
     doc.undo_stack.undo()
     assert doc.layer("o").mesh is None
+
+
+def test_hole_gesture_plan_cuts_one_hole_in_one_undo_step_and_redraw_keeps_holes(real_host):
+    from sketchforge.tools.draw import DrawContourTool, plan_stroke
+
+    doc = Document(host=real_host)
+    doc.execute({"command": "add_layer", "id": "o", "name": "O"})
+    doc.execute({"command": "set_contour", "layer": "o", "points": ring(1.0, 100).tolist(), "closed": True})
+    n = doc.undo_stack.count()
+    # Refused: nothing selected, or a loop that leaves the part.
+    assert "select a part" in plan_stroke(doc, ring(0.3, 40), "hole", None).refusal
+    assert "inside “O”" in plan_stroke(doc, ring(0.3, 40, cx=0.9), "hole", "o").refusal
+    plan = plan_stroke(doc, ring(0.3, 40, cx=-0.3), "hole", "o")
+    assert plan.refusal is None and plan.redraw == "hole" and plan.target == "o" and len(plan.holes) == 1
+    tool = DrawContourTool(doc, target_layer=plan.target, closed=plan.closed, keep_edits=True, holes=plan.holes)
+    doc.push(tool.commands_for(plan.points)[1])
+    assert doc.undo_stack.count() == n + 1 and len(doc.layer("o").mesh.holes) == 1
+    # A second hole adds to the first.
+    plan = plan_stroke(doc, ring(0.25, 40, cx=0.45), "hole", "o")
+    doc.push(DrawContourTool(doc, target_layer="o", closed=True, holes=plan.holes).commands_for(plan.points)[1])
+    assert len(doc.layer("o").mesh.holes) == 2
+    doc.undo_stack.undo()
+    assert len(doc.layer("o").mesh.holes) == 1
+    # Redrawing the whole outline smaller keeps the hole that still fits and says so for the rest.
+    plan = plan_stroke(doc, ring(0.8, 100, cx=-0.2), "redraw", "o")
+    assert len(plan.holes) == 1
+    plan = plan_stroke(doc, ring(0.5, 100, cx=0.5), "redraw", "o")
+    assert plan.holes == () and "1 hole outside the new outline was dropped" in plan.notes[0]

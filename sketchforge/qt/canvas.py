@@ -14,7 +14,8 @@ Gestures:
 - ``"draw"``: a left drag is a stroke (``DrawContourTool`` collects it); on release
   :attr:`stroke_finished` carries the points and the stroke's kind to the window, which runs
   the inflation off the GUI thread: ``"front"`` (a left drag), ``"behind"`` (a right drag, or
-  Shift + left drag) or ``"redraw"`` (Ctrl + left drag: the selected part's whole outline).
+  Shift + left drag), ``"redraw"`` (Ctrl + left drag: the selected part's whole outline) or
+  ``"hole"`` (Alt + left drag: a closed stroke cuts a hole in the selected part).
   A click picks the part under it (:attr:`part_clicked`), a double click duplicates it
   (:attr:`part_double_clicked`, with the button).
 - ``"light"``: a left drag sets the light with ``LightTool`` (one undo step per drag); never a
@@ -595,8 +596,11 @@ MIN_STROKE_PIXELS = 8
 
 
 def _stroke_kind(button, modifiers) -> str:
-    """Which part a draw gesture makes: right button or Shift draws behind, Ctrl redraws the
-    selected part's whole outline, a plain left drag draws in front."""
+    """Which part a draw gesture makes: Alt cuts a hole in the selected part, right button or
+    Shift draws behind, Ctrl redraws the selected part's whole outline, a plain left drag
+    draws in front."""
+    if modifiers & Qt.KeyboardModifier.AltModifier:
+        return "hole"
     if button == Qt.MouseButton.RightButton or modifiers & Qt.KeyboardModifier.ShiftModifier:
         return "behind"
     if modifiers & Qt.KeyboardModifier.ControlModifier:

@@ -656,8 +656,9 @@ class MainWindow(QMainWindow):
         if plan.refusal is not None:
             self.show_message(plan.refusal)
         elif plan.redraw is not None:
-            what = "redrew the outline" if plan.redraw == "whole" else "redrew part of the outline"
-            self._redraw(self.doc.layer(plan.target), plan.points, plan.closed, what)
+            what = {"whole": "redrew the outline", "stretch": "redrew part of the outline", "hole": "cut a hole"}[plan.redraw]
+            self._redraw(self.doc.layer(plan.target), plan.points, plan.closed, what, holes=plan.holes,
+                         notes=plan.notes)
         else:
             self._new_part(plan)
 
@@ -674,11 +675,11 @@ class MainWindow(QMainWindow):
 
         self.runner.run(cmd, label="Inflating", macro="Draw layer" if before else None, before=before, on_done=done)
 
-    def _redraw(self, layer, pts, closed: bool, what: str, keep_edits: bool = True) -> None:
-        """Replace ``layer``'s outline; its sculpt edits are kept when they still apply, else the
-        person is asked whether to redraw without them."""
+    def _redraw(self, layer, pts, closed: bool, what: str, keep_edits: bool = True, holes=(), notes=()) -> None:
+        """Replace ``layer``'s outline and holes (one undo step); its sculpt edits are kept when
+        they still apply, else the person is asked whether to redraw without them."""
         keep = keep_edits and bool(layer.edits)
-        tool = DrawContourTool(self.doc, target_layer=layer.id, closed=bool(closed), keep_edits=keep)
+        tool = DrawContourTool(self.doc, target_layer=layer.id, closed=bool(closed), keep_edits=keep, holes=holes)
         _, cmd = tool.commands_for(pts)
 
         def error(exc) -> bool:
@@ -690,16 +691,18 @@ class MainWindow(QMainWindow):
                 f"Layer “{layer.name}” has {len(layer.edits)} sculpt edit(s) that do not apply to the new "
                 f"outline ({exc}). Redraw it without them? (Undo brings them back.)",
             ):
-                QTimer.singleShot(0, lambda: self._redraw(self.doc.layer(layer.id), pts, closed, what, keep_edits=False))
+                QTimer.singleShot(0, lambda: self._redraw(self.doc.layer(layer.id), pts, closed, what, keep_edits=False,
+                                                          holes=holes, notes=notes))
             else:
                 self.show_message("the outline was not redrawn: its sculpt edits would be lost")
             return True
 
         kept = f"; kept its {len(layer.edits)} sculpt edit(s)" if keep else ""
+        kept += "".join("; " + n for n in notes)
         self.runner.run(
             cmd,
             label="Inflating",
-            on_done=lambda c: self.show_message(f"{what} of “{layer.name}”{kept}"),
+            on_done=lambda c: self.show_message(f"{what} {'in' if what == 'cut a hole' else 'of'} “{layer.name}”{kept}"),
             on_error=error,
         )
 

@@ -12,6 +12,7 @@ SHORTCUTS: tuple[tuple[str, str], ...] = (
     ("Right drag or Shift + left drag", "draw a new part behind the backmost part it overlaps"),
     ("Drag from the selected outline back to it", "redraw that stretch of the selected part's outline"),
     ("Ctrl + left drag", "redraw the selected part's whole outline"),
+    ("Alt + left drag", "cut a hole in the selected part (draw a closed loop inside it)"),
     ("Click", "select the part under the pointer"),
     ("Double-click (left / right)", "duplicate the part behind / in front of itself"),
     ("Ctrl+D", "duplicate the selected part, moved aside"),
