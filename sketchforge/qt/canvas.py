@@ -421,6 +421,7 @@ class Canvas(pg.GraphicsView):
             if layer.visible:
                 if layer.mesh is not None and len(layer.mesh.boundary):
                     lines.append(layer.mesh.V[layer.mesh.boundary, :2])
+                    lines += [layer.mesh.V[h, :2] for h in layer.mesh.holes]
                 elif layer.points is not None:
                     lines.append(layer.points)
         self.outline.set_lines(lines)
