@@ -155,3 +155,25 @@ def test_hole_gesture_plan_cuts_one_hole_in_one_undo_step_and_redraw_keeps_holes
     assert len(plan.holes) == 1
     plan = plan_stroke(doc, ring(0.5, 100, cx=0.5), "redraw", "o")
     assert plan.holes == () and "1 hole outside the new outline was dropped" in plan.notes[0]
+
+
+def test_an_inflater_without_holes_still_works_and_refuses_a_layer_with_holes(fan_host):
+    doc = Document(host=fan_host)
+    doc.execute({"command": "add_layer", "id": "o", "name": "O"})
+    doc.execute({"command": "set_contour", "layer": "o", "points": ring(1.0, 40).tolist(), "closed": True})
+    assert doc.layer("o").mesh is not None
+    with pytest.raises(ContourError, match="cannot cut holes"):
+        doc.execute({"command": "set_contour", "layer": "o", "points": ring(1.0, 40).tolist(), "closed": True,
+                     "holes": [ring(0.3, 20).tolist()]})
+    assert doc.layer("o").holes == ()
+
+
+def test_duplicate_offsets_the_copy_with_its_holes(real_host):
+    doc = Document(host=real_host)
+    doc.execute({"command": "add_layer", "id": "o", "name": "O"})
+    doc.execute({"command": "set_contour", "layer": "o", "points": ring(1.0, 100).tolist(), "closed": True,
+                 "holes": [ring(0.4, 50).tolist()]})
+    doc.execute({"command": "duplicate_layer", "layer": "o", "id": "o2", "offset": [2.5, 0.0]})
+    a, b = doc.layer("o"), doc.layer("o2")
+    assert np.array_equal(b.holes[0], a.holes[0] + [2.5, 0.0])
+    assert np.array_equal(b.mesh.V[b.mesh.holes[0], 0], a.mesh.V[a.mesh.holes[0], 0] + 2.5)

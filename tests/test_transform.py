@@ -150,3 +150,19 @@ def test_moved_part_is_reattached_where_its_junction_lies(real_host):
     doc.push(TransformLayer(layer="leg", matrix=[[1, 0, 3.0], [0, 1, 0.0]]))  # off the body: free
     assert attachments() == [] and host_of(doc, doc.layer("leg")) is None
     assert layers[0] is not None
+
+
+def test_handle_geometry_hits_and_drag_matrices():
+    from sketchforge.tools import transform as tr
+
+    outline = np.array([[0.0, 0.0], [2.0, 0.0], [2.0, 1.0], [0.0, 1.0]])
+    h = tr.handles_for(outline, pixel=0.01)
+    assert tr.hit(h, [1.0, 0.5]) == "move" and tr.hit(h, [2.03, 1.02]) == "scale2"
+    assert tr.hit(h, h.knob + [0.05, 0.0]) == "rotate" and tr.hit(h, [0.6, 0.5]) is None  # elsewhere: draw
+    A = tr.drag_matrix(h, "scale2", [2.0, 1.0], [3.0, 1.5])  # the corner pulled out along its diagonal
+    assert np.allclose(tr.apply(A, outline), outline * 1.5) and np.allclose(tr.apply(A, [[0.0, 0.0]]), 0.0)
+    A = tr.drag_matrix(h, "scale2", [2.0, 1.0], [-5.0, -5.0])  # through the opposite corner: clamped
+    assert np.isclose(A[0, 0], tr.MIN_SCALE)
+    A = tr.drag_matrix(h, "rotate", h.center + [0.0, 1.0], h.center + [-1.0, 0.0])
+    assert np.allclose(A[:, :2], [[0.0, -1.0], [1.0, 0.0]]) and np.allclose(tr.apply(A, [h.center]), h.center)
+    assert tr.is_identity(tr.drag_matrix(h, "move", [1.0, 0.5], [1.0, 0.5]))
