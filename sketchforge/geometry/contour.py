@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import shapely
+from scipy.spatial import cKDTree
 
 from sketchforge.errors import ContourError
 
@@ -278,6 +279,23 @@ SLIT_WIDTH_FRACTION = 0.15
 SLIT_MAX_EDGES = 8.0
 
 
+def _segment_distances(a, b, c, d) -> np.ndarray:
+    """Distances (m,) between segments ab and cd, each (m, 2): 0 where they cross, else the
+    least of the four end-to-segment distances."""
+
+    def point_seg(p, u, v):
+        w = v - u
+        t = np.clip(np.einsum("ij,ij->i", p - u, w) / np.maximum(np.einsum("ij,ij->i", w, w), 1e-300), 0.0, 1.0)
+        return np.linalg.norm(p - u - t[:, None] * w, axis=1)
+
+    def orient(p, q, r):
+        return np.sign((q[:, 0] - p[:, 0]) * (r[:, 1] - p[:, 1]) - (q[:, 1] - p[:, 1]) * (r[:, 0] - p[:, 0]))
+
+    cross = (orient(a, b, c) * orient(a, b, d) < 0) & (orient(c, d, a) * orient(c, d, b) < 0)
+    dist = np.minimum.reduce([point_seg(a, c, d), point_seg(b, c, d), point_seg(c, a, b), point_seg(d, a, b)])
+    return np.where(cross, 0.0, dist)
+
+
 def _refuse_slit_ring(P, h: float) -> None:
     """Refuse an outer and an inner ring concatenated into one stroke (an "O" or "&" drawn in
     one go): the ring then runs out along a thin channel, round the hole and back, and would
@@ -288,23 +306,33 @@ def _refuse_slit_ring(P, h: float) -> None:
     if k < 8:
         return
     Q = np.vstack([P, P[:1]])
-    segs = shapely.linestrings(np.stack([Q[:-1], Q[1:]], axis=1))
     size = np.sqrt(abs(signed_area(P)))
     reach = max(SLIT_WIDTH_EDGES * h, min(SLIT_WIDTH_FRACTION * size, SLIT_MAX_EDGES * h))
-    i, j = shapely.STRtree(segs).query(segs, predicate="dwithin", distance=reach)
+    # Candidate pairs by segment midpoints (a k-d tree: GEOS' dwithin query took a second on
+    # a 4k-point outline), then exact segment distances on the few left.
+    a, b = Q[:-1], Q[1:]
+    half = 0.5 * float(np.max(np.linalg.norm(b - a, axis=1)))
+    pairs = cKDTree(0.5 * (a + b)).query_pairs(reach + 2.0 * half, output_type="ndarray")
+    if not len(pairs):
+        return
+    i, j = np.sort(pairs, axis=1).T
     s = _arclength(Q)
     total = s[-1]
     along = np.abs(s[j] - s[i])
-    keep = (i < j) & (np.minimum(along, total - along) > 4.0 * h)
+    # Neighbours along a smooth stretch are close in both senses; a pinch joins stretches that
+    # are close across but far apart along the ring.
+    keep = np.minimum(along, total - along) > max(4.0 * h, 4.0 * reach)
     if not keep.any():
         return
     cand = np.column_stack([i[keep], j[keep]])
+    dist = _segment_distances(a[cand[:, 0]], b[cand[:, 0]], a[cand[:, 1]], b[cand[:, 1]])
+    near = dist <= reach
+    cand, dist = cand[near], dist[near]
     # The closest pair first: a pinch is where the channel is narrowest. A bounded number of
     # candidates keeps a wiggly stroke O(n log n).
-    dist = shapely.distance(segs[cand[:, 0]], segs[cand[:, 1]])
     order = np.argsort(dist, kind="stable")[:16]
-    for (a, b), d in zip(cand[order], dist[order]):
-        inner, outer = P[a + 1 : b + 1], np.vstack([P[b + 1 :], P[: a + 1]])
+    for (m, n), d in zip(cand[order], dist[order]):
+        inner, outer = P[m + 1 : n + 1], np.vstack([P[n + 1 :], P[: m + 1]])
         if len(inner) < 3 or len(outer) < 3:
             continue
         pa, pb = shapely.Polygon(inner).buffer(0), shapely.Polygon(outer).buffer(0)
@@ -314,7 +342,7 @@ def _refuse_slit_ring(P, h: float) -> None:
         if d > max(SLIT_WIDTH_EDGES * h, SLIT_WIDTH_FRACTION * np.sqrt(small)):
             continue
         if pb.contains(pa.representative_point()) or pa.contains(pb.representative_point()):
-            x = 0.5 * (Q[a] + Q[b + 1])
+            x = 0.5 * (Q[m] + Q[n + 1])
             raise ContourError(
                 f"the outline runs out to an inner ring and back along a slit near {format_point(x)}: "
                 "draw the hole as a hole (the 'holes' field of set_contour, or Alt+drag in the app), "
