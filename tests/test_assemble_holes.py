@@ -53,3 +53,20 @@ def test_part_attached_to_a_holed_body_and_a_part_seen_through_the_hole():
     assert [(a.upper, a.lower) for a in res.attachments] == [(2, 1)]
     euler = sorted(check_closed(res))
     assert euler == [-2, 2], euler  # body + arm: genus 2; the free part behind: a sphere
+
+
+def test_holes_example_a_b_with_two_legs_one_mirrored_from_the_other(real_host):
+    """examples/holes.json: a B (two holes), a left leg, a copy of it duplicated in place and
+    mirrored about the host's axis (past the sibling it was copied from): a right leg; the
+    assembly is one closed genus-2 surface."""
+    from pathlib import Path
+
+    from sketchforge.document import fileformat as ff
+
+    doc = ff.load(Path(__file__).resolve().parents[1] / "examples" / "holes.json", host=real_host)
+    body, left, right = (np.asarray(doc.layer(i).points) for i in ("b", "leg", "leg2"))
+    cx = 0.5 * (body[:, 0].min() + body[:, 0].max())
+    assert np.abs(right[:, 0] - (2 * cx - left[:, 0])).max() < 1e-12 and right[:, 0].mean() > 0.2
+    res = assemble_detailed([l.mesh for l in doc.layers], [l.closed for l in doc.layers], names=doc.layer_ids())
+    assert sorted((doc.layers[a.upper].id, doc.layers[a.lower].id) for a in res.attachments) == [("leg", "b"), ("leg2", "b")]
+    assert check_closed(res) == [-2]

@@ -377,8 +377,9 @@ MIRROR_AXES = ("host", "own")
 
 def host_of(doc, layer: Layer) -> Layer | None:
     """The layer an attached part hangs on: the nearest layer behind ``layer`` whose outline
-    (holes cut out) contains the midpoint of its junction Γ_conn; None for a free part (no
-    junction) or a junction over empty space. The assembly decides attachment by the same
+    (holes cut out) contains the midpoint of its junction Γ_conn, looking past a sibling
+    attached by the same junction (a copy duplicated in place, about to be mirrored); None
+    for a free part (no junction) or a junction over empty space. The assembly decides attachment by the same
     rule (the junction over a layer below), so this is the host it will be glued to."""
     mesh = layer.mesh
     if mesh is None or len(mesh.junction) < 2:
@@ -387,11 +388,19 @@ def host_of(doc, layer: Layer) -> Layer | None:
 
     from sketchforge.geometry import guard
 
-    mid = mesh.V[mesh.junction, :2].mean(axis=0)
+    J = mesh.V[mesh.junction, :2]
+    mid = J.mean(axis=0)
+    ends = J[[0, -1]]
+    tol = 1e-6 * max(1.0, float(np.ptp(mesh.V[:, :2], axis=0).max()))
     k = doc.index_of(layer.id)
     for below in reversed(doc.layers[:k]):
         if below.points is None or below.mesh is None:
             continue
+        bj = below.mesh.junction
+        if len(bj) >= 2:
+            other = below.mesh.V[bj[[0, -1]], :2]
+            if min(np.abs(other - ends).max(), np.abs(other[::-1] - ends).max()) <= tol:
+                continue  # a sibling glued at the same place (a copy in place): look past it
         try:
             region = guard.polygon(below.mesh.V[below.mesh.boundary, :2], f"the outline of layer {below.id!r}")
             for hole in below.mesh.holes:
