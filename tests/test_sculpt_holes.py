@@ -2,6 +2,7 @@
 distance, the rim margin and the fixed z = 0 vertices include the holes."""
 
 import numpy as np
+import shapely
 
 from sculpt_helpers import isophote_stroke
 from sketchforge_inflate import inflate_stroke
@@ -33,3 +34,12 @@ def test_rim_distance_and_sculpt_respect_the_hole():
     assert len(res.mesh.holes) == 1 and np.array_equal(res.mesh.holes[0], mesh.holes[0])
     # Within half the rim margin of the hole the surface barely moves (0.001 vs 0.016 measured).
     assert dz[r < a + 0.5 * pd.margin].max() < 0.15 * dz.max()
+    # The band shown around an isophote that passes the hole stops at the hole's rim.
+    from sketchforge.geometry.reflectance import LAMBERTIAN
+    from sketchforge_isophote_tool.isophote import band_around, picked_isophote
+    from sketchforge_isophote_tool.layerdata import layer_data
+
+    ld = layer_data(mesh, LIGHT, LAMBERTIAN)
+    _, iso = picked_isophote(ld, [0.0, 0.55])
+    region = band_around(ld, iso, 0.3)
+    assert region.area > 0.1 and region.intersection(shapely.Polygon(ring(a - 1e-3, 120))).area == 0.0
