@@ -24,6 +24,7 @@ from sketchforge.document.commands import (
     SetInflateParams,
     SetLayerVisible,
     SetLight,
+    TransformLayer,
     new_gesture_id,
 )
 from sketchforge.plugins.testing import FanInflater, make_test_host
@@ -126,6 +127,14 @@ class DocumentMachine(RuleBasedStateMachine):
     def mirror(self, data):
         lid = data.draw(st.sampled_from([l.id for l in self.doc.layers if l.points is not None]))
         self.push(MirrorLayer(layer=lid))
+
+    @precondition(lambda self: any(l.points is not None for l in self.doc.layers))
+    @rule(data=st.data(), angle=st.floats(-180, 180), scale=st.floats(0.5, 2.0), dx=st.floats(-1, 1))
+    def transform(self, data, angle, scale, dx):
+        lid = data.draw(st.sampled_from([l.id for l in self.doc.layers if l.points is not None]))
+        a = np.radians(angle)
+        L = scale * np.array([[np.cos(a), -np.sin(a)], [np.sin(a), np.cos(a)]])
+        self.push(TransformLayer(layer=lid, matrix=np.column_stack([L, [dx, 0.25]])))
 
     @rule(angles=st.lists(st.floats(-180, 180), min_size=1, max_size=4))
     def light_drag(self, angles):

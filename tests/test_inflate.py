@@ -170,7 +170,7 @@ def test_hook_implementation_through_pluggy():
     pm = pluggy.PluginManager("sketchforge")
     pm.add_hookspecs(hookspecs)
     pm.register(inflate_plugin)
-    mesh = pm.hook.sketchforge_inflate(points=circle(n=100).tolist(), closed=True, params={"resolution": 0.1})
+    mesh = pm.hook.sketchforge_inflate(points=circle(n=100).tolist(), closed=True, params={"resolution": 0.1}, holes=[])
     _check_contract(mesh)
 
 

@@ -151,7 +151,7 @@ def inflate_layer(doc, layer: Layer) -> Layer:
     edits re-applied in order. Raises before anything changes."""
     if layer.points is None:
         return layer.evolve(mesh=None, edits=())
-    mesh = doc.host.inflate(layer.points, layer.closed, dict(layer.params))
+    mesh = doc.host.inflate(layer.points, layer.closed, dict(layer.params), holes=[np.asarray(h) for h in layer.holes])
     if mesh is None:
         raise SketchforgeError("no inflate plugin is installed, so a contour cannot become a mesh")
     if not np.all(np.isfinite(mesh.V)):
@@ -317,22 +317,30 @@ class SetContour(ReplaceLayerCommand):
     (they were drawn on the old shape; the app asks first). With ``keep_edits`` the edits are
     re-applied to the new surface in order; if one no longer applies, nothing changes and
     :class:`~sketchforge.errors.EditsDoNotApplyError` says which (the app then asks whether
-    to redraw without them)."""
+    to redraw without them).
+
+    ``holes`` are the part's inner rings (any orientation), replacing the ones it had: the
+    surface keeps height 0 on each. A hole that crosses the outline or another hole, lies
+    outside, or is too small for the resolution is refused with a message naming it (1-based)
+    and nothing changes. Cutting a hole into a drawn part is this command with the same
+    points, the old holes plus the new one and ``keep_edits``."""
 
     name: ClassVar[str] = "set_contour"
     points: Any = None  # (n,2) float64
     closed: bool = False
     keep_edits: bool = False
+    holes: Any = ()  # sequence of (n_i,2) float64
 
     def __post_init__(self) -> None:
         self.points = np.array(self.points, dtype=np.float64)
         self.points.setflags(write=False)
+        self.holes = Layer(id="", name="", holes=self.holes).holes  # checked, read-only copies
 
     def text(self) -> str:
         return "Draw contour"
 
     def compute(self, doc, old: Layer) -> Layer:
-        base = inflate_layer(doc, old.evolve(points=self.points, closed=bool(self.closed), edits=()))
+        base = inflate_layer(doc, old.evolve(points=self.points, closed=bool(self.closed), edits=(), holes=self.holes))
         if not (self.keep_edits and old.edits):
             return base
         try:
@@ -348,15 +356,20 @@ class SetContour(ReplaceLayerCommand):
             d["closed"] = True
         if self.keep_edits:
             d["keep_edits"] = True
+        if self.holes:
+            d["holes"] = [h.tolist() for h in self.holes]
         return d
 
     @classmethod
     def from_dict(cls, d: dict) -> "SetContour":
+        raw = parse_field(d, "holes", list, cls.name, [])
+        holes = [parse_points({"hole": h}, cls.name, key="hole") for h in raw]
         return cls(
             layer=parse_field(d, "layer", str, cls.name),
             points=parse_points(d, cls.name),
             closed=parse_field(d, "closed", bool, cls.name, False),
             keep_edits=parse_field(d, "keep_edits", bool, cls.name, False),
+            holes=holes,
         )
 
 
@@ -386,12 +399,85 @@ class SetInflateParams(ReplaceLayerCommand):
         return cls(layer=parse_field(d, "layer", str, cls.name), params=dict(params))
 
 
+#: Mirror axes: the host's vertical symmetry axis (the layer an attached part's junction lies
+#: on), or the part's own.
+MIRROR_AXES = ("host", "own")
+
+
+def host_of(doc, layer: Layer) -> Layer | None:
+    """The layer an attached part hangs on: the nearest layer behind ``layer`` whose outline
+    (holes cut out) contains the midpoint of its junction Γ_conn, looking past a sibling
+    attached by the same junction (a copy duplicated in place, about to be mirrored); None
+    for a free part (no junction) or a junction over empty space. The assembly decides attachment by the same
+    rule (the junction over a layer below), so this is the host it will be glued to."""
+    mesh = layer.mesh
+    if mesh is None or len(mesh.junction) < 2:
+        return None
+    import shapely
+
+    from sketchforge.geometry import guard
+
+    J = mesh.V[mesh.junction, :2]
+    mid = J.mean(axis=0)
+    ends = J[[0, -1]]
+    tol = 1e-6 * max(1.0, float(np.ptp(mesh.V[:, :2], axis=0).max()))
+    k = doc.index_of(layer.id)
+    for below in reversed(doc.layers[:k]):
+        if below.points is None or below.mesh is None:
+            continue
+        bj = below.mesh.junction
+        if len(bj) >= 2:
+            other = below.mesh.V[bj[[0, -1]], :2]
+            if min(np.abs(other - ends).max(), np.abs(other[::-1] - ends).max()) <= tol:
+                continue  # a sibling glued at the same place (a copy in place): look past it
+        try:
+            region = guard.polygon(below.mesh.V[below.mesh.boundary, :2], f"the outline of layer {below.id!r}")
+            for hole in below.mesh.holes:
+                region = region.difference(guard.polygon(below.mesh.V[hole, :2], "a hole"))
+        except SketchforgeError:
+            continue
+        if region.contains(shapely.Point(mid)):
+            return below
+    return None
+
+
+def mirror_axis_x(doc, layer: Layer, axis) -> tuple[float, str]:
+    """x of the vertical axis to mirror ``layer`` about, and which axis that is ("host",
+    "own" or "x"). ``axis``: "host" (the host's bounding-box centre; a free part falls back
+    to its own), "own" (the part's bounding-box centre) or a number (that x)."""
+    if isinstance(axis, (int, float)) and not isinstance(axis, bool):
+        x = float(axis)
+        if not np.isfinite(x):
+            raise ParameterError("a mirror axis must be a finite x")
+        return x, "x"
+    if axis not in MIRROR_AXES:
+        raise ParameterError(f"a mirror axis is 'host', 'own' or a number, got {axis!r}")
+    if axis == "host":
+        host = host_of(doc, layer)
+        if host is not None:
+            hp = np.asarray(host.points)
+            return 0.5 * (hp[:, 0].min() + hp[:, 0].max()), "host"
+    pts = np.asarray(layer.points)
+    return 0.5 * (pts[:, 0].min() + pts[:, 0].max()), "own"
+
+
 @dataclass
 class MirrorLayer(ReplaceLayerCommand):
-    """Mirror a layer's stroke left-right about its own bounding-box centre (the mesh is
-    re-inflated; sculpt edits are dropped as for a redraw)."""
+    """Mirror a layer's stroke and holes left-right about a vertical axis (the mesh is
+    re-inflated; sculpt edits are dropped as for a redraw).
+
+    ``axis``: "host" (the default in the app) mirrors an attached part about its host's
+    vertical symmetry axis, the bounding-box centre x of the layer its junction lies on, so a
+    left leg becomes a right leg; a free part (no host) is mirrored about its own axis.
+    "own": the part's own bounding-box centre (what a journal without ``axis`` means: files
+    written before this option replay unchanged). A number: that x. The junction is
+    mirrored with the part: the assembly re-attaches it to the layer it then lies over.
+    Mirroring twice about the same axis gives the stroke back."""
 
     name: ClassVar[str] = "mirror_layer"
+    axis: Any = "host"
+    #: Which axis the last ``do`` used ("host", "own" or "x"), for the app's message.
+    used_axis: str = field(default="", repr=False)
 
     def text(self) -> str:
         return "Mirror layer"
@@ -399,17 +485,28 @@ class MirrorLayer(ReplaceLayerCommand):
     def compute(self, doc, old: Layer) -> Layer:
         if old.points is None:
             raise ParameterError(f"layer {old.id!r} has no contour to mirror")
+        cx, self.used_axis = mirror_axis_x(doc, old, self.axis)
         pts = np.array(old.points)
-        cx = 0.5 * (pts[:, 0].min() + pts[:, 0].max())
         pts[:, 0] = 2.0 * cx - pts[:, 0]
-        return inflate_layer(doc, old.evolve(points=pts, edits=()))
+        holes = []
+        for h in old.holes:
+            h = np.array(h)
+            h[:, 0] = 2.0 * cx - h[:, 0]
+            holes.append(h)
+        return inflate_layer(doc, old.evolve(points=pts, holes=tuple(holes), edits=()))
 
     def to_dict(self) -> dict:
-        return {"command": self.name, "layer": self.layer}
+        d = {"command": self.name, "layer": self.layer}
+        if self.axis != "own":
+            d["axis"] = self.axis
+        return d
 
     @classmethod
     def from_dict(cls, d: dict) -> "MirrorLayer":
-        return cls(layer=parse_field(d, "layer", str, cls.name))
+        axis = d.get("axis", "own")  # files from before the option mirrored about the part's own axis
+        if not (axis in MIRROR_AXES or (isinstance(axis, (int, float)) and not isinstance(axis, bool))):
+            raise DocumentFormatError(f"command {cls.name!r}: 'axis' must be 'host', 'own' or a number")
+        return cls(layer=parse_field(d, "layer", str, cls.name), axis=float(axis) if not isinstance(axis, str) else axis)
 
 
 @dataclass
@@ -512,31 +609,153 @@ class DuplicateLayer(Command):
 
 
 def _translated(layer: Layer, off: np.ndarray) -> Layer:
-    """``layer`` moved by ``off`` (2,) in the drawing plane: stroke, mesh and edit positions."""
+    """``layer`` moved by ``off`` (2,) in the drawing plane: stroke, holes, mesh and edit positions."""
+    return _transformed(layer, np.array([[1.0, 0.0, off[0]], [0.0, 1.0, off[1]]]))
+
+
+def check_affine(matrix) -> np.ndarray:
+    """A layer transform as a (2, 3) float64 array [[a, b, tx], [c, d, ty]]: x' = a x + b y + tx,
+    y' = c x + d y + ty. Raises ParameterError for a wrong shape, a non-finite entry, a linear
+    part that collapses the part (|det| below 1e-6, or scaling by more than 1e4 in area) or
+    one that mirrors it (det < 0: that is mirror_layer, which re-inflates)."""
+    try:
+        A = np.array(matrix, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise ParameterError("a transform must be a 2x3 matrix of numbers [[a, b, tx], [c, d, ty]]") from None
+    if A.shape != (2, 3):
+        raise ParameterError(f"a transform must be a 2x3 matrix [[a, b, tx], [c, d, ty]], got shape {A.shape}")
+    if not np.all(np.isfinite(A)):
+        raise ParameterError("a transform must be finite numbers")
+    det = float(A[0, 0] * A[1, 1] - A[0, 1] * A[1, 0])
+    if det < 0:
+        raise ParameterError("this transform mirrors the part (negative determinant); use Mirror layer instead")
+    if not 1e-6 <= det <= 1e4:
+        raise ParameterError(f"this transform scales the part's area by {det:.3g}; the allowed range is 1e-6 to 1e4")
+    return A
+
+
+def _transformed(layer: Layer, A: np.ndarray) -> Layer:
+    """``layer`` under the affine map A (2, 3): its stroke, holes, mesh and the positions its
+    sculpt edits were drawn at (``pick``, ``stroke``; a ``band`` radius scales with the part)
+    together. Heights scale by sqrt(det), the linear size of the part, so a scaled blob keeps
+    its shape (a rotation or a move leaves them untouched). A pure move adds the offset only,
+    bit for bit what ``translate_layer`` always did."""
+    L, t = A[:, :2], A[:, 2]
+    moved_only = bool(np.array_equal(L, np.eye(2)))
+    s = float(np.sqrt(L[0, 0] * L[1, 1] - L[0, 1] * L[1, 0]))
+
+    def f(P) -> np.ndarray:
+        P = np.asarray(P, dtype=np.float64).reshape(-1, 2)
+        return P + t if moved_only else P @ L.T + t
+
     changes: dict[str, Any] = {}
     if layer.points is not None:
-        changes["points"] = np.asarray(layer.points) + off
+        changes["points"] = f(layer.points)
+    changes["holes"] = tuple(f(h) for h in layer.holes)
     if layer.mesh is not None:
         V = np.array(layer.mesh.V, dtype=np.float64)
-        V[:, :2] += off
+        V[:, :2] = f(V[:, :2])
+        if not moved_only:
+            V[:, 2] *= s
         changes["mesh"] = replace(layer.mesh, V=V)
     edits = []
     for entry in layer.edits:
         e = dict(entry)
         if isinstance(e.get("pick"), list) and len(e["pick"]) >= 2:
-            e["pick"] = [float(e["pick"][0] + off[0]), float(e["pick"][1] + off[1]), *e["pick"][2:]]
+            q = f(np.asarray(e["pick"][:2], dtype=np.float64))[0]
+            e["pick"] = [float(q[0]), float(q[1]), *e["pick"][2:]]
         if isinstance(e.get("stroke"), list):
-            e["stroke"] = (np.asarray(e["stroke"], dtype=np.float64).reshape(-1, 2) + off).tolist()
+            e["stroke"] = f(e["stroke"]).tolist()
+        if not moved_only and isinstance(e.get("band"), (int, float)) and not isinstance(e.get("band"), bool):
+            e["band"] = float(e["band"]) * s
+        light = e.get("light")
+        if not moved_only and isinstance(light, list) and len(light) >= 2:
+            # The edit was shaped by that light: it turns with the part (a direction, so
+            # by the linear part, renormalised).
+            v = L @ np.asarray(light[:2], dtype=np.float64)
+            v = v / max(float(np.hypot(v[0], v[1])), 1e-300)
+            e["light"] = [float(v[0]), float(v[1]), *light[2:]]
         edits.append(e)
     changes["edits"] = tuple(edits)
     return layer.evolve(**changes)
 
 
+def compose_affine(*matrices) -> np.ndarray:
+    """The (2, 3) affine doing ``matrices[0]`` first, then the next, ... (each (2, 3))."""
+    out = np.eye(3)
+    for m in matrices:
+        M = np.vstack([np.asarray(m, dtype=np.float64), [0.0, 0.0, 1.0]])
+        out = M @ out
+    return out[:2]
+
+
+def scale_about(center, sx: float, sy: float | None = None) -> np.ndarray:
+    """(2, 3) affine scaling by (sx, sy) about ``center`` (2,)."""
+    sy = sx if sy is None else sy
+    c = np.asarray(center, dtype=np.float64).reshape(2)
+    return np.array([[sx, 0.0, c[0] - sx * c[0]], [0.0, sy, c[1] - sy * c[1]]])
+
+
+def rotate_about(center, radians: float) -> np.ndarray:
+    """(2, 3) affine rotating counter-clockwise by ``radians`` about ``center`` (2,)."""
+    c = np.asarray(center, dtype=np.float64).reshape(2)
+    co, si = np.cos(radians), np.sin(radians)
+    L = np.array([[co, -si], [si, co]])
+    return np.column_stack([L, c - L @ c])
+
+
+@dataclass
+class TransformLayer(ReplaceLayerCommand):
+    """Move, scale and rotate a layer in the drawing plane: ``matrix`` is a 2x3 affine
+    [[a, b, tx], [c, d, ty]] (x' = a x + b y + tx, y' = c x + d y + ty) applied to its stroke,
+    holes, mesh and sculpt-edit positions together, without re-inflation (heights scale by
+    sqrt(det), so a scaled part keeps its shape). One command per gesture: a drag of the app's
+    handles is one ``transform_layer`` with the matrix of the whole drag.
+
+    Attached parts are re-attached, not pinned: the junction is part of the layer's own
+    stroke, so it moves with the part, and the assembly glues it to whichever layer it then
+    lies over (a junction moved off every layer makes the part free; one moved across two
+    layers is reported by the assembly). Parts attached to a moved layer stay where they are.
+
+    The inflation parameters are kept as they are (``resolution`` is in drawing units): a
+    later parameter change re-inflates the transformed outline at that resolution."""
+
+    name: ClassVar[str] = "transform_layer"
+    matrix: Any = ((1.0, 0.0, 0.0), (0.0, 1.0, 0.0))
+
+    def __post_init__(self) -> None:
+        self.matrix = check_affine(self.matrix).tolist()
+
+    def text(self) -> str:
+        L = np.asarray(self.matrix)[:, :2]
+        if np.array_equal(L, np.eye(2)):
+            return "Move layer"
+        if np.allclose(L, L[0, 0] * np.eye(2)):
+            return "Scale layer"
+        return "Rotate layer" if np.isclose(L[0, 0] * L[1, 1] - L[0, 1] * L[1, 0], 1.0) else "Transform layer"
+
+    def compute(self, doc, old: Layer) -> Layer:
+        return _transformed(old, np.asarray(self.matrix, dtype=np.float64))
+
+    def to_dict(self) -> dict:
+        return {"command": self.name, "layer": self.layer, "matrix": [list(map(float, r)) for r in self.matrix]}
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "TransformLayer":
+        raw = parse_field(d, "matrix", list, cls.name)
+        if len(raw) != 2 or not all(isinstance(r, list) and len(r) == 3 for r in raw) or not all(
+            isinstance(x, (int, float)) and not isinstance(x, bool) for r in raw for x in r
+        ):
+            raise DocumentFormatError(f"command {cls.name!r}: 'matrix' must be [[a, b, tx], [c, d, ty]] numbers")
+        return cls(layer=parse_field(d, "layer", str, cls.name), matrix=raw)
+
+
 @dataclass
 class TranslateLayer(ReplaceLayerCommand):
     """Move a layer in the drawing plane by ``offset`` (dx, dy): its stroke, mesh and sculpt
-    edit positions together (no re-inflation: the same surface, moved). Each nudge is its own
-    step (summing nudges would not replay bit for bit)."""
+    edit positions together (no re-inflation: the same surface, moved). Kept so that files
+    written before ``transform_layer`` load; the app now writes ``transform_layer`` (a pure
+    move there is bit for bit the same). Each nudge is its own step."""
 
     name: ClassVar[str] = "translate_layer"
     offset: Any = (0.0, 0.0)
@@ -667,6 +886,7 @@ CORE_COMMANDS: tuple[type[Command], ...] = (
     MoveLayer,
     DuplicateLayer,
     TranslateLayer,
+    TransformLayer,
     MirrorLayer,
     SetContour,
     SetInflateParams,

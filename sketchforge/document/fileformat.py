@@ -108,7 +108,10 @@ def _short(v: Any, n: int = 60) -> str:
 
 
 def encode_mesh(m: Mesh) -> dict:
-    return {k: encode_array(getattr(m, k)) for k in ("V", "F", "boundary", "junction")}
+    out = {k: encode_array(getattr(m, k)) for k in ("V", "F", "boundary", "junction")}
+    if m.holes:
+        out["holes"] = [encode_array(h) for h in m.holes]
+    return out
 
 
 def decode_mesh(d: Any, where: str) -> Mesh:
@@ -131,6 +134,15 @@ def decode_mesh(d: Any, where: str) -> Mesh:
             raise DocumentFormatError(f"{where}.{k}: refers to a vertex outside 0..{n - 1}")
         if len(np.unique(idx)) != len(idx):
             raise DocumentFormatError(f"{where}.{k}: lists a vertex twice")
+    holes = d.get("holes", [])
+    if not isinstance(holes, list):
+        raise DocumentFormatError(f"{where}.holes: must be a list of arrays")
+    arrays["holes"] = tuple(decode_array(h, f"{where}.holes[{i}]", *_MESH_FIELDS["boundary"]) for i, h in enumerate(holes))
+    for i, idx in enumerate(arrays["holes"]):
+        if idx.size and (idx.min() < 0 or idx.max() >= n):
+            raise DocumentFormatError(f"{where}.holes[{i}]: refers to a vertex outside 0..{n - 1}")
+        if len(np.unique(idx)) != len(idx):
+            raise DocumentFormatError(f"{where}.holes[{i}]: lists a vertex twice")
     try:
         return Mesh(**arrays)
     except ValueError as exc:
@@ -151,6 +163,7 @@ def _layer_to_dict(layer: Layer) -> dict:
         "visible": layer.visible,
         "closed": layer.closed,
         "points": None if layer.points is None else layer.points.tolist(),
+        **({"holes": [h.tolist() for h in layer.holes]} if layer.holes else {}),
         "params": dict(layer.params),
         "edits": [dict(e) for e in layer.edits],
         "mesh": None if layer.mesh is None else encode_mesh(layer.mesh),
@@ -229,6 +242,13 @@ def _layer_from_dict(d: Any, where: str, registry=None) -> Layer:
             raise DocumentFormatError(f"{where}.points: must be [x, y] pairs of finite numbers") from None
         if pts.ndim != 2 or pts.shape[1] != 2 or not np.isfinite(pts).all():
             raise DocumentFormatError(f"{where}.points: must be [x, y] pairs of finite numbers")
+    holes = d.get("holes", [])
+    try:
+        holes = [np.array(h, dtype=np.float64) for h in holes] if isinstance(holes, list) else None
+    except (TypeError, ValueError, OverflowError):
+        holes = None
+    if holes is None or any(h.ndim != 2 or h.shape[1] != 2 or not np.isfinite(h).all() for h in holes):
+        raise DocumentFormatError(f"{where}.holes: must be a list of rings of [x, y] pairs of finite numbers")
     params = d.get("params", {})
     edits = d.get("edits", [])
     if not isinstance(params, dict) or not isinstance(edits, list) or not all(isinstance(e, dict) for e in edits):
@@ -244,7 +264,8 @@ def _layer_from_dict(d: Any, where: str, registry=None) -> Layer:
         _check_edits(edits, where, registry)
     mesh = d.get("mesh")
     mesh = None if mesh is None else decode_mesh(mesh, f"{where}.mesh")
-    return Layer(id=lid, name=name, visible=visible, points=pts, closed=closed, params=params, mesh=mesh, edits=tuple(edits))
+    return Layer(id=lid, name=name, visible=visible, points=pts, closed=closed, params=params, mesh=mesh, edits=tuple(edits),
+                 holes=tuple(holes))
 
 
 def validate_header(data: Any, source: str) -> tuple[Light, list]:

@@ -19,6 +19,22 @@ from sketchforge.geometry.inflate_params import DEFAULT_INFLATE_PARAMS  # noqa: 
 from sketchforge.geometry.mesh import Mesh
 
 
+def _holes(a) -> tuple:
+    if a is None:
+        return ()
+    out = []
+    for n, ring in enumerate(a, start=1):
+        try:
+            arr = np.array(ring, dtype=np.float64, copy=True)
+        except (TypeError, ValueError):
+            raise ParameterError(f"hole {n} must be a list of [x, y] number pairs") from None
+        if arr.ndim != 2 or arr.shape[1] != 2:
+            raise ParameterError(f"hole {n} must be a list of [x, y] pairs, got shape {arr.shape}")
+        arr.setflags(write=False)
+        out.append(arr)
+    return tuple(out)
+
+
 def _points(a) -> np.ndarray | None:
     if a is None:
         return None
@@ -52,6 +68,8 @@ class Layer:
     edits : tuple of dict
         Sculpt commands (as journal dicts) applied since the mesh was last inflated, oldest
         first; re-applied when the inflation parameters change.
+    holes : tuple of (n_i, 2) float64
+        Inner rings cut out of the part, as drawn (any orientation).
     """
 
     id: str
@@ -62,9 +80,11 @@ class Layer:
     params: Mapping[str, float] = field(default_factory=lambda: dict(DEFAULT_INFLATE_PARAMS))
     mesh: Mesh | None = None
     edits: tuple = ()
+    holes: tuple = ()
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "points", _points(self.points))
+        object.__setattr__(self, "holes", _holes(self.holes))
         object.__setattr__(self, "params", MappingProxyType(dict(self.params)))
         object.__setattr__(self, "edits", tuple(self.edits))
 
@@ -85,8 +105,12 @@ class Layer:
         mesh_equal = (self.mesh is None and other.mesh is None) or (
             self.mesh is not None and self.mesh.identical(other.mesh)
         )
+        holes_equal = len(self.holes) == len(other.holes) and all(
+            a.shape == b.shape and a.tobytes() == b.tobytes() for a, b in zip(self.holes, other.holes)
+        )
         return (
-            self.id == other.id
+            holes_equal
+            and self.id == other.id
             and self.name == other.name
             and self.visible == other.visible
             and self.closed == other.closed

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import shapely
+from scipy.spatial import cKDTree
 
 from sketchforge.errors import ContourError
 
@@ -255,7 +256,9 @@ def prepare_outline(points, resolution: float, closed: bool = False) -> Outline:
                 f"the straight line closing the stroke (from its end back to its start) crosses the "
                 f"stroke near {format_point(x)}; draw the stroke so that its ends face each other"
             )
+        _refuse_slit_ring(P, h)  # an inner ring drawn the same way round crosses its way back
         raise ContourError(f"the outline crosses itself near {format_point(x)} (a figure eight cannot be inflated)")
+    _refuse_slit_ring(P, h)
 
     gap = float(np.linalg.norm(P[-1] - P[0]))
     is_open = (not closed) and (not trimmed) and gap > JUNCTION_GAP_EDGES * h
@@ -267,6 +270,86 @@ def prepare_outline(points, resolution: float, closed: bool = False) -> Outline:
         P = P[::-1].copy()
     h = min(h, perimeter / MIN_BOUNDARY_EDGES)
     return Outline(np.ascontiguousarray(P), is_open, abs(area), perimeter, h)
+
+
+#: Two stretches of an outline far apart along it but closer than SLIT_WIDTH_EDGES edge
+#: lengths, or than SLIT_WIDTH_FRACTION of the size (square root of the area) of the loop they
+#: cut off, pinch it; a pinch that cuts the ring into one loop inside the other is a slit ring.
+#: The search radius is capped at SLIT_MAX_EDGES edge lengths to keep the search O(n log n).
+SLIT_WIDTH_EDGES = 0.5
+SLIT_WIDTH_FRACTION = 0.15
+SLIT_MAX_EDGES = 8.0
+
+
+def _segment_distances(a, b, c, d) -> np.ndarray:
+    """Distances (m,) between segments ab and cd, each (m, 2): 0 where they cross, else the
+    least of the four end-to-segment distances."""
+
+    def point_seg(p, u, v):
+        w = v - u
+        t = np.clip(np.einsum("ij,ij->i", p - u, w) / np.maximum(np.einsum("ij,ij->i", w, w), 1e-300), 0.0, 1.0)
+        return np.linalg.norm(p - u - t[:, None] * w, axis=1)
+
+    def orient(p, q, r):
+        return np.sign((q[:, 0] - p[:, 0]) * (r[:, 1] - p[:, 1]) - (q[:, 1] - p[:, 1]) * (r[:, 0] - p[:, 0]))
+
+    cross = (orient(a, b, c) * orient(a, b, d) < 0) & (orient(c, d, a) * orient(c, d, b) < 0)
+    dist = np.minimum.reduce([point_seg(a, c, d), point_seg(b, c, d), point_seg(c, a, b), point_seg(d, a, b)])
+    return np.where(cross, 0.0, dist)
+
+
+def _refuse_slit_ring(P, h: float) -> None:
+    """Refuse an outer and an inner ring concatenated into one stroke (an "O" or "&" drawn in
+    one go): the ring then runs out along a thin channel, round the hole and back, and would
+    inflate into a ring with a slit. Drawn holes go in the ``holes`` field instead.
+
+    P (k, 2) float64, the thinned ring; h the edge length. Raises ContourError."""
+    k = len(P)
+    if k < 8:
+        return
+    Q = np.vstack([P, P[:1]])
+    size = np.sqrt(abs(signed_area(P)))
+    reach = max(SLIT_WIDTH_EDGES * h, min(SLIT_WIDTH_FRACTION * size, SLIT_MAX_EDGES * h))
+    # Candidate pairs by segment midpoints (a k-d tree: GEOS' dwithin query took a second on
+    # a 4k-point outline), then exact segment distances on the few left.
+    a, b = Q[:-1], Q[1:]
+    half = 0.5 * float(np.max(np.linalg.norm(b - a, axis=1)))
+    pairs = cKDTree(0.5 * (a + b)).query_pairs(reach + 2.0 * half, output_type="ndarray")
+    if not len(pairs):
+        return
+    i, j = np.sort(pairs, axis=1).T
+    s = _arclength(Q)
+    total = s[-1]
+    along = np.abs(s[j] - s[i])
+    # Neighbours along a smooth stretch are close in both senses; a pinch joins stretches that
+    # are close across but far apart along the ring.
+    keep = np.minimum(along, total - along) > max(4.0 * h, 4.0 * reach)
+    if not keep.any():
+        return
+    cand = np.column_stack([i[keep], j[keep]])
+    dist = _segment_distances(a[cand[:, 0]], b[cand[:, 0]], a[cand[:, 1]], b[cand[:, 1]])
+    near = dist <= reach
+    cand, dist = cand[near], dist[near]
+    # The closest pair first: a pinch is where the channel is narrowest. A bounded number of
+    # candidates keeps a wiggly stroke O(n log n).
+    order = np.argsort(dist, kind="stable")[:16]
+    for (m, n), d in zip(cand[order], dist[order]):
+        inner, outer = P[m + 1 : n + 1], np.vstack([P[n + 1 :], P[: m + 1]])
+        if len(inner) < 3 or len(outer) < 3:
+            continue
+        pa, pb = shapely.Polygon(inner).buffer(0), shapely.Polygon(outer).buffer(0)
+        if pa.is_empty or pb.is_empty:
+            continue
+        small = min(pa.area, pb.area)
+        if d > max(SLIT_WIDTH_EDGES * h, SLIT_WIDTH_FRACTION * np.sqrt(small)):
+            continue
+        if pb.contains(pa.representative_point()) or pa.contains(pb.representative_point()):
+            x = 0.5 * (Q[m] + Q[n + 1])
+            raise ContourError(
+                f"the outline runs out to an inner ring and back along a slit near {format_point(x)}: "
+                "draw the hole as a hole (the 'holes' field of set_contour, or Alt+drag in the app), "
+                "not as part of the outline"
+            )
 
 
 def _trim_overshoot(P):
@@ -442,3 +525,112 @@ def resample_outline(outline: Outline, smooth: bool = True) -> Contour:
 def clean_contour(points, resolution: float, closed: bool = False, smooth: bool = True) -> Contour:
     """:func:`prepare_outline` then :func:`resample_outline` (no mesh-size check in between)."""
     return resample_outline(prepare_outline(points, resolution, closed), smooth=smooth)
+
+
+# --- holes -------------------------------------------------------------------------------------
+
+#: A hole must measure at least this many edge lengths across (4·area/perimeter, the diameter
+#: for a disk): a smaller one would be a ring of a few slivers.
+MIN_HOLE_EDGES = 2.0
+#: Rings (a hole and the outline, or two holes) must stay this many edge lengths apart, so the
+#: band between them gets at least one row of well-shaped triangles.
+MIN_RING_GAP_EDGES = 0.5
+
+
+def _ring_polygon(P) -> shapely.Polygon:
+    return shapely.Polygon(np.asarray(P, dtype=np.float64))
+
+
+def prepare_holes(holes, contour: Contour) -> list[np.ndarray]:
+    """Validate and resample the inner rings (holes) of an outline.
+
+    Parameters
+    ----------
+    holes : sequence of (n_i, 2) array-like of float
+        The holes as drawn, any orientation, closing point optional.
+    contour : Contour
+        The resampled outer ring they must lie inside; its ``edge_length`` is used for them.
+
+    Returns
+    -------
+    rings : list of (k_i, 2) float64
+        Each hole resampled at the contour's edge length, clockwise (the surface lies to the
+        left of every ring), first point not repeated; in the order given.
+
+    Raises
+    ------
+    ContourError
+        Naming the hole (1-based, in the order given): not a list of points, fewer than 3
+        distinct points or no area, crossing itself, too small (less than MIN_HOLE_EDGES edge
+        lengths across), crossing or touching the outline or another hole, outside the
+        outline, inside another hole, or closer than MIN_RING_GAP_EDGES edge lengths to
+        either.
+    """
+    if holes is None:
+        return []
+    h = float(contour.edge_length)
+    outer = _ring_polygon(contour.points)
+    gap = MIN_RING_GAP_EDGES * h
+    rings: list[np.ndarray] = []
+    polys: list = []
+    for n, raw in enumerate(holes, start=1):
+        name = f"hole {n}"
+        P = validate_stroke(raw, what=name)
+        if len(P):
+            P = P[np.concatenate([[True], np.any(np.diff(P, axis=0) != 0, axis=1)])]
+        if len(P) > 1 and np.all(P[-1] == P[0]):
+            P = P[:-1]
+        if len(np.unique(P, axis=0)) < 3:
+            raise ContourError(f"{name} has fewer than 3 distinct points, so it encloses no area")
+        P = decimate(P, h / 4.0)
+        if len(P) < 3:
+            raise ContourError(f"{name} is too small: fewer than 3 distinct points remain at resolution {h:.3g}")
+        crossings = segment_crossings(P, closed=True)
+        if len(crossings):
+            i, j = crossings[0]
+            Q = np.vstack([P, P[:1]])
+            x = intersection_point(Q[i], Q[i + 1], Q[j], Q[j + 1])
+            raise ContourError(f"{name} crosses itself near {format_point(x)}")
+        area = signed_area(P)
+        perimeter = float(_arclength(np.vstack([P, P[:1]]))[-1])
+        across = 4.0 * abs(area) / perimeter
+        if across < MIN_HOLE_EDGES * h:
+            raise ContourError(
+                f"{name} is too small: about {across:.3g} across, less than {MIN_HOLE_EDGES:g} edge lengths "
+                f"({MIN_HOLE_EDGES * h:.3g}) at resolution {h:.3g}; draw it larger or use a finer resolution"
+            )
+        if area < 0:
+            P = P[::-1].copy()
+        try:
+            ring = resample_outline(Outline(np.ascontiguousarray(P), False, abs(area), perimeter, h)).points
+        except ContourError as exc:
+            raise ContourError(f"{name}: {exc}") from None
+        ring = np.ascontiguousarray(ring[::-1])  # clockwise: the surface on its left
+        poly = _ring_polygon(ring)
+        where = format_point(np.asarray(poly.representative_point().coords[0]))
+        if not outer.intersects(poly):
+            raise ContourError(f"{name} near {where} lies outside the outline; a hole must be drawn inside its part")
+        if outer.exterior.intersects(poly.exterior):
+            x = shapely.get_coordinates(outer.exterior.intersection(poly.exterior)).mean(axis=0)
+            raise ContourError(f"{name} crosses the outline near {format_point(x)}; a hole must lie inside its part")
+        if not outer.contains(poly):
+            raise ContourError(f"{name} near {where} lies outside the outline; a hole must be drawn inside its part")
+        d = poly.exterior.distance(outer.exterior)
+        if d < gap:
+            raise ContourError(
+                f"{name} comes within {d:.3g} of the outline near {where}; keep holes at least "
+                f"{gap:.3g} (half an edge length) inside"
+            )
+        for m, other in enumerate(polys, start=1):
+            if poly.exterior.intersects(other.exterior):
+                x = shapely.get_coordinates(poly.exterior.intersection(other.exterior)).mean(axis=0)
+                raise ContourError(f"{name} crosses hole {m} near {format_point(x)}; holes must not overlap")
+            if poly.contains(other) or other.contains(poly):
+                inner, outer_n = (m, n) if poly.contains(other) else (n, m)
+                raise ContourError(f"hole {inner} lies inside hole {outer_n}; holes must not overlap")
+            d = poly.exterior.distance(other.exterior)
+            if d < gap:
+                raise ContourError(f"{name} comes within {d:.3g} of hole {m} near {where}; keep holes at least {gap:.3g} apart")
+        rings.append(ring)
+        polys.append(poly)
+    return rings

@@ -34,25 +34,36 @@ class Mesh:
     junction : (j,) int64
         Vertices on the junction Γ_conn (the closing segment of an open stroke), in order
         along the boundary; empty for a free (closed-outline) part.
+    holes : tuple of (k_i,) int64
+        The inner boundary loops (holes), each in order with the surface on its left seen
+        from +z (clockwise for a front surface); empty when the part has no hole.
     """
 
     V: np.ndarray
     F: np.ndarray
     boundary: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
     junction: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int64))
+    holes: tuple = ()
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "V", _frozen(self.V, np.float64, 2, "V"))
         object.__setattr__(self, "F", _frozen(self.F, np.int64, 2, "F"))
         object.__setattr__(self, "boundary", _frozen(self.boundary, np.int64, 1, "boundary"))
         object.__setattr__(self, "junction", _frozen(self.junction, np.int64, 1, "junction"))
+        object.__setattr__(self, "holes", tuple(_frozen(h, np.int64, 1, "holes") for h in self.holes))
         if self.V.shape[1] != 3 or self.F.shape[1] != 3:
             raise ValueError(f"Mesh needs V (n,3) and F (m,3), got {self.V.shape} and {self.F.shape}")
         n = len(self.V)
-        for name in ("F", "boundary", "junction"):
-            idx = getattr(self, name)
+        for name, idx in (("F", self.F), ("boundary", self.boundary), ("junction", self.junction),
+                          *(("holes", h) for h in self.holes)):
             if idx.size and (idx.min() < 0 or idx.max() >= n):
                 raise ValueError(f"Mesh.{name} refers to a vertex outside 0..{n - 1}")
+
+    @property
+    def rims(self) -> np.ndarray:
+        """(r,) int64: every vertex on a boundary loop, the outline's then each hole's (the
+        vertices an inflated front surface keeps at z = 0)."""
+        return np.concatenate([self.boundary, *self.holes]) if self.holes else self.boundary
 
     @property
     def n_vertices(self) -> int:
@@ -66,18 +77,19 @@ class Mesh:
         """Same connectivity, new z (n,) float64."""
         V = np.array(self.V)
         V[:, 2] = np.asarray(z, dtype=np.float64)
-        return Mesh(V, self.F, self.boundary, self.junction)
+        return Mesh(V, self.F, self.boundary, self.junction, self.holes)
 
     def identical(self, other: "Mesh | None") -> bool:
         """Bit-identical comparison (positions compared as raw bytes, so -0.0 != 0.0, NaN == NaN)."""
         if other is None:
             return False
-        return all(
+        return len(self.holes) == len(other.holes) and all(
             a.shape == b.shape and a.dtype == b.dtype and a.tobytes() == b.tobytes()
             for a, b in (
                 (self.V, other.V),
                 (self.F, other.F),
                 (self.boundary, other.boundary),
                 (self.junction, other.junction),
+                *zip(self.holes, other.holes),
             )
         )

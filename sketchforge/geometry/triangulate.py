@@ -39,14 +39,18 @@ _VERTICES_PER_MAX_AREA = 0.8
 class Triangulation(NamedTuple):
     """Output of :func:`triangulate_polygon`.
 
-    V2 : (n, 2) float64, vertex positions; the first k are the input polygon, in order.
+    V2 : (n, 2) float64, vertex positions; the first k are the input polygon, in order, then
+        the vertices of each hole ring, in order.
     F : (m, 3) int64, triangles, counter-clockwise.
     boundary : (k,) int64, the boundary loop (``arange(k)``), counter-clockwise.
+    holes : tuple of (k_i,) int64, each hole's ring (consecutive indices after the outline),
+        in the order and orientation given.
     """
 
     V2: np.ndarray
     F: np.ndarray
     boundary: np.ndarray
+    holes: tuple = ()
 
 
 def max_triangle_area(edge_length: float) -> float:
@@ -95,13 +99,16 @@ def _format_area(a: float) -> str:
     return s
 
 
-def triangulate_polygon(P, max_edge: float, min_angle: float = MIN_ANGLE) -> Triangulation:
-    """Quality-mesh the inside of a simple counter-clockwise polygon.
+def triangulate_polygon(P, max_edge: float, min_angle: float = MIN_ANGLE, holes=()) -> Triangulation:
+    """Quality-mesh the inside of a simple counter-clockwise polygon, minus its holes.
 
     Parameters
     ----------
     P : (k, 2) float64
         Polygon vertices, counter-clockwise, first vertex not repeated.
+    holes : sequence of (k_i, 2) float64
+        Inner rings (validated by :func:`contour.prepare_holes`: inside P, disjoint), either
+        orientation, first vertex not repeated; their vertices are kept unsplit like P's.
     max_edge : float
         Target edge length h; triangles get at most the area of the equilateral triangle of
         edge h.
@@ -125,15 +132,35 @@ def triangulate_polygon(P, max_edge: float, min_angle: float = MIN_ANGLE) -> Tri
         k = len(P)
     except TypeError:  # not a sequence: pslg says so
         k = 0
-    seg = np.column_stack([np.arange(k), (np.arange(k) + 1) % k])
-    data, index = guard.pslg(P, seg, None, what="the outline", return_index=True)
-    P = data["vertices"]  # the input, checked, when nothing merged
-    if len(P) != k:
-        i = int(np.flatnonzero(index != np.arange(k))[0])  # the first point that merged into an earlier one
+    rings = [guard.points(H, f"hole {n}") for n, H in enumerate(holes, start=1)]
+    sizes = [k] + [len(H) for H in rings]
+    starts = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+    seg = np.vstack([np.column_stack([np.arange(a, b), np.roll(np.arange(a, b), -1)])
+                     for a, b in zip(starts[:-1], starts[1:])])
+    allP = P if not rings else np.vstack([guard.points(P, "the outline")] + rings)
+    ring_of_segment = np.repeat(np.arange(len(sizes)), sizes)
+    try:
+        data, index = guard.pslg(allP, seg, None, what="the outline", return_index=True)
+    except guard.PslgError as exc:
+        if not rings or not exc.segments:
+            raise
+        names = sorted({"the outline" if r == 0 else f"hole {r}" for r in ring_of_segment[list(exc.segments)]})
+        raise guard.PslgError(f"{' and '.join(names)}: {exc}", exc.points, exc.segments, exc.at) from None
+    n_in = int(starts[-1])
+    Pv = data["vertices"]  # the input, checked, when nothing merged
+    if len(Pv) != n_in:
+        i = int(np.flatnonzero(index != np.arange(n_in))[0])  # the first point that merged into an earlier one
         raise GeometryError(
-            f"the outline has two points closer than {guard.tolerance(P):.3g} drawing units near "
-            f"{format_point(P[index[i]])}; they cannot both be mesh vertices"
+            f"the outline has two points closer than {guard.tolerance(Pv):.3g} drawing units near "
+            f"{format_point(Pv[index[i]])}; they cannot both be mesh vertices"
         )
+    if rings:
+        # Triangle eats the triangles around a point inside each hole; a representative point
+        # of the ring's polygon lies strictly inside it whatever its shape.
+        inside = [np.asarray(guard.polygon(Pv[a:b], f"hole {n}").representative_point().coords[0])
+                  for n, (a, b) in enumerate(zip(starts[1:-1], starts[2:]), start=1)]
+        data["holes"] = guard.finite(np.array(inside, dtype=np.float64), (len(rings), 2), "the hole points")
+    P, k = Pv, n_in
     # p: planar straight-line graph; q: quality; a: max area; Y: no Steiner points on the
     # boundary; Q: quiet. Triangle keeps the input vertices first and in order.
     opts = f"pq{min_angle:g}a{_format_area(max_triangle_area(max_edge))}YQ"
@@ -150,8 +177,9 @@ def triangulate_polygon(P, max_edge: float, min_angle: float = MIN_ANGLE) -> Tri
     cross = (b[:, 0] - a[:, 0]) * (c[:, 1] - a[:, 1]) - (b[:, 1] - a[:, 1]) * (c[:, 0] - a[:, 0])
     flip = cross < 0
     F[flip] = F[flip][:, [0, 2, 1]]
-    V2 = relax_interior(V2, F, k, RELAX_STEPS)
-    return Triangulation(V2, F, np.arange(k, dtype=np.int64))
+    V2 = relax_interior(V2, F, k, RELAX_STEPS)  # every ring (outline and holes) stays fixed
+    hole_loops = tuple(np.arange(a, b, dtype=np.int64) for a, b in zip(starts[1:-1], starts[2:]))
+    return Triangulation(V2, F, np.arange(sizes[0], dtype=np.int64), hole_loops)
 
 
 def _min_angles(V2: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

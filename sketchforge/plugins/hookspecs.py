@@ -38,7 +38,7 @@ hookimpl = pluggy.HookimplMarker("sketchforge")
 
 
 @hookspec(firstresult=True)
-def sketchforge_inflate(points, closed, params):
+def sketchforge_inflate(points, closed, params, holes):
     """Turn a drawn stroke into a layer's front surface.
 
     Called by the ``set_contour`` and ``set_inflate_params`` commands (and on replay).
@@ -53,12 +53,18 @@ def sketchforge_inflate(points, closed, params):
     params : dict
         ``resolution`` (target edge length, drawing units), ``inflation`` (height scale),
         ``smoothing`` (fairing weight α in [0, 1), 0 = none). Unknown keys are ignored.
+    holes : list of (k_i, 2) float64
+        Inner rings to cut out of the part (empty: none), either orientation; the surface
+        keeps z = 0 on each and the returned mesh lists their loops in ``holes``. An
+        implementation without this argument cannot make holes: the host refuses a layer
+        with holes rather than silently fill them.
 
     Returns
     -------
     sketchforge.geometry.Mesh
         V (n,3) float64 with z >= 0 and z = 0 on the boundary, F (m,3) int64
-        counter-clockwise seen from +z, ``boundary`` loop and ``junction`` vertices.
+        counter-clockwise seen from +z, ``boundary`` loop, ``junction`` vertices and ``holes``
+        loops.
 
     Raises
     ------

@@ -110,8 +110,15 @@ class PluginHost:
                 return result
         return None
 
-    def inflate(self, points, closed: bool, params: dict):
-        return self._solve("sketchforge_inflate", points=points, closed=closed, params=params)
+    def inflate(self, points, closed: bool, params: dict, holes=()):
+        holes = [] if holes is None else list(holes)
+        if holes:
+            impls = self.pm.hook.sketchforge_inflate.get_hookimpls()
+            if impls and "holes" not in impls[-1].argnames:  # the last registered answers first
+                from sketchforge.errors import ContourError
+
+                raise ContourError(f"the inflate plugin {impls[-1].plugin_name!r} cannot cut holes; remove the holes or install one that can")
+        return self._solve("sketchforge_inflate", points=points, closed=closed, params=params, holes=holes)
 
     def has_assembler(self) -> bool:
         return bool(self.pm.hook.sketchforge_assemble.get_hookimpls())

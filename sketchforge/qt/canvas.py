@@ -14,9 +14,14 @@ Gestures:
 - ``"draw"``: a left drag is a stroke (``DrawContourTool`` collects it); on release
   :attr:`stroke_finished` carries the points and the stroke's kind to the window, which runs
   the inflation off the GUI thread: ``"front"`` (a left drag), ``"behind"`` (a right drag, or
-  Shift + left drag) or ``"redraw"`` (Ctrl + left drag: the selected part's whole outline).
+  Shift + left drag), ``"redraw"`` (Ctrl + left drag: the selected part's whole outline) or
+  ``"hole"`` (Alt + left drag: a closed stroke cuts a hole in the selected part).
   A click picks the part under it (:attr:`part_clicked`), a double click duplicates it
-  (:attr:`part_double_clicked`, with the button).
+  (:attr:`part_double_clicked`, with the button). The selected part shows handles
+  (:mod:`sketchforge.tools.transform`): a left drag that starts on the centre marker moves
+  it, on a corner scales it about the opposite corner, on the knob above rotates it; the
+  outline follows the drag and its end asks for one ``transform_layer``
+  (:attr:`transform_requested`).
 - ``"light"``: a left drag sets the light with ``LightTool`` (one undo step per drag); never a
   stroke.
 - ``"sculpt"``: clicks, drags and the wheel go to the sculpt controller (``sculpt.py``).
@@ -38,6 +43,7 @@ from sketchforge.errors import SketchforgeError
 from sketchforge.geometry import gbuffer as gb
 from sketchforge.qt import items as it
 from sketchforge.tools import DrawContourTool, LightTool
+from sketchforge.tools import transform as tr
 
 BACKGROUND = QColor(242, 240, 236)
 #: Default visible region (document units) of an empty document.
@@ -104,6 +110,9 @@ class Canvas(pg.GraphicsView):
     part_clicked = Signal(object)
     #: a double click in "draw": the document point (2,) and "left" or "right"
     part_double_clicked = Signal(object, str)
+    #: the end of a handle drag on the selected part: layer id and the (2, 3) affine of the
+    #: whole drag (the window pushes one transform_layer)
+    transform_requested = Signal(str, object)
     #: a one-line message for the status bar
     message = Signal(str)
     #: ((GBuffer | None, error | None), view, meshes) from the rasterising thread
@@ -154,6 +163,9 @@ class Canvas(pg.GraphicsView):
         self._edit_timer.timeout.connect(self.render_now)
 
         self.outline = it.PolylinesItem(it.cosmetic_pen(it.SELECTED, 1.5, Qt.PenStyle.DotLine), closed=True)
+        #: the selected part's move / scale / rotate handles (sketchforge.tools.transform)
+        self.handles = it.PolylinesItem(it.cosmetic_pen(it.SELECTED, 1.2))
+        self._handle_drag: tuple | None = None  # (kind, start, Handles, outline) during a handle drag
         self.stroke = it.PolylinesItem(it.cosmetic_pen(it.STROKE_DRAW, 2.0))
         self.light_indicator = it.LightIndicator()
         self.overlays: dict[str, it.PolylinesItem] = {
@@ -165,7 +177,7 @@ class Canvas(pg.GraphicsView):
         }
         z = 1000
         self.vb.addItem(self.scene_item)
-        for item in (self.outline, *self.overlays.values(), self.stroke, self.light_indicator):
+        for item in (self.outline, self.handles, *self.overlays.values(), self.stroke, self.light_indicator):
             item.setZValue(z)
             z += 1
             self.vb.addItem(item)
@@ -177,6 +189,7 @@ class Canvas(pg.GraphicsView):
         doc.layer_changed.connect(self._on_layer_changed)
         doc.light_changed.connect(self._on_light)
         self.vb.sigRangeChanged.connect(lambda *a: self._update_light_indicator())
+        self.vb.sigRangeChanged.connect(lambda *a: self._refresh_handles())  # sized in pixels
         self.vb.sigRangeChanged.connect(lambda *a: self._schedule_render(VIEW_SETTLE_MS))
         self.vb.sigResized.connect(lambda *a: self._schedule_render(VIEW_SETTLE_MS))
         self.rebuild()
@@ -408,9 +421,46 @@ class Canvas(pg.GraphicsView):
             if layer.visible:
                 if layer.mesh is not None and len(layer.mesh.boundary):
                     lines.append(layer.mesh.V[layer.mesh.boundary, :2])
+                    lines += [layer.mesh.V[h, :2] for h in layer.mesh.holes]
                 elif layer.points is not None:
                     lines.append(layer.points)
         self.outline.set_lines(lines)
+        self._refresh_handles()
+
+    def selected_outline(self) -> np.ndarray | None:
+        """The selected visible part's outline (n, 2) as drawn, or None."""
+        if self.current_layer is None or self.current_layer not in self.doc.layer_ids():
+            return None
+        layer = self.doc.layer(self.current_layer)
+        if not layer.visible:
+            return None
+        if layer.mesh is not None and len(layer.mesh.boundary):
+            return np.asarray(layer.mesh.V[layer.mesh.boundary, :2])
+        return None if layer.points is None else np.asarray(layer.points)
+
+    def current_handles(self):
+        """The selected part's handle set at this zoom (None without one, or outside "draw")."""
+        if self.interaction != "draw":
+            return None
+        return tr.handles_for(self.selected_outline(), self.pixel_size())
+
+    def _refresh_handles(self) -> None:
+        if self._handle_drag is None:
+            self.handles.set_lines(tr.handle_lines(self.current_handles()))
+
+    def _drag_handle(self, ev) -> None:
+        """A drag that started on a handle: preview the transformed outline, and at the end ask
+        for one transform_layer with the whole drag's matrix."""
+        kind, start, h, outline = self._handle_drag
+        A = tr.drag_matrix(h, kind, start, self._event_doc(ev))
+        if not ev.isFinish():
+            self.outline.set_lines([tr.apply(A, outline)])
+            self.handles.set_lines(tr.handle_lines(tr.handles_for(tr.apply(A, h.corners), h.pixel)))
+            return
+        self._handle_drag = None
+        self._refresh_outline()
+        if not tr.is_identity(A) and self.current_layer is not None:
+            self.transform_requested.emit(self.current_layer, A)
 
     def _update_light_indicator(self) -> None:
         visible = self.interaction == "light"
@@ -449,7 +499,9 @@ class Canvas(pg.GraphicsView):
             self._tool.cancel()
             self._tool = None
         self.interaction = name
+        self._handle_drag = None
         self.stroke.set_lines([])
+        self._refresh_handles()
         cursor = Qt.CursorShape.CrossCursor if name in ("draw", "sculpt", "light") else Qt.CursorShape.ArrowCursor
         self.viewport().setCursor(cursor)
         for key, item in self.overlays.items():
@@ -496,6 +548,18 @@ class Canvas(pg.GraphicsView):
     # --- gestures -------------------------------------------------------------------------------
     def handle_left_drag(self, ev) -> bool:
         mode = self.interaction
+        if self._handle_drag is not None:
+            self._drag_handle(ev)
+            return True
+        if (ev.isStart() and mode == "draw" and not self.busy and ev.button() == Qt.MouseButton.LeftButton
+                and ev.modifiers() == Qt.KeyboardModifier.NoModifier):
+            start = self._event_doc(ev, ev.buttonDownPos())
+            h = self.current_handles()
+            kind = tr.hit(h, start)
+            if kind is not None:
+                self._handle_drag = (kind, start, h, self.selected_outline())
+                self._drag_handle(ev)
+                return True
         if ev.isStart():
             # A stroke may be drawn while the last one inflates (the window queues it).
             if self.busy and mode not in ("light", "draw"):
@@ -595,8 +659,11 @@ MIN_STROKE_PIXELS = 8
 
 
 def _stroke_kind(button, modifiers) -> str:
-    """Which part a draw gesture makes: right button or Shift draws behind, Ctrl redraws the
-    selected part's whole outline, a plain left drag draws in front."""
+    """Which part a draw gesture makes: Alt cuts a hole in the selected part, right button or
+    Shift draws behind, Ctrl redraws the selected part's whole outline, a plain left drag
+    draws in front."""
+    if modifiers & Qt.KeyboardModifier.AltModifier:
+        return "hole"
     if button == Qt.MouseButton.RightButton or modifiers & Qt.KeyboardModifier.ShiftModifier:
         return "behind"
     if modifiers & Qt.KeyboardModifier.ControlModifier:

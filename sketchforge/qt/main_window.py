@@ -337,6 +337,8 @@ class MainWindow(QMainWindow):
         self._action(lm, "&Remove layer", lambda: self._on_current(self.remove_layer), "Del")
         self._action(lm, "&Duplicate layer", lambda: self._on_current(self.duplicate_aside), "Ctrl+D")
         self._action(lm, "&Mirror layer", lambda: self._on_current(self.mirror_layer), "Ctrl+M")
+        self._action(lm, "Mirror layer about its &own axis",
+                     lambda: self._on_current(lambda i: self.mirror_layer(i, axis="own")), "Ctrl+Shift+M")
         lm.addSeparator()
         self._action(lm, "Bring &forward", lambda: self._on_current(lambda lid: self.move_depth(lid, +1)), "PgUp")
         self._action(lm, "Send &backward", lambda: self._on_current(lambda lid: self.move_depth(lid, -1)), "PgDown")
@@ -431,6 +433,7 @@ class MainWindow(QMainWindow):
         self.canvas.stroke_finished.connect(self.draw_stroke)
         self.canvas.part_clicked.connect(self.select_at)
         self.canvas.part_double_clicked.connect(self.duplicate_at)
+        self.canvas.transform_requested.connect(self.transform_layer)
         self.creation_panel.closed_toggled.connect(self.set_closed)
         self.canvas.message.connect(self.show_message)
         self.view3d.message.connect(self.show_message)
@@ -646,9 +649,19 @@ class MainWindow(QMainWindow):
         if self.push(cmd):
             self.layers_panel.select(cmd.new_id)
 
-    def mirror_layer(self, layer_id: str) -> None:
-        if not self._refuse_if_busy():
-            self.runner.run(C.MirrorLayer(layer=layer_id), label="Inflating")
+    def mirror_layer(self, layer_id: str, axis: str = "host") -> None:
+        """Mirror about the host's vertical axis (a left leg becomes a right leg; a free part
+        about its own), or with ``axis="own"`` about the part's own axis."""
+        if self._refuse_if_busy():
+            return
+        cmd = C.MirrorLayer(layer=layer_id, axis=axis)
+        name = self.doc.layer(layer_id).name
+
+        def done(c):
+            where = "its host's axis" if c.used_axis == "host" else "its own axis"
+            self.show_message(f"mirrored “{name}” about {where}")
+
+        self.runner.run(cmd, label="Inflating", on_done=done)
 
     def set_params(self, params: dict) -> None:
         if self.current_layer is None:
@@ -726,8 +739,9 @@ class MainWindow(QMainWindow):
         if plan.refusal is not None:
             self.show_message(plan.refusal)
         elif plan.redraw is not None:
-            what = "redrew the outline" if plan.redraw == "whole" else "redrew part of the outline"
-            self._redraw(self.doc.layer(plan.target), plan.points, plan.closed, what)
+            what = {"whole": "redrew the outline", "stretch": "redrew part of the outline", "hole": "cut a hole"}[plan.redraw]
+            self._redraw(self.doc.layer(plan.target), plan.points, plan.closed, what, holes=plan.holes,
+                         notes=plan.notes)
         else:
             self._new_part(plan)
 
@@ -744,11 +758,11 @@ class MainWindow(QMainWindow):
 
         self.runner.run(cmd, label="Inflating", macro="Draw layer" if before else None, before=before, on_done=done)
 
-    def _redraw(self, layer, pts, closed: bool, what: str, keep_edits: bool = True) -> None:
-        """Replace ``layer``'s outline; its sculpt edits are kept when they still apply, else the
-        person is asked whether to redraw without them."""
+    def _redraw(self, layer, pts, closed: bool, what: str, keep_edits: bool = True, holes=(), notes=()) -> None:
+        """Replace ``layer``'s outline and holes (one undo step); its sculpt edits are kept when
+        they still apply, else the person is asked whether to redraw without them."""
         keep = keep_edits and bool(layer.edits)
-        tool = DrawContourTool(self.doc, target_layer=layer.id, closed=bool(closed), keep_edits=keep)
+        tool = DrawContourTool(self.doc, target_layer=layer.id, closed=bool(closed), keep_edits=keep, holes=holes)
         _, cmd = tool.commands_for(pts)
 
         def error(exc) -> bool:
@@ -760,16 +774,18 @@ class MainWindow(QMainWindow):
                 f"Layer “{layer.name}” has {len(layer.edits)} sculpt edit(s) that do not apply to the new "
                 f"outline ({exc}). Redraw it without them? (Undo brings them back.)",
             ):
-                QTimer.singleShot(0, lambda: self._redraw(self.doc.layer(layer.id), pts, closed, what, keep_edits=False))
+                QTimer.singleShot(0, lambda: self._redraw(self.doc.layer(layer.id), pts, closed, what, keep_edits=False,
+                                                          holes=holes, notes=notes))
             else:
                 self.show_message("the outline was not redrawn: its sculpt edits would be lost")
             return True
 
         kept = f"; kept its {len(layer.edits)} sculpt edit(s)" if keep else ""
+        kept += "".join("; " + n for n in notes)
         self.runner.run(
             cmd,
             label="Inflating",
-            on_done=lambda c: self.show_message(f"{what} of “{layer.name}”{kept}"),
+            on_done=lambda c: self.show_message(f"{what} {'in' if what == 'cut a hole' else 'of'} “{layer.name}”{kept}"),
             on_error=error,
         )
 
@@ -834,8 +850,16 @@ class MainWindow(QMainWindow):
     def nudge(self, layer_id: str, step) -> None:
         """Arrow keys: move the selected part NUDGE_PIXELS screen pixels (one undo step)."""
         d = NUDGE_PIXELS * self.canvas.pixel_size()
-        if self.push(C.TranslateLayer(layer=layer_id, offset=[step[0] * d, step[1] * d])):
+        if self.push(C.TransformLayer(layer=layer_id, matrix=[[1.0, 0.0, step[0] * d], [0.0, 1.0, step[1] * d]])):
             self.show_message(f"moved “{self.doc.layer(layer_id).name}” (arrow keys)")
+
+    def transform_layer(self, layer_id: str, matrix) -> None:
+        """The end of a handle drag: one transform_layer with the whole drag's matrix."""
+        if layer_id not in self.doc.layer_ids() or self._refuse_if_busy():
+            return
+        cmd = C.TransformLayer(layer=layer_id, matrix=matrix)
+        if self.push(cmd):
+            self.show_message(f"{cmd.text().split()[0].lower()}d “{self.doc.layer(layer_id).name}” (Ctrl+Z undoes it)")
 
     def move_depth(self, layer_id: str, where) -> None:
         """PgUp / PgDn: one step to the front / back; Home / End: to the very front / back."""

@@ -9,7 +9,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from sketchforge.document.commands import AddLayer, Command, SetContour
-from sketchforge.errors import ContourError
+from sketchforge.errors import ContourError, SketchforgeError
+from sketchforge.geometry import guard
 from sketchforge.geometry.inflate_params import DEFAULT_INFLATE_PARAMS
 from sketchforge.geometry.parts import chord_touches, overlapped, splice_outline, stroke_closes
 from sketchforge.tools.base import Tool
@@ -28,7 +29,7 @@ class DrawContourTool(Tool):
     label = "Draw contour"
 
     def __init__(self, doc, target_layer: str | None = None, closed: bool = False, index: int | None = None,
-                 keep_edits: bool = False) -> None:
+                 keep_edits: bool = False, holes=()) -> None:
         super().__init__(doc)
         self.target_layer = target_layer
         self.closed = closed
@@ -36,6 +37,9 @@ class DrawContourTool(Tool):
         self.index = index
         #: a redraw re-applies the layer's sculpt edits (SetContour.keep_edits)
         self.keep_edits = keep_edits
+        #: the target layer's holes after the stroke (a redraw keeps those that still fit; a
+        #: cut adds one), each (n_i, 2) float64
+        self.holes = tuple(holes)
         self._points: list[np.ndarray] = []
 
     def press(self, pos) -> None:
@@ -53,7 +57,8 @@ class DrawContourTool(Tool):
         new layer, meant to be one macro "Draw layer"."""
         pts = np.asarray(points, dtype=np.float64)
         if self.target_layer is not None:
-            return [], SetContour(layer=self.target_layer, points=pts, closed=self.closed, keep_edits=self.keep_edits)
+            return [], SetContour(layer=self.target_layer, points=pts, closed=self.closed, keep_edits=self.keep_edits,
+                                  holes=self.holes)
         add = AddLayer(id=self.doc.new_layer_id(), index=self.index)
         return [add], SetContour(layer=add.id, points=pts, closed=self.closed)
 
@@ -94,8 +99,12 @@ class StrokePlan:
     closed: bool
     #: where a new layer goes in the back-to-front list (None: in front of all)
     index: int | None = None
-    #: "whole" or "stretch" for a redraw of an existing part, None otherwise
+    #: "whole" or "stretch" for a redraw of an existing part, "hole" for a hole cut into it,
+    #: None otherwise
     redraw: str | None = None
+    #: the target's holes after the stroke, each (n_i, 2) float64 (a redraw keeps those still
+    #: inside the new outline, a cut adds the stroke)
+    holes: tuple = ()
     #: what the person should be told besides the result (drawn behind whom, made free)
     notes: tuple[str, ...] = ()
     #: why nothing is done (the rest is then meaningless)
@@ -130,25 +139,63 @@ def closes(points, params) -> bool | None:
         return None
 
 
+def _region(P):
+    """A shapely polygon of the ring P (n, 2), or None when it encloses no valid area."""
+    try:
+        return guard.polygon(P, "the stroke")
+    except SketchforgeError:
+        return None
+
+
+def _holes_inside(layer, outline) -> tuple[tuple, int]:
+    """(the layer's holes that lie inside the new ``outline`` (n, 2), how many were dropped)."""
+    if not layer.holes:
+        return (), 0
+    region = _region(outline)
+    kept = tuple(h for h in layer.holes if region is not None and (r := _region(h)) is not None and region.contains(r))
+    return kept, len(layer.holes) - len(kept)
+
+
+def _dropped_note(n: int) -> tuple[str, ...]:
+    return (f"{n} hole{'s' * (n != 1)} outside the new outline {'were' if n != 1 else 'was'} dropped",) if n else ()
+
+
 def plan_stroke(doc, points, kind: str = "front", selected: str | None = None, splice_tol: float = 0.0) -> StrokePlan:
     """Where a finished stroke goes.
 
     points : (n, 2) float64. kind : "front" (a new part in front of all), "behind" (a new part
-    under the backmost part it overlaps, or at the very back) or "redraw" (the selected part's
-    whole outline). A "front" stroke that starts and ends within ``splice_tol`` of the selected
-    part's outline redraws that stretch; one with an empty layer selected fills it. A new part
-    is closed when its ends meet, and also when its open junction touches no part."""
+    under the backmost part it overlaps, or at the very back), "redraw" (the selected part's
+    whole outline) or "hole" (a closed stroke inside the selected part cuts a hole in it: its
+    contour is set again with the same outline and one more hole, sculpt edits kept). A
+    "front" stroke that starts and ends within ``splice_tol`` of the selected part's outline
+    redraws that stretch; one with an empty layer selected fills it. A redraw keeps the holes
+    that still lie inside the new outline. A new part is closed when its ends meet, and also
+    when its open junction touches no part."""
     pts = np.asarray(points, dtype=np.float64).reshape(-1, 2)
     layer = doc.layer(selected) if selected in doc.layer_ids() else None
+    if kind == "hole":
+        if layer is None or layer.points is None:
+            return StrokePlan(None, pts, False, refusal="Alt + drag cuts a hole in the selected part: select a part first (click it)")
+        outline = layer_outlines(doc)[doc.index_of(layer.id)]
+        region, cut = _region(outline if outline is not None else layer.points), _region(pts)
+        if cut is None:
+            return StrokePlan(None, pts, False, refusal="the hole stroke encloses no area: draw a closed loop inside the part")
+        if region is None or not region.contains(cut):
+            return StrokePlan(None, pts, False, refusal=f"draw the hole inside “{layer.name}”, away from its outline")
+        return StrokePlan(layer.id, np.asarray(layer.points), bool(layer.closed), redraw="hole", holes=layer.holes + (pts,))
     if kind == "redraw":
         if layer is None:
             return StrokePlan(None, pts, False, refusal="Ctrl + drag redraws the selected part's outline: select a part first (click it)")
         c = closes(pts, layer.params)
-        return StrokePlan(layer.id, pts, layer.closed if c is None else c, redraw="whole")
+        holes, dropped = _holes_inside(layer, pts)
+        return StrokePlan(layer.id, pts, layer.closed if c is None else c, redraw="whole", holes=holes,
+                          notes=_dropped_note(dropped))
     if kind == "front" and layer is not None and layer.points is not None:
         spliced = splice_outline(layer.points, is_free(layer), pts, splice_tol)
         if spliced is not None:
-            return StrokePlan(layer.id, spliced, bool(layer.closed), redraw="stretch")
+            holes, dropped = _holes_inside(layer, spliced)
+            return StrokePlan(layer.id, spliced, bool(layer.closed), redraw="stretch", holes=holes,
+                              notes=_dropped_note(dropped))
     target = layer.id if kind == "front" and layer is not None and layer.points is None else None
     outlines = layer_outlines(doc)
     notes = []

@@ -18,7 +18,7 @@ from sketchforge.geometry import guard
 from sketchforge.geometry.contour import format_point
 
 from .errors import AttachmentError
-from .sheet import Sheet, ccw_triangles, has_directed_edge
+from .sheet import Sheet, ccw_triangles, has_directed_edge, oriented_loop
 
 
 def rbf_heights(xy: np.ndarray, z: np.ndarray, query: np.ndarray, neighbors: int = 24) -> np.ndarray:
@@ -80,6 +80,8 @@ def insert_chains(sheet: Sheet, chains_xy: list[np.ndarray], names: list[str], o
     # Drop interior vertices closer than ~half an edge to a junction: they would make slivers.
     on_boundary = np.zeros(sheet.n, bool)
     on_boundary[sheet.boundary] = True
+    for hole in sheet.holes:
+        on_boundary[hole] = True
     zone = shapely.union_all([ln.buffer(0.55 * h) for ln in lines])
     near = shapely.contains_xy(zone, sheet.xy[:, 0], sheet.xy[:, 1]) & ~on_boundary
     kept = np.flatnonzero(~near)
@@ -87,7 +89,8 @@ def insert_chains(sheet: Sheet, chains_xy: list[np.ndarray], names: list[str], o
     new_index[kept] = np.arange(len(kept))
 
     pts = [sheet.xy[kept]]
-    segs = [np.c_[new_index[sheet.boundary], np.roll(new_index[sheet.boundary], -1)]]
+    rims = [sheet.boundary, *sheet.holes]  # the holes are kept as constrained loops too
+    segs = [np.c_[new_index[r], np.roll(new_index[r], -1)] for r in rims]
     chains = []
     start = len(kept)
     for c in chains_xy:
@@ -102,8 +105,9 @@ def insert_chains(sheet: Sheet, chains_xy: list[np.ndarray], names: list[str], o
     # Who each vertex and segment of the graph belongs to, to name the culprit: chain c >= 0,
     # the outline (-1), an interior vertex of the lower layer (-2).
     part = np.r_[np.full(len(kept), -2), np.repeat(np.arange(len(chains_xy)), [len(c) for c in chains_xy])]
-    part[new_index[sheet.boundary]] = -1
-    seg_part = np.r_[np.full(len(sheet.boundary), -1),
+    for r in rims:
+        part[new_index[r]] = -1
+    seg_part = np.r_[np.full(sum(len(r) for r in rims), -1),
                      np.repeat(np.arange(len(chains_xy)), [len(c) - 1 for c in chains_xy])]
     # Triangle's behaviour on crossing segments or duplicate vertices is undefined (it
     # segfaults), so the graph is checked first and what is wrong is reported with its owner.
@@ -122,6 +126,11 @@ def insert_chains(sheet: Sheet, chains_xy: list[np.ndarray], names: list[str], o
         i = int(np.argmax(index != np.arange(len(P))))  # the first point that merged into an earlier one
         j = int(np.argmax(index == index[i]))  # that earlier point
         raise AttachmentError(_culprit("merge", part[j], part[i], P[j], sheet.name, chain_names, guard.tolerance(P)))
+    if sheet.holes:
+        # Triangle eats the triangles around one point strictly inside each hole.
+        data["holes"] = guard.finite(
+            [guard.polygon(sheet.xy[r], f"a hole of layer '{sheet.name}'").representative_point().coords[0]
+             for r in sheet.holes], (len(sheet.holes), 2), "the hole points")
     # 'p': constrained Delaunay of the given points and segments, no quality refinement, so no
     # vertex is added (the segments were checked not to cross, no vertex lies on a segment).
     out = triangle.triangulate(data, "pQ")
@@ -137,8 +146,9 @@ def insert_chains(sheet: Sheet, chains_xy: list[np.ndarray], names: list[str], o
     boundary = new_index[sheet.boundary]
     if not has_directed_edge(F, boundary[0], boundary[1]):
         boundary = boundary[::-1].copy()
+    holes = tuple(oriented_loop(F, new_index[r]) for r in sheet.holes)
     return sheet.evolve(
-        xy=P, z=z, F=F, boundary=boundary, junction=new_index[sheet.junction], chains=tuple(chains)
+        xy=P, z=z, F=F, boundary=boundary, junction=new_index[sheet.junction], chains=tuple(chains), holes=holes
     )
 
 

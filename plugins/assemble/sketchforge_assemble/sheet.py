@@ -43,6 +43,9 @@ class Sheet:
         of the attachments that created them.
     h : float
         Median edge length, the sheet's resolution.
+    holes : tuple of (k_i,) int64
+        Hole loops, each ordered like ``boundary`` (``(hole[i], hole[i+1])`` is an edge of
+        ``F`` as ``F`` orients it): the rim is bridged front to back along them too.
     """
 
     layer: int
@@ -54,15 +57,20 @@ class Sheet:
     junction: np.ndarray
     h: float
     chains: tuple = field(default_factory=tuple)
+    holes: tuple = field(default_factory=tuple)
 
     @property
     def n(self) -> int:
         return int(len(self.xy))
 
     def polygon(self) -> shapely.Polygon:
-        """The layer's region Ω in the drawing plane (made valid by :func:`guard.polygon` if
-        its outline touches itself)."""
-        return guard.polygon(self.xy[self.boundary], f"the outline of layer '{self.name}'")
+        """The layer's region Ω in the drawing plane, holes cut out (made valid by
+        :func:`guard.polygon` if its outline touches itself)."""
+        outer = guard.polygon(self.xy[self.boundary], f"the outline of layer '{self.name}'")
+        if not self.holes:
+            return outer
+        cut = shapely.union_all([guard.polygon(self.xy[h], f"a hole of layer '{self.name}'") for h in self.holes])
+        return guard.geometry(shapely.difference(outer, cut), f"the outline of layer '{self.name}'")
 
     def evolve(self, **changes) -> "Sheet":
         return replace(self, **changes)
@@ -127,9 +135,17 @@ def sheet_from_mesh(layer: int, name: str, mesh: Mesh, free: bool) -> Sheet:
     junction = np.zeros(0, np.int64) if free else np.array(mesh.junction, dtype=np.int64)
     if len(junction) < 2:
         junction = np.zeros(0, np.int64)
+    holes = tuple(oriented_loop(F, np.array(r, dtype=np.int64)) for r in mesh.holes)
     E = directed_edges(F)
     h = float(np.median(np.linalg.norm(xy[E[:, 0]] - xy[E[:, 1]], axis=1)))
-    return Sheet(layer, name, xy, z, F, boundary, junction, h)
+    return Sheet(layer, name, xy, z, F, boundary, junction, h, holes=holes)
+
+
+def oriented_loop(F: np.ndarray, loop: np.ndarray) -> np.ndarray:
+    """``loop`` (k,) int64, reversed if needed so that its first edge is walked by F (m, 3)."""
+    if len(loop) >= 2 and not has_directed_edge(F, loop[0], loop[1]):
+        return loop[::-1].copy()
+    return loop
 
 
 def interior_on_left(sheet: Sheet) -> bool:

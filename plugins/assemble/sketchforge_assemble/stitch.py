@@ -133,6 +133,10 @@ def build_mesh(sheets: list[Sheet], attachments: list[Attachment], delta: list[n
             jpos[s.junction] = np.arange(len(s.junction))
             is_j = jset[a_] & jset[b_] & (np.abs(jpos[a_] - jpos[b_]) == 1)
             a_, b_ = a_[~is_j], b_[~is_j]
+        # Every hole's rim is bridged the same way: its loop runs with the face on its left
+        # like the outline, so the same two triangles per edge close it, outward-facing.
+        for hole in s.holes:
+            a_, b_ = np.r_[a_, hole], np.r_[b_, np.roll(hole, -1)]
         af, bf, ab, bb = front[i][a_], front[i][b_], back[i][a_], back[i][b_]
         bridges.append(np.c_[bf, af, ab])
         bridges.append(np.c_[bf, ab, bb])

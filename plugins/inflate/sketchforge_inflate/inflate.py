@@ -27,7 +27,7 @@ from typing import Mapping
 
 import numpy as np
 
-from sketchforge.geometry.contour import prepare_outline, resample_outline
+from sketchforge.geometry.contour import prepare_holes, prepare_outline, resample_outline, signed_area
 from sketchforge.geometry.fairing import FairingSolver
 from sketchforge.geometry.inflate_params import DEFAULT_INFLATE_PARAMS, check_inflate_params
 from sketchforge.geometry.inflation import inflate_heights
@@ -44,7 +44,8 @@ validate_params = check_inflate_params
 SMOOTHING_UNITS_PER_SIZE = 32.0
 
 
-def inflate_stroke(points, closed: bool = False, params: Mapping | None = None, *, max_vertices: int = MAX_VERTICES) -> Mesh:
+def inflate_stroke(points, closed: bool = False, params: Mapping | None = None, *, max_vertices: int = MAX_VERTICES,
+                   holes=None) -> Mesh:
     """Turn a drawn stroke into a layer's front surface.
 
     Parameters
@@ -59,6 +60,10 @@ def inflate_stroke(points, closed: bool = False, params: Mapping | None = None, 
         take :data:`DEFAULT_PARAMS`.
     max_vertices : int
         Size limit checked before triangulating.
+    holes : sequence of (n_i, 2) array-like of float, optional
+        Inner rings cut out of the part, any orientation (see
+        :func:`~sketchforge.geometry.contour.prepare_holes` for what is refused). Every ring
+        keeps height 0, in the inflation and in the fairing.
 
     Returns
     -------
@@ -66,7 +71,7 @@ def inflate_stroke(points, closed: bool = False, params: Mapping | None = None, 
         V (n, 3) float64 with z >= 0 and z = 0 exactly on the boundary; F (m, 3) int64
         counter-clockwise from +z; ``boundary`` (k,) the counter-clockwise boundary loop
         (vertices 0..k-1); ``junction`` the Γ_conn vertices in boundary order, both ends
-        included, empty for closed outlines.
+        included, empty for closed outlines; ``holes`` each hole's clockwise loop.
 
     Raises
     ------
@@ -76,15 +81,21 @@ def inflate_stroke(points, closed: bool = False, params: Mapping | None = None, 
     outline = prepare_outline(points, p["resolution"], closed=bool(closed))
     check_vertex_budget(outline.area, outline.perimeter, outline.edge_length, max_vertices)
     contour = resample_outline(outline)
-    tri = triangulate_polygon(contour.points, contour.edge_length, MIN_ANGLE)
+    rings = prepare_holes(holes, contour)
+    tri = triangulate_polygon(contour.points, contour.edge_length, MIN_ANGLE, holes=rings)
+    rim = np.concatenate([tri.boundary, *tri.holes]) if rings else tri.boundary
     L, M = laplacian_and_mass(tri.V2, tri.F)
-    z = inflate_heights(tri.V2, tri.F, tri.boundary, p["inflation"], L, M)
+    z = inflate_heights(tri.V2, tri.F, rim, p["inflation"], L, M)
     if p["smoothing"] > 0.0 and p["inflation"] > 0.0:
-        size = 2.0 * outline.area / outline.perimeter
-        z = FairingSolver(L, M, tri.boundary, p["smoothing"], size / SMOOTHING_UNITS_PER_SIZE).solve(z)
+        # Without holes this is the size the smoothing unit was tuned on; with holes the
+        # surface's own area and rim length make a ring's band as smooth as a blob its width.
+        area = outline.area - sum(abs(signed_area(r)) for r in rings)
+        perimeter = outline.perimeter + sum(float(np.sum(np.linalg.norm(r - np.roll(r, 1, axis=0), axis=1))) for r in rings)
+        size = 2.0 * area / perimeter
+        z = FairingSolver(L, M, rim, p["smoothing"], size / SMOOTHING_UNITS_PER_SIZE).solve(z)
         # The biharmonic fairing has no maximum principle: it can undershoot by a hair next to
         # the rim. Heights are >= 0 by contract (the boundary stays exactly 0: DirichletSolver
         # copies fixed values).
         z = np.maximum(z, 0.0)
     V = np.column_stack([tri.V2, z])
-    return Mesh(V, tri.F, tri.boundary, contour.junction)
+    return Mesh(V, tri.F, tri.boundary, contour.junction, tri.holes)

@@ -8,5 +8,5 @@ from sketchforge_inflate.inflate import inflate_stroke
 
 
 @hookimpl
-def sketchforge_inflate(points, closed, params):
-    return inflate_stroke(points, closed, params)
+def sketchforge_inflate(points, closed, params, holes):
+    return inflate_stroke(points, closed, params, holes=holes)

@@ -13,6 +13,7 @@ from __future__ import annotations
 import numpy as np
 import shapely
 
+from sketchforge.geometry import guard
 from sketchforge.geometry.band import band
 from sketchforge.geometry.isophotes import isophotes, isovalue_at, select_isophote
 
@@ -53,4 +54,7 @@ def band_around(ld: LayerData, isophote: shapely.LineString, radius: float):
     SculptError
         For a radius that is not a positive number.
     """
-    return band(np.asarray(isophote.coords), radius, np.asarray(ld.outline.exterior.coords))
+    region = band(np.asarray(isophote.coords), radius, np.asarray(ld.outline.exterior.coords))
+    if len(ld.outline.interiors):  # a holed layer: the band stops at the holes' rims too
+        region = guard.geometry(region.intersection(ld.outline), "the band")
+    return region

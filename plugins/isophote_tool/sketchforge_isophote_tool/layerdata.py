@@ -90,7 +90,7 @@ class PlanarData:
 
     def rim_distance(self, P: np.ndarray) -> np.ndarray:
         """Distance (k,) from points P (k, 2) to the outline (see :func:`distance_to_ring`)."""
-        return distance_to_ring(np.asarray(P, np.float64).reshape(-1, 2), np.asarray(self.outline.exterior.coords))
+        return distance_to_rim(np.asarray(P, np.float64).reshape(-1, 2), self.outline)
 
     def margin_at(self, P: np.ndarray) -> np.ndarray:
         """The rim margin (k,) at points P (k, 2) (see :func:`local_margin`)."""
@@ -184,11 +184,26 @@ def distance_to_ring(P: np.ndarray, ring: np.ndarray, k: int = 8) -> np.ndarray:
     return np.linalg.norm(rel - t[..., None] * D, axis=2).min(axis=1)
 
 
+def distance_to_rim(P: np.ndarray, outline) -> np.ndarray:
+    """Distance (n,) from points P (n, 2) to the nearest ring of ``outline`` (a shapely
+    Polygon): its exterior or any hole; every ring is rim, where the surface meets z = 0."""
+    d = distance_to_ring(P, np.asarray(outline.exterior.coords))
+    for hole in outline.interiors:
+        d = np.minimum(d, distance_to_ring(P, np.asarray(hole.coords)))
+    return d
+
+
 def outline_polygon(mesh: Mesh):
-    """The layer outline as a valid, counter-clockwise shapely Polygon."""
+    """The layer outline as a valid, counter-clockwise shapely Polygon, holes cut out."""
     poly = guard.polygon(mesh.V[mesh.boundary, :2], "the layer's outline")
     if poly.geom_type != "Polygon":
         poly = max(getattr(poly, "geoms", [poly]), key=lambda g: g.area)
+    if mesh.holes:
+        shell = np.asarray(poly.exterior.coords)
+        poly = shapely.Polygon(shell, [mesh.V[h, :2] for h in mesh.holes])
+        poly = guard.geometry(poly, "the layer's outline")
+        if poly.geom_type != "Polygon":
+            poly = max(getattr(poly, "geoms", [poly]), key=lambda g: g.area)
     return shapely.geometry.polygon.orient(poly, 1.0)
 
 
@@ -202,8 +217,8 @@ def _planar(mesh: Mesh) -> PlanarData:
     Gp, Gq = gradient_operators(V2, F)  # = the vertex-normal slopes, linear in z
     outline = outline_polygon(mesh)
     is_contour = np.zeros(len(V2), bool)
-    is_contour[mesh.boundary] = True
-    d_rim = distance_to_ring(V2, np.asarray(outline.exterior.coords))
+    is_contour[mesh.rims] = True
+    d_rim = distance_to_rim(V2, outline)
     d_rim[is_contour] = 0.0
     size = 2.0 * outline.area / outline.length
     margin = max(RIM_EDGES * h, RIM_SIZE * size)
