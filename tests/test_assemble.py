@@ -383,3 +383,19 @@ def test_intersection_counter_on_hand_made_triangles():
     assert len(dg.intersecting_pairs(V, F, np.array([0, 0, 1]))) == 0  # same group: not counted
     F2 = np.array([[0, 1, 2], [0, 4, 5]])  # shares a vertex: neighbours are skipped
     assert len(dg.intersecting_pairs(V, F2)) == 0
+
+
+def test_a_loop_of_attachments_is_a_clear_error_or_a_free_part():
+    # two parts, each with its junction (the closing chord) inside the other: A glued behind
+    # B, B glued in front of A, which would glue a sleeve onto itself
+    a = _inflate(_arc(-0.3, 0.0, 0.5, 40, 320), False)
+    b = _inflate(_arc(0.3, 0.0, 0.5, 220, 500), False)
+    assert a.junction.size and b.junction.size
+    with pytest.raises(AttachmentError, match=r"loop \('b' -> 'a' -> 'b'") as err:
+        assemble_detailed([a, b], names=["a", "b"])
+    assert isinstance(err.value, SketchforgeError)
+    res = assemble_detailed([a, b], params={"on_bad_junction": "free"}, names=["a", "b"])
+    assert len(res.attachments) == 1 and len(res.warnings) == 1 and "loop" in res.warnings[0]
+    _, count = dg.edge_counts(res.mesh.F)
+    assert np.all(count == 2) and dg.euler_characteristics(res.mesh.F) == [2]
+    assert dg.is_consistently_oriented(res.mesh.F) and dg.signed_volume(res.mesh.V, res.mesh.F) > 0
