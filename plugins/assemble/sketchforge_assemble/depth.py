@@ -639,7 +639,8 @@ def _active_set(P, q, Aeq, beq, Ain, bin_, warm, tol, max_iter, memory_budget=ME
 
 
 def settle_free_parts(x, Ain, bin_, offsets, free, pad: float = 0.0):
-    """Lower each free part rigidly onto the layers below it, after the solve.
+    """Lower each free part rigidly onto the layers below it (or raise one that has layers
+    only in front of it onto them), after the solve.
 
     Why. The rest depth that the mass term pulls towards (see :func:`build_problem`) stacks
     the layers from the *rest* depths of the layers below, but those layers move in the solve
@@ -682,7 +683,8 @@ def settle_free_parts(x, Ain, bin_, offsets, free, pad: float = 0.0):
         A copy with the free parts lowered.
     shift : dict int -> float
         How far each free part that has a layer below it was lowered (0 when its tightest row
-        already has at most ``pad`` slack). Parts over nothing are left where they are.
+        already has at most ``pad`` slack); a free part with layers only in front of it is
+        raised onto them instead (a negative shift). Parts overlapping nothing stay put.
     """
     x = np.array(x, dtype=np.float64, copy=True)
     shift: dict[int, float] = {}
@@ -693,10 +695,19 @@ def settle_free_parts(x, Ain, bin_, offsets, free, pad: float = 0.0):
         a, b = int(offsets[f]), int(offsets[f + 1])
         d = np.asarray(Ain[:, a:b].sum(axis=1)).ravel()  # +1 nearer, -1 farther, 0 not involved
         below = d > 0.5
-        if not below.any():
+        if below.any():
+            slack = Ain[below] @ x - bin_[below]
+            s = max(0.0, float(np.min((slack - pad) / d[below])))
+            x[a:b] -= s
+            shift[f] = s
             continue
-        slack = Ain[below] @ x - bin_[below]
-        s = max(0.0, float(np.min((slack - pad) / d[below])))
-        x[a:b] -= s
-        shift[f] = s
+        # Nothing below: a part drawn behind a layer and over nothing else rises onto that
+        # layer's back face from behind instead of staying at the drawing plane, far behind a
+        # layer that the glue moved forwards (the same rows, their signs flipped).
+        above = d < -0.5
+        if above.any():
+            slack = Ain[above] @ x - bin_[above]
+            s = max(0.0, float(np.min((slack - pad) / -d[above])))
+            x[a:b] += s
+            shift[f] = -s
     return x, shift

@@ -34,8 +34,10 @@ def random_creature(seed: int, resolution: float = 0.03) -> dict:
     limbs (some behind the body, some in front) and an eye on the head.
 
     Every part is an open stroke whose closing segment (its junction) lies inside the body at
-    0.7 of its radius, so it attaches; limbs are spread at least 45 degrees apart around the body
-    so that no two junctions touch. Deterministic for a given ``seed``.
+    0.7 of its radius, so it attaches; limbs are spread about 40 degrees apart around the body
+    and one that would put its junction over another part (or cover another part's
+    junction) is left out, so a creature may have fewer limbs than drawn (at least 2 in
+    practice). Deterministic for a given ``seed``.
     """
     import numpy as np
 
@@ -65,12 +67,23 @@ def random_creature(seed: int, resolution: float = 0.03) -> dict:
     a = np.linspace(out - np.radians(120), out + np.radians(120), 50)
     layer("head", np.c_[c[0] + r * np.cos(a), c[1] + r * np.sin(a)], False)
 
-    # limbs: capsules pointing outwards from inside the body, spread around its lower half
+    # limbs: capsules pointing outwards from inside the body, spread around its lower half; a
+    # candidate whose junction would lie over another part (or whose outline would cover
+    # another part's junction) is skipped, so every junction lies on the body alone
+    import shapely
+
+    head_poly = shapely.Polygon(np.c_[c[0] + r * np.cos(a), c[1] + r * np.sin(a)])
+    taken_polys, taken_lines = [head_poly], [shapely.LineString([head_poly.exterior.coords[0],
+                                                                 head_poly.exterior.coords[-2]])]
     n_limbs = int(rng.integers(2, 7))
-    free = np.radians(np.arange(150, 391, 45.0))  # 150..390 degrees, 45 apart: away from the head
-    angles = np.sort(rng.choice(free, size=n_limbs, replace=False)) + rng.uniform(-0.1, 0.1, n_limbs)
+    slots = np.radians(np.arange(150, 391, 40.0))  # 150..390 degrees: away from the head
+    order = rng.permutation(len(slots))
     behind = []
-    for k, theta in enumerate(angles):
+    k = 0
+    for slot in order:
+        if k == n_limbs:
+            break
+        theta = slots[slot] + rng.uniform(-0.1, 0.1)
         p = on_body(theta, 0.7)
         d = np.array([np.cos(theta), np.sin(theta)])
         nrm = np.array([-d[1], d[0]])
@@ -82,8 +95,15 @@ def random_creature(seed: int, resolution: float = 0.03) -> dict:
         cap = np.linspace(np.pi / 2, -np.pi / 2, 12)[1:-1]
         end = tip + w * (np.cos(cap)[:, None] * d + np.sin(cap)[:, None] * nrm)
         side2 = p - w * nrm + s[::-1] * (tip - p)
+        pts = np.vstack([side1, end, side2])
+        poly, line = shapely.Polygon(pts), shapely.LineString([pts[-1], pts[0]])
+        if any(poly.distance(t) < 0.05 for t in taken_lines) or any(line.distance(t) < 0.05 for t in taken_polys):
+            continue
+        taken_polys.append(poly)
+        taken_lines.append(line)
         lid = f"limb_{k}"
-        layer(lid, np.vstack([side1, end, side2]), False)
+        k += 1
+        layer(lid, pts, False)
         if rng.random() < 0.5:
             behind.append(lid)
 
