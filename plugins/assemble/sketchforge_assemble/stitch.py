@@ -143,11 +143,9 @@ def build_mesh(sheets: list[Sheet], attachments: list[Attachment], delta: list[n
         # lip the other way round.
         P = plus_chain[j]
         a, b = lip[:-1], lip[1:]
-        lipward = np.zeros(len(a), bool)
-        E = directed_edges(faces)
-        key = set(zip(E[:, 0].tolist(), E[:, 1].tolist()))
         k = len(a) // 2  # an edge of two interior vertices when there is one
-        lipward = (int(a[k]), int(b[k])) in key
+        E = directed_edges(faces)
+        lipward = bool(np.any((E[:, 0] == a[k]) & (E[:, 1] == b[k])))
         if lipward:  # the face walks a -> b
             strips.append((np.c_[b, a, P[:-1]], at.upper))
             strips.append((np.c_[b, P[:-1], P[1:]], at.upper))
