@@ -65,12 +65,17 @@ def random_creature(seed: int, resolution: float = 0.03) -> dict:
     r = rng.uniform(0.3, 0.42)
     out = np.arctan2(c[1] / ay**2, c[0] / ax**2)  # outward normal of the ellipse at c
     a = np.linspace(out - np.radians(120), out + np.radians(120), 50)
+    import shapely
+
+    inner = shapely.Polygon(np.c_[ax * np.cos(t), ay * np.sin(t)]).buffer(-0.05)
+    while not inner.contains(shapely.LineString([c + r * np.array([np.cos(a[0]), np.sin(a[0])]),
+                                                 c + r * np.array([np.cos(a[-1]), np.sin(a[-1])])])):
+        r *= 0.9  # a head so large that its junction would leave the body
     layer("head", np.c_[c[0] + r * np.cos(a), c[1] + r * np.sin(a)], False)
 
     # limbs: capsules pointing outwards from inside the body, spread around its lower half; a
     # candidate whose junction would lie over another part (or whose outline would cover
     # another part's junction) is skipped, so every junction lies on the body alone
-    import shapely
 
     head_poly = shapely.Polygon(np.c_[c[0] + r * np.cos(a), c[1] + r * np.sin(a)])
     taken_polys, taken_lines = [head_poly], [shapely.LineString([head_poly.exterior.coords[0],
