@@ -53,6 +53,75 @@ def run(name, doc, repeats=5):
           f"intersecting triangle pairs between layers {len(inter)}")
 
 
+def crowd(n_creatures: int, resolution: float = 0.03) -> dict:
+    """Random creatures side by side (2.6 apart in x), one document: layers grow with the crowd."""
+    from sketchforge_assemble.testing import random_creature
+
+    journal = []
+    for k in range(n_creatures):
+        doc = random_creature(k, resolution)
+        for c in doc["journal"]:
+            c = dict(c)
+            for key in ("id", "layer"):
+                if key in c:
+                    c[key] = f"c{k}_{c[key]}"
+            if "points" in c:
+                c["points"] = (np.asarray(c["points"]) + [2.6 * k, 0.0]).tolist()
+            if c["command"] == "move_layer":
+                continue  # keep each creature's own order: drawn in sequence, back to front
+            journal.append(c)
+    return dict(random_creature(0), journal=journal)
+
+
+def scaling(max_vertices: int, max_layers: int) -> None:
+    """Cost against layer vertices (the example creature at finer resolutions) and against
+    layer count (crowds of random creatures), with the fitted growth exponent."""
+
+    def fit(xs, ts):
+        return float(np.polyfit(np.log(xs), np.log(ts), 1)[0]) if len(xs) > 1 else float("nan")
+
+    base = json.loads((ROOT / "examples" / "creature.json").read_text())
+    xs, ts = [], []
+    for res in (0.03, 0.021, 0.015, 0.0106, 0.0075):
+        doc = json.loads(json.dumps(base))
+        for c in doc["journal"]:
+            if c["command"] == "set_inflate_params":
+                c["params"] = dict(c["params"], resolution=res * (0.5 if c["layer"] == "eye" else 1.0))
+        _, meshes, closed = meshes_from_journal(doc)
+        n = sum(m.n_vertices for m in meshes)
+        if n > max_vertices:
+            break
+        t = time.perf_counter()
+        assemble_detailed(meshes, closed)
+        xs.append(n)
+        ts.append(time.perf_counter() - t)
+        print(f"  8 layers, {n:6d} layer vertices: {ts[-1]:.2f} s", flush=True)
+    print(f"  cost ~ vertices^{fit(xs, ts):.2f}")
+    xs, ts = [], []
+    for k in (1, 2, 3, 4, 5, 6):
+        _, meshes, closed = meshes_from_journal(crowd(k))
+        if len(meshes) > max_layers:
+            break
+        t = time.perf_counter()
+        assemble_detailed(meshes, closed)
+        xs.append(len(meshes))
+        ts.append(time.perf_counter() - t)
+        print(f"  {len(meshes):2d} layers, {sum(m.n_vertices for m in meshes):6d} layer vertices: {ts[-1]:.2f} s",
+              flush=True)
+    print(f"  cost ~ layers^{fit(xs, ts):.2f} (vertices grow with the layers)")
+
+
 if __name__ == "__main__":
+    import argparse
+
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--scaling", action="store_true", help="also print cost against vertices and layers")
+    ap.add_argument("--max-vertices", type=int, default=100_000)
+    ap.add_argument("--max-layers", type=int, default=30)
+    args = ap.parse_args()
     run("3-layer creature (target <= 0.5 s)", three_layer_doc())
-    run("8-layer creature (target <= 1 s)", json.loads((ROOT / "examples" / "creature.json").read_text()))
+    run("8-layer creature (target <= 1 s; issue 12: <= 0.3 s)",
+        json.loads((ROOT / "examples" / "creature.json").read_text()))
+    if args.scaling:
+        print("scaling (issue 12: up to 100k vertices and 30 layers)")
+        scaling(args.max_vertices, args.max_layers)

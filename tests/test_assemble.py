@@ -383,3 +383,47 @@ def test_intersection_counter_on_hand_made_triangles():
     assert len(dg.intersecting_pairs(V, F, np.array([0, 0, 1]))) == 0  # same group: not counted
     F2 = np.array([[0, 1, 2], [0, 4, 5]])  # shares a vertex: neighbours are skipped
     assert len(dg.intersecting_pairs(V, F2)) == 0
+
+
+def test_a_loop_of_attachments_is_a_clear_error_or_a_free_part():
+    # two parts, each with its junction (the closing chord) inside the other: A glued behind
+    # B, B glued in front of A, which would glue a sleeve onto itself
+    a = _inflate(_arc(-0.3, 0.0, 0.5, 40, 320), False)
+    b = _inflate(_arc(0.3, 0.0, 0.5, 220, 500), False)
+    assert a.junction.size and b.junction.size
+    with pytest.raises(AttachmentError, match=r"loop \('b' -> 'a' -> 'b'") as err:
+        assemble_detailed([a, b], names=["a", "b"])
+    assert isinstance(err.value, SketchforgeError)
+    res = assemble_detailed([a, b], params={"on_bad_junction": "free"}, names=["a", "b"])
+    assert len(res.attachments) == 1 and len(res.warnings) == 1 and "loop" in res.warnings[0]
+    _, count = dg.edge_counts(res.mesh.F)
+    assert np.all(count == 2) and dg.euler_characteristics(res.mesh.F) == [2]
+    assert dg.is_consistently_oriented(res.mesh.F) and dg.signed_volume(res.mesh.V, res.mesh.F) > 0
+
+
+def test_free_part_behind_a_layer_settles_onto_its_back():
+    # A disc drawn behind the creature's head, where the head reaches past the body: only the
+    # head overlaps it, from the front. The head is glued onto the body's front, far from the
+    # drawing plane, so the disc would stay behind it at its rest depth; it must rise to sit
+    # just behind the head, like a sticker on the head's back.
+    layers, meshes, closed = _inflated("creature")
+    ids = [layer.id for layer in layers]
+    head, body = meshes[ids.index("head")], meshes[ids.index("body")]
+    spot = shapely.Polygon(head.V[head.boundary, :2]).difference(
+        shapely.Polygon(body.V[body.boundary, :2]).buffer(0.05)).buffer(-0.05)
+    c = spot.representative_point()
+    disc = _inflate(_ellipse(c.x, c.y, 0.04, 0.04, n=16), True, res=0.015)
+    res = assemble_detailed([disc] + list(meshes), [True] + list(closed), names=["disc"] + ids)
+    assert res.solver["free_shift"][0] < 0  # raised
+    V, F = res.mesh.V, res.mesh.F
+    front = V[np.unique(F[(res.face_layer == 0) & (res.face_kind == 0)])]
+    back = res.face_layer == 1 + ids.index("head")
+    Vh = V[np.unique(F[back & (res.face_kind == 1)])]
+    # clearance: the head's back face above each disc front vertex (nearest head back vertex)
+    d = np.linalg.norm(front[:, None, :2] - Vh[None, :, :2], axis=2)
+    above = Vh[np.argmin(d, axis=1), 2] - front[:, 2]
+    gap = res.solver["gap"]
+    print(f"disc clearance behind the head {np.min(above):.4f} (gap {gap:.4f}), "
+          f"raised by {-res.solver['free_shift'][0]:.3f}")
+    assert res.max_violation <= 0.0
+    assert -0.5 * gap <= np.min(above) <= 0.02  # nearest vertices, not the exact point above

@@ -124,4 +124,40 @@ def find_attachments(sheets: list[Sheet], names: list[str], on_bad_junction: str
             continue
         if problem is not None:
             bad_junction(problem)
-    return attachments, warnings
+    return _break_loops(attachments, names, bad_junction), warnings
+
+
+def _break_loops(attachments: list[Attachment], names: list[str], bad_junction) -> list[Attachment]:
+    """The attachments without any that closes a loop.
+
+    Every part has at most one junction, so each attachment is an edge part -> layer and a
+    group of attached parts is a tree unless some edges close a cycle (a part glued onto a
+    layer whose own junction lies on that part, directly or through others). A cycle would
+    glue a sleeve onto itself: the result is no longer a sphere per group (a torus, or a
+    non-manifold mesh), so it is refused by name (``bad_junction`` raises, or frees the part
+    whose attachment closes the loop and records why).
+    """
+    parent: dict[int, int] = {}
+
+    def root(a: int) -> int:
+        while parent.get(a, a) != a:
+            a = parent[a]
+        return a
+
+    onto = {a.upper: a.lower for a in attachments}
+    kept = []
+    for a in attachments:
+        ru, rl = root(a.upper), root(a.lower)
+        if ru == rl:
+            cycle = [a.upper]
+            while onto[cycle[-1]] != a.upper:
+                cycle.append(onto[cycle[-1]])
+            path = " -> ".join(f"'{names[i]}'" for i in cycle + [a.upper])
+            bad_junction(
+                f"the attachments form a loop ({path}: each is glued onto the next); move one of these "
+                f"parts in depth or redraw its junction so that it lies on a layer outside the loop"
+            )
+            continue
+        parent[ru] = rl
+        kept.append(a)
+    return kept

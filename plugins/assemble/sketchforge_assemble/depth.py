@@ -86,7 +86,7 @@ class _Rows:
 
 
 def build_problem(sheets, offsets, front_off, back_off, attachments: list[Attachment], gap: float, reg: float,
-                  stiffness: float = 20.0):
+                  stiffness: float = 20.0, glue_lift=None, springs=None):
     """Assemble the QP of the module docstring.
 
     Parameters
@@ -109,6 +109,14 @@ def build_problem(sheets, offsets, front_off, back_off, attachments: list[Attach
         bump the body's front. (A stiff layer also stays locally planar at the slit, where the
         part folds away from it, so the two piecewise-linear faces do not cross between
         vertices.)
+    glue_lift : list of (c,) float64, optional
+        Per attachment, how far the part's facing junction chain lies off the face below,
+        towards the part (the height of the blended junction's "+" lip and strip, see
+        :mod:`.blend`); default 0.
+    springs : list, optional
+        Per attachment, soft rows ``(part_cols, host_cols, bary, weight, target)`` (sheet-local
+        indices) added to the objective as  weight·(δ_part - Σ bary·δ_host - target)²
+        (:func:`.blend.blend_junctions`).
 
     Returns
     -------
@@ -127,6 +135,23 @@ def build_problem(sheets, offsets, front_off, back_off, attachments: list[Attach
         blocks.append((k * (-L) + w * M).tocsc())
         blocks_m.append(M)
     P = sp.block_diag(blocks, format="csc")
+    q_springs = np.zeros(N)
+    if springs:
+        rows, cols, vals, wts, tgt = [], [], [], [], []
+        m = 0
+        for at, (pc, hc, bary, wt, target) in zip(attachments, springs):
+            k = len(pc)
+            r = np.arange(m, m + k)
+            rows += [r, np.repeat(r, hc.shape[1])]
+            cols += [offsets[at.upper] + pc, (offsets[at.lower] + hc).ravel()]
+            vals += [np.ones(k), -bary.ravel()]
+            wts.append(wt)
+            tgt.append(target)
+            m += k
+        R = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(m, N))
+        wt, target = np.concatenate(wts), np.concatenate(tgt)
+        P = (P + R.T @ sp.diags(wt) @ R).tocsc()
+        q_springs = -(R.T @ (wt * target))
 
     eq, ineq = _Rows(), _Rows()
     glued: dict[tuple[int, int], list[np.ndarray]] = {}
@@ -140,6 +165,8 @@ def build_problem(sheets, offsets, front_off, back_off, attachments: list[Attach
             rhs = front_off[at.lower][c] + back_off[at.upper][j]
         else:  # front chain of the part lies on the back face above
             rhs = -back_off[at.lower][c] - front_off[at.upper][j]
+        if glue_lift is not None:
+            rhs = rhs + (1.0 if at.side == FRONT else -1.0) * glue_lift[a_i]
         eq.add(cols, coefs, rhs)
         key = (min(at.upper, at.lower), max(at.upper, at.lower))
         glued.setdefault(key, [])
@@ -189,7 +216,7 @@ def build_problem(sheets, offsets, front_off, back_off, attachments: list[Attach
         mine = pairs[:, 0] == f
         if mine.any():
             rest[f] = max(0.0, float(np.max(rest[pairs[mine, 1]] + bin_[mine])))
-    q = np.concatenate([-w * blocks_m[i] @ np.full(s.n, rest[i]) for i, s in enumerate(sheets)])
+    q = np.concatenate([-w * blocks_m[i] @ np.full(s.n, rest[i]) for i, s in enumerate(sheets)]) + q_springs
     return P, q, Aeq, beq, Ain, bin_, {"overlapping_pairs": n_pairs, "reg_weight": w, "rest_depth": rest.tolist()}
 
 
@@ -612,7 +639,8 @@ def _active_set(P, q, Aeq, beq, Ain, bin_, warm, tol, max_iter, memory_budget=ME
 
 
 def settle_free_parts(x, Ain, bin_, offsets, free, pad: float = 0.0):
-    """Lower each free part rigidly onto the layers below it, after the solve.
+    """Lower each free part rigidly onto the layers below it (or raise one that has layers
+    only in front of it onto them), after the solve.
 
     Why. The rest depth that the mass term pulls towards (see :func:`build_problem`) stacks
     the layers from the *rest* depths of the layers below, but those layers move in the solve
@@ -655,7 +683,8 @@ def settle_free_parts(x, Ain, bin_, offsets, free, pad: float = 0.0):
         A copy with the free parts lowered.
     shift : dict int -> float
         How far each free part that has a layer below it was lowered (0 when its tightest row
-        already has at most ``pad`` slack). Parts over nothing are left where they are.
+        already has at most ``pad`` slack); a free part with layers only in front of it is
+        raised onto them instead (a negative shift). Parts overlapping nothing stay put.
     """
     x = np.array(x, dtype=np.float64, copy=True)
     shift: dict[int, float] = {}
@@ -666,10 +695,19 @@ def settle_free_parts(x, Ain, bin_, offsets, free, pad: float = 0.0):
         a, b = int(offsets[f]), int(offsets[f + 1])
         d = np.asarray(Ain[:, a:b].sum(axis=1)).ravel()  # +1 nearer, -1 farther, 0 not involved
         below = d > 0.5
-        if not below.any():
+        if below.any():
+            slack = Ain[below] @ x - bin_[below]
+            s = max(0.0, float(np.min((slack - pad) / d[below])))
+            x[a:b] -= s
+            shift[f] = s
             continue
-        slack = Ain[below] @ x - bin_[below]
-        s = max(0.0, float(np.min((slack - pad) / d[below])))
-        x[a:b] -= s
-        shift[f] = s
+        # Nothing below: a part drawn behind a layer and over nothing else rises onto that
+        # layer's back face from behind instead of staying at the drawing plane, far behind a
+        # layer that the glue moved forwards (the same rows, their signs flipped).
+        above = d < -0.5
+        if above.any():
+            slack = Ain[above] @ x - bin_[above]
+            s = max(0.0, float(np.min((slack - pad) / -d[above])))
+            x[a:b] += s
+            shift[f] = -s
     return x, shift

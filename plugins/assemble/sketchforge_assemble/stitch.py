@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from .attach import FRONT, Attachment, lo_chain_index
-from .sheet import Sheet, interior_on_left
+from .sheet import Sheet, directed_edges, interior_on_left
 
 
 def chain_sides(sheet: Sheet, chain: np.ndarray):
@@ -56,7 +56,7 @@ def chain_sides(sheet: Sheet, chain: np.ndarray):
 
 
 def build_mesh(sheets: list[Sheet], attachments: list[Attachment], delta: list[np.ndarray],
-               front_off: list[np.ndarray], back_off: list[np.ndarray]):
+               front_off: list[np.ndarray], back_off: list[np.ndarray], lips=None):
     """The assembled mesh.
 
     Parameters
@@ -68,6 +68,11 @@ def build_mesh(sheets: list[Sheet], attachments: list[Attachment], delta: list[n
         Depth offset of each sheet's vertices.
     front_off, back_off : list of (n_i,) float64
         Front z = δ + front_off, back z = δ - back_off.
+    lips : list of (c,) float64, optional
+        Per attachment, how far the lower face's "+" lip lies off that face towards the part
+        (:func:`.blend.blend_junctions`). With it the "+" lip gets its own vertices and a strip
+        of triangles joins them to the part's chain (a rim bridge along the junction); without
+        it the lip is the part's chain itself.
 
     Returns
     -------
@@ -97,6 +102,10 @@ def build_mesh(sheets: list[Sheet], attachments: list[Attachment], delta: list[n
         ends = sheets[i].junction[[0, -1]]
         remap[back[i][ends]] = front[i][ends]
 
+    extra = []  # (k, 3) rows of lip vertices appended after V
+    strips = []  # (t, 3) strip triangles, with the layer of the part
+    n_v = len(V)
+
     faces_front = [front[i][s.F] for i, s in enumerate(sheets)]
     faces_back = [back[i][s.F[:, ::-1]] for i, s in enumerate(sheets)]
 
@@ -118,7 +127,31 @@ def build_mesh(sheets: list[Sheet], attachments: list[Attachment], delta: list[n
         minus_chain = front[at.upper] if at.side == FRONT else back[at.upper]
         # back faces store each triangle reversed, so corner c sits in column 2 - c
         col = corners[:, 1] if at.side == FRONT else 2 - corners[:, 1]
-        faces[corners[:, 0], col] = np.where(plus, plus_chain[j[pos]], minus_chain[j[pos]])
+        if lips is None:
+            faces[corners[:, 0], col] = np.where(plus, plus_chain[j[pos]], minus_chain[j[pos]])
+            continue
+        # the "+" lip's own vertices, on the lower face lifted by the lip's height; its ends
+        # are the part's shared end vertices
+        sgn = 1.0 if at.side == FRONT else -1.0
+        face_z = delta[at.lower][chain] + (front_off[at.lower][chain] if at.side == FRONT
+                                           else -back_off[at.lower][chain])
+        lip = np.r_[front[at.upper][j[0]], n_v + np.arange(len(chain) - 2), front[at.upper][j[-1]]]
+        extra.append(np.c_[lo.xy[chain[1:-1]], face_z[1:-1] + sgn * lips[a_i][1:-1]])
+        n_v += len(chain) - 2
+        faces[corners[:, 0], col] = np.where(plus, lip[pos], minus_chain[j[pos]])
+        # The strip runs against the lower face's "+" triangles along the lip, so it walks the
+        # lip the other way round.
+        P = plus_chain[j]
+        a, b = lip[:-1], lip[1:]
+        k = len(a) // 2  # an edge of two interior vertices when there is one
+        E = directed_edges(faces)
+        lipward = bool(np.any((E[:, 0] == a[k]) & (E[:, 1] == b[k])))
+        if lipward:  # the face walks a -> b
+            strips.append((np.c_[b, a, P[:-1]], at.upper))
+            strips.append((np.c_[b, P[:-1], P[1:]], at.upper))
+        else:
+            strips.append((np.c_[a, b, P[1:]], at.upper))
+            strips.append((np.c_[a, P[1:], P[:-1]], at.upper))
 
     # Rim bridges along the outline, except along a glued junction.
     bridges = []
@@ -147,6 +180,13 @@ def build_mesh(sheets: list[Sheet], attachments: list[Attachment], delta: list[n
             parts.append(faces)
             layer.append(np.full(len(faces), i))
             kind.append(np.full(len(faces), kd, np.int8))
+    for faces, i in strips:  # a strip belongs to its part, as its rim bridge does
+        parts.append(faces)
+        layer.append(np.full(len(faces), i))
+        kind.append(np.full(len(faces), 2, np.int8))
+    if extra:
+        V = np.vstack([V] + extra)
+        remap = np.r_[remap, np.arange(len(remap), len(V))]
     F = remap[np.vstack(parts)]
     face_layer = np.concatenate(layer)
     face_kind = np.concatenate(kind)
