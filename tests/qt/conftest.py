@@ -87,3 +87,16 @@ def mouse():
     from qt_helpers import Mouse
 
     return Mouse
+
+
+@pytest.fixture
+def drawing_window(make_window, host):
+    """A shown, active window whose host really inflates (skips where no inflate plugin is
+    installed): for tests that draw parts with the mouse."""
+    from qt_helpers import circle
+
+    if host.inflate(circle(0.5, 24), True, {"resolution": 0.1, "inflation": 1.0, "smoothing": 0.0}) is None:
+        pytest.skip("no inflate plugin is installed")
+    win = make_window()
+    win.activateWindow()
+    return win

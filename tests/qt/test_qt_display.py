@@ -60,7 +60,8 @@ def test_canvas_shading_is_as_smooth_as_the_headless_render(make_window, mouse, 
     assert canvas_rms <= 2.5 * render_rms
 
 
-def test_a_view_change_rasterises_in_the_background_and_a_light_change_does_not(make_window, mouse, qtbot, host):
+def _window_with_ellipse(make_window, mouse, qtbot):
+    """A window with one ellipse drawn by mouse and rendered (skips without an inflate plugin)."""
     w = make_window()
     pts = ellipse(40)
     mouse(w.canvas).drag(list(pts) + [pts[0]])
@@ -68,6 +69,11 @@ def test_a_view_change_rasterises_in_the_background_and_a_light_change_does_not(
     if w.doc.layers[0].mesh is None:
         pytest.skip("no inflate plugin is installed")
     w.canvas.render_now()
+    return w
+
+
+def test_a_view_change_rasterises_in_the_background_and_a_light_change_does_not(make_window, mouse, qtbot, host):
+    w = _window_with_ellipse(make_window, mouse, qtbot)
     first = w.canvas._gbuf
     w.canvas.vb.translateBy(x=0.2, y=0.1)  # a pan
     assert w.canvas._gbuf is first  # nothing rasterised on the GUI thread during the gesture
@@ -82,13 +88,7 @@ def test_a_view_change_rasterises_in_the_background_and_a_light_change_does_not(
 
 
 def test_a_broken_shader_plugin_falls_back_to_lambert_with_a_message(make_window, mouse, qtbot, host):
-    w = make_window()
-    pts = ellipse(40)
-    mouse(w.canvas).drag(list(pts) + [pts[0]])
-    wait_idle(qtbot, w)
-    if w.doc.layers[0].mesh is None:
-        pytest.skip("no inflate plugin is installed")
-    w.canvas.render_now()
+    w = _window_with_ellipse(make_window, mouse, qtbot)
     good = w.canvas.scene_item.pixels().copy()
 
     class Broken:

@@ -16,12 +16,8 @@ M = Qt.KeyboardModifier
 
 
 @pytest.fixture
-def w(make_window, host):
-    if host.inflate(circle(0.5, 24), True, {"resolution": 0.1, "inflation": 1.0, "smoothing": 0.0}) is None:
-        pytest.skip("no inflate plugin is installed")
-    win = make_window()
-    win.activateWindow()
-    return win
+def w(drawing_window):
+    return drawing_window
 
 
 def loop(r, center, n=40):
