@@ -145,12 +145,8 @@ def corner_normals(V: np.ndarray, F: np.ndarray, crease_deg: float = 50.0) -> np
         Unit normal of corner j of face i at [i, j].
     """
     F = np.asarray(F, dtype=np.int64)
-    cross = _face_cross(V, F)
-    area2 = np.linalg.norm(cross, axis=1)
-    Nf = np.zeros_like(cross)
-    Nf[:, 2] = 1.0
-    ok = area2 > 0
-    Nf[ok] = cross[ok] / area2[ok, None]
+    Nf, area = face_normals(V, F)
+    cross = Nf * (2.0 * area)[:, None]  # the area weights (0 for a degenerate face)
     m = len(F)
     # (corner, neighbour face) pairs through the corner's vertex, grouped by vertex.
     corner_v = F.ravel()

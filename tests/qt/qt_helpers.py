@@ -80,3 +80,21 @@ class Mouse:
 def circle(radius=0.5, n=60, center=(0.0, 0.0)):
     t = np.linspace(0.0, 2 * np.pi, n, endpoint=False)
     return np.c_[center[0] + radius * np.cos(t), center[1] + radius * np.sin(t)]
+
+
+#: Start of a script run in its own process under Xvfb (OpenGL tests): a shown window of
+#: ``SIZE`` (format the string with ``size=(w, h)``) on the document named by ``sys.argv[1]``;
+#: ``app``, ``host`` and ``w`` are defined for the rest of the script.
+GL_WINDOW_PRELUDE = """
+import sys
+from sketchforge.qt.app import ensure_qapp, grab_window, plugin_host, settle
+from sketchforge.qt.main_window import MainWindow
+from sketchforge.document import fileformat as ff
+from sketchforge.document.document import Document
+app = ensure_qapp()
+host = plugin_host()
+w = MainWindow(Document(host=host), host=host)
+w.resize{size}
+w.adopt(ff.load(sys.argv[1], host=host), None)
+w.show()
+"""

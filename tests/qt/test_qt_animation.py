@@ -12,6 +12,7 @@ pytest.importorskip("sketchforge_animate")
 
 from sketchforge_animate import Animation  # noqa: E402
 from sketchforge_animate.picking import pick_vertex, project, unproject_at_depth  # noqa: E402
+from qt_helpers import GL_WINDOW_PRELUDE  # noqa: E402
 
 BLOB = [[np.cos(t), 0.5 * np.sin(t)] for t in np.linspace(0, 2 * np.pi, 40, endpoint=False)]
 
@@ -127,23 +128,13 @@ def test_picking_projects_and_unprojects():
     assert abs(moved[2] - P[2][2]) < 1e-9 and moved[0] > P[2][0]  # same depth, moved right
 
 
-GL_SCRIPT = r"""
-import sys, time
+GL_SCRIPT = GL_WINDOW_PRELUDE.format(size=(1100, 760)) + r"""
+import time
 import numpy as np
 from PySide6.QtCore import QPoint, Qt
 from PySide6.QtTest import QTest
-from sketchforge.qt.app import ensure_qapp, grab_window, plugin_host, settle
-from sketchforge.qt.main_window import MainWindow
-from sketchforge.document import fileformat as ff
-from sketchforge.document.document import Document
 from sketchforge_animate import Animation
 from sketchforge_animate.picking import project
-app = ensure_qapp()
-host = plugin_host()
-w = MainWindow(Document(host=host), host=host)
-w.resize(1100, 760)
-w.adopt(ff.load(sys.argv[1], host=host), None)
-w.show()
 w.set_mode("observation")
 settle(w, app)
 ctl = w.animation

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import pytest
 from PySide6.QtGui import QColor, QImage
+from qt_helpers import GL_WINDOW_PRELUDE
 
 ROOT = Path(__file__).resolve().parents[2]
 EXAMPLE = ROOT / "examples" / "creature.json"
@@ -47,18 +48,7 @@ def test_editing_screenshot_offscreen(tmp_path):
     assert clay_fraction(img, 0.15, 0.75, 0.1, 0.9) > 0.25  # the shaded layers are drawn
 
 
-GL_SCRIPT = """
-import sys
-from sketchforge.qt.app import ensure_qapp, grab_window, plugin_host, settle
-from sketchforge.qt.main_window import MainWindow
-from sketchforge.document import fileformat as ff
-from sketchforge.document.document import Document
-app = ensure_qapp()
-host = plugin_host()
-w = MainWindow(Document(host=host), host=host)
-w.resize(1000, 700)
-w.adopt(ff.load(sys.argv[1], host=host), None)
-w.show()
+GL_SCRIPT = GL_WINDOW_PRELUDE.format(size=(1000, 700)) + """
 w.modes.per_layer.setChecked(True)  # each layer's own mesh: no assembly solve to wait for
 w.set_mode("observation")
 settle(w, app)
