@@ -434,27 +434,28 @@ def pair():
     return _damaged_pair()
 
 
-def test_a_junction_that_repeats_a_point_is_blamed_not_the_outline(pair):
-    from sketchforge_assemble.errors import AttachmentError
-
-    body, head = pair
-    j = np.insert(head.junction, 2, head.junction[2])
-    with pytest.raises(AttachmentError) as err:
-        _assemble_pair(body, Mesh(head.V, head.F, head.boundary, j))
-    msg = _one_sentence(err.value)
-    assert msg.startswith("The junction of layer 'Head' has two points closer than") and "outline" not in msg
+def _repeat_a_point(j):
+    return np.insert(j, 2, j[2])
 
 
-def test_a_junction_that_runs_back_over_itself_is_blamed_not_the_outline(pair):
-    from sketchforge_assemble.errors import AttachmentError
-
-    body, head = pair
-    j = np.array(head.junction)
+def _turn_back(j):
+    j = np.array(j)
     j[2], j[3] = j[3], j[2]  # a zigzag: the junction turns back along itself
+    return j
+
+
+@pytest.mark.parametrize("bend, message", [
+    (_repeat_a_point, "The junction of layer 'Head' has two points closer than"),
+    (_turn_back, "The junction of layer 'Head' touches itself near"),
+])
+def test_a_broken_junction_is_blamed_not_the_outline(pair, bend, message):
+    from sketchforge_assemble.errors import AttachmentError
+
+    body, head = pair
     with pytest.raises(AttachmentError) as err:
-        _assemble_pair(body, Mesh(head.V, head.F, head.boundary, j))
+        _assemble_pair(body, Mesh(head.V, head.F, head.boundary, bend(head.junction)))
     msg = _one_sentence(err.value)
-    assert msg.startswith("The junction of layer 'Head' touches itself near") and "outline" not in msg
+    assert msg.startswith(message) and "outline" not in msg
 
 
 def test_two_coinciding_vertices_of_the_lower_layer_are_blamed_on_that_layer(pair):

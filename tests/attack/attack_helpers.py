@@ -87,3 +87,18 @@ def write_doc(path: Path, data) -> Path:
     return path
 
 
+
+
+def refuse_new_files(monkeypatch) -> None:
+    """Make creating any file fail with EACCES in sketchforge.atomic (simulated: tests run as
+    root, who may write anywhere)."""
+    import sketchforge.atomic as atomic
+
+    real_open = os.open
+
+    def refuse(path, flags, *a, **k):
+        if flags & os.O_CREAT:
+            raise PermissionError(13, "Permission denied", str(path))
+        return real_open(path, flags, *a, **k)
+
+    monkeypatch.setattr(atomic.os, "open", refuse)

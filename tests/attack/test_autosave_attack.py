@@ -153,20 +153,13 @@ def test_declined_recovery_keeps_the_autosave_across_ticks_and_offers_it_again(w
 
 
 def test_app_save_into_a_folder_that_refuses_new_files(window, dialogs, tmp_path, monkeypatch):
-    import sketchforge.atomic as atomic
+    from attack_helpers import refuse_new_files
 
     calls, _ = dialogs
     w = window()
     w.push(C.AddLayer(id="a", layer_name="A"))
     assert w.isWindowModified()
-    real_open = os.open
-
-    def refuse(path, flags, *a, **k):
-        if flags & os.O_CREAT:
-            raise PermissionError(13, "Permission denied", str(path))
-        return real_open(path, flags, *a, **k)
-
-    monkeypatch.setattr(atomic.os, "open", refuse)
+    refuse_new_files(monkeypatch)
     assert w.save_to(tmp_path / "doc.json") is False
     [(kind, title, text)] = [c for c in calls if c[0] == "critical"]
     assert title == "Cannot save the document" and "does not allow new files" in text and "\n" not in text

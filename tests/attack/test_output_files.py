@@ -12,7 +12,7 @@ import time
 
 import pytest
 
-from attack_helpers import assert_one_line_error, run_cli, write_doc
+from attack_helpers import assert_one_line_error, refuse_new_files, run_cli, write_doc
 
 
 @pytest.fixture
@@ -81,16 +81,7 @@ def test_longest_legal_name(tmp_path, doc_path):
 
 def test_folder_that_refuses_new_files(tmp_path, doc_path, monkeypatch):
     """EACCES from creating the temp file (the check is simulated: root may write anywhere)."""
-    import sketchforge.atomic as atomic
-
-    real_open = os.open
-
-    def refuse(path, flags, *a, **k):
-        if flags & os.O_CREAT:
-            raise PermissionError(13, "Permission denied", str(path))
-        return real_open(path, flags, *a, **k)
-
-    monkeypatch.setattr(atomic.os, "open", refuse)
+    refuse_new_files(monkeypatch)
     for argv in (("replay", doc_path, "--export", tmp_path / "m.obj"), ("render", doc_path, "--png", tmp_path / "r.png")):
         assert_one_line_error(run_cli(*argv), "does not allow new files")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["doc.json"]
