@@ -46,6 +46,7 @@ from pathlib import Path
 
 from sketchforge.atomic import write_bytes_atomic
 from sketchforge.document import fileformat as ff
+from sketchforge.errors import SketchforgeError
 
 #: Seconds between autosaves of a document with unsaved changes.
 DEFAULT_INTERVAL_S = 60.0
@@ -321,7 +322,13 @@ class Autosaver:
 
 
 def _read_json_dict(path: Path) -> dict:
-    data = json.loads(path.read_text("utf-8"))
+    """A JSON object through the document reader's guards: a FIFO or device named ``*.json``
+    in the folder is refused instead of blocking the start-up scan (a plain ``read_text`` did),
+    and an oversized file is refused before it is read."""
+    try:
+        data = ff.read_json(path)
+    except SketchforgeError as exc:
+        raise ValueError(str(exc)) from None
     if not isinstance(data, dict):
         raise ValueError("not an object")
     return data

@@ -12,17 +12,8 @@ import inspect
 import tempfile
 from pathlib import Path
 
-from sketchforge.atomic import write_bytes_atomic
+from sketchforge.atomic import check_target, write_bytes_atomic
 from sketchforge.errors import ExportError, SketchforgeError
-
-
-def _check_target(path: Path) -> None:
-    """Fail before any (possibly long) solve when the file could not be written anyway."""
-    folder = path.parent if str(path.parent) else Path(".")
-    if not folder.is_dir():
-        raise ExportError(f"cannot write {path}: the folder {folder} does not exist")
-    if path.is_dir():
-        raise ExportError(f"cannot write {path}: it is a directory")
 
 
 def _accepts_progress(fn) -> bool:
@@ -49,7 +40,7 @@ def run_exporter(host, path, mesh=None, doc=None, progress=None) -> str:
     path = Path(path)
     exporter = host.exporter_for(path, doc if mesh is None else None)
     plugin = host.provider_of(exporter) or "unknown plugin"
-    _check_target(path)
+    check_target(path)
     whole_document = mesh is None and exporter.write_document is not None
     if mesh is None and not whole_document:
         if doc is None:

@@ -69,3 +69,19 @@ def test_a_file_growing_while_read_is_cut_at_the_cap(tmp_path, monkeypatch):
     monkeypatch.setattr(ff.os, "fstat", lambda fd: Small(real_fstat(fd)))
     with pytest.raises(ff.LimitError, match="more than 1000 bytes"):
         ff.read_regular_file(p, limit=1000)
+
+
+def test_a_fifo_in_the_autosave_folder_does_not_block_the_start_up_scan(tmp_path):
+    """The recovery scan at start reads every *.json of the autosave folder: a FIFO there is
+    skipped at once (it blocked forever with a plain read)."""
+    import time
+
+    from sketchforge.document.autosave import find_recoverable
+
+    folder = tmp_path / "auto"
+    folder.mkdir()
+    os.mkfifo(folder / "x.json")
+    os.mkfifo(folder / "y.pending")
+    t = time.perf_counter()
+    assert find_recoverable(folder) == []
+    assert time.perf_counter() - t < 10  # a hang guard: it returns, it does not wait for a writer
