@@ -101,3 +101,23 @@ def test_corner_normals_are_smooth_on_a_fair_surface_and_keep_creases():
     C = corner_normals(V, F, 100.0)
     np.testing.assert_allclose(C, vertex_normals(V, F)[F], atol=1e-12)
     assert abs(C[0, 2, 1]) > 0.4
+
+
+def test_posed_corner_normals_turn_with_the_pose_and_keep_the_rest_creases():
+    """The 3D view shades a posed frame with the crease groups found at rest (issue 13): a
+    rigid turn of the model turns every corner normal with it, exactly as computing afresh."""
+    from sketchforge.geometry.normals import corner_normals, corner_normals_grouped, crease_groups
+
+    # a box: 90° creases everywhere, 12 triangles
+    V = np.array([[x, y, z] for x in (0.0, 1.0) for y in (0.0, 2.0) for z in (0.0, 0.5)])
+    F = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
+                  [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]])
+    groups = crease_groups(V, F, 50.0)
+    rest = corner_normals_grouped(V, F, groups)
+    assert np.allclose(rest, corner_normals(V, F, 50.0))
+    # creases kept: every corner normal is its face's normal (no smoothing across 90°)
+    assert np.allclose(rest[:, 0], rest[:, 1]) and np.allclose(rest[:, 1], rest[:, 2])
+    c, s = np.cos(0.7), np.sin(0.7)
+    R = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
+    posed = corner_normals_grouped(V @ R.T + [0.3, -1.0, 2.0], F, groups)
+    assert np.abs(posed - rest @ R.T).max() < 1e-12

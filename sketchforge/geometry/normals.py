@@ -22,7 +22,12 @@ def _face_cross(V, F) -> np.ndarray:
     """(m, 3) unnormalised face normals (b - a) x (c - a): twice the area times the unit normal."""
     V = np.asarray(V, dtype=np.float64)
     F = np.asarray(F, dtype=np.int64)
-    return np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+    a = V[F[:, 0]]
+    u, v = V[F[:, 1]] - a, V[F[:, 2]] - a
+    # written out: np.cross is several times slower on (m, 3) rows (a posed frame pays this)
+    return np.column_stack([u[:, 1] * v[:, 2] - u[:, 2] * v[:, 1],
+                            u[:, 2] * v[:, 0] - u[:, 0] * v[:, 2],
+                            u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]])
 
 
 def face_normals(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -144,11 +149,25 @@ def corner_normals(V: np.ndarray, F: np.ndarray, crease_deg: float = 50.0) -> np
     (m, 3, 3) float64
         Unit normal of corner j of face i at [i, j].
     """
+    return corner_normals_grouped(V, F, crease_groups(V, F, crease_deg))
+
+
+def crease_groups(V: np.ndarray, F: np.ndarray, crease_deg: float = 50.0):
+    """Which faces each triangle corner smooths over (the expensive, pose-independent half of
+    :func:`corner_normals`): the faces around the corner's vertex whose normals are within
+    ``crease_deg`` of the corner's own face. A near-rigid deformation (a posed model) keeps
+    them, so its normals cost only :func:`corner_normals_grouped` (one sparse product).
+
+    Returns
+    -------
+    (3m, m) scipy.sparse.csr_matrix of ones
+        Row 3·face + j (corner j of face) has a 1 in the column of every face it smooths over.
+    """
+    import scipy.sparse as sp
+
     F = np.asarray(F, dtype=np.int64)
-    Nf, area = face_normals(V, F)
-    cross = Nf * (2.0 * area)[:, None]  # the area weights (0 for a degenerate face)
+    Nf, _ = face_normals(V, F)
     m = len(F)
-    # (corner, neighbour face) pairs through the corner's vertex, grouped by vertex.
     corner_v = F.ravel()
     corner_f = np.repeat(np.arange(m), 3)
     order = np.argsort(corner_v, kind="stable")
@@ -160,12 +179,20 @@ def corner_normals(V: np.ndarray, F: np.ndarray, crease_deg: float = 50.0) -> np
     c = np.repeat(np.arange(3 * m), reps)
     k = np.arange(len(c)) - np.repeat(np.cumsum(reps) - reps, reps)
     nb = sf[start[corner_v[c]] + k]
-    cos_min = np.cos(np.radians(crease_deg))
-    same = np.einsum("ij,ij->i", Nf[corner_f[c]], Nf[nb]) >= cos_min
-    acc = np.zeros((3 * m, 3))
-    np.add.at(acc, c[same], cross[nb[same]])
-    norm = np.linalg.norm(acc, axis=1)
-    out = Nf[corner_f].copy()
+    same = np.einsum("ij,ij->i", Nf[corner_f[c]], Nf[nb]) >= np.cos(np.radians(crease_deg))
+    return sp.csr_matrix((np.ones(int(same.sum())), (c[same], nb[same])), shape=(3 * m, m))
+
+
+def corner_normals_grouped(V: np.ndarray, F: np.ndarray, groups) -> np.ndarray:
+    """Per-corner normals of (V, F) summed over ``groups`` (from :func:`crease_groups`),
+    area-weighted; (m, 3, 3) float64 unit normals, (0, 0, 1) where the sum vanishes."""
+    F = np.asarray(F, dtype=np.int64)
+    cross = _face_cross(V, F)  # unit normal times twice the area: the area weights
+    m = len(F)
+    acc = groups @ cross
+    norm = np.sqrt(np.einsum("ij,ij->i", acc, acc))
     good = norm > 1e-300
+    out = np.zeros_like(acc)
+    out[:, 2] = 1.0  # (0, 0, 1) where the summed faces cancel or have no area
     out[good] = acc[good] / norm[good, None]
     return out.reshape(m, 3, 3)

@@ -432,7 +432,7 @@ class PinInteraction(QObject):
         item = getattr(self.view, "model_item", None)
         if item is None or self.c.mesh is None:
             return
-        item.setMeshData(vertexes=np.asarray(P, dtype=np.float32), faces=np.asarray(self.c.mesh.F, dtype=np.int32))
+        item.set_positions(P)  # same triangles as the shown model; normals of the pose
         self._show_pins()
 
     def _show_pins(self) -> None:

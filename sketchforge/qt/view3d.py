@@ -15,6 +15,8 @@ pool thread) or each visible layer's own mesh.
 
 from __future__ import annotations
 
+import functools
+
 import numpy as np
 from PySide6.QtCore import Qt, Signal
 from PySide6.QtGui import QGuiApplication
@@ -101,16 +103,29 @@ def _register_shader() -> None:
     )
 
 
+@functools.cache
 def _mesh_item_class():
     """GLMeshItem drawing given per-corner normals (pyqtgraph would average face normals)."""
     import pyqtgraph.opengl as gl
     from pyqtgraph.opengl.items.GLMeshItem import DirtyFlag
 
+    from sketchforge.geometry.normals import corner_normals_grouped, crease_groups
+
     class CornerNormalMeshItem(gl.GLMeshItem):
-        def __init__(self, corners, normals, **kwds):
-            self._corner_normals = np.ascontiguousarray(normals, dtype=np.float32)
-            md = gl.MeshData(vertexes=np.ascontiguousarray(corners, dtype=np.float32))
+        def __init__(self, V, F, **kwds):
+            V = np.asarray(V, dtype=np.float64)
+            self._F = np.asarray(F, dtype=np.int64)
+            self._groups = crease_groups(V, self._F, CREASE_DEG)
+            self._corner_normals = np.ascontiguousarray(corner_normals_grouped(V, self._F, self._groups), dtype=np.float32)
+            md = gl.MeshData(vertexes=np.ascontiguousarray(V[self._F], dtype=np.float32))
             super().__init__(meshdata=md, smooth=False, computeNormals=False, **kwds)
+
+        def set_positions(self, V) -> None:
+            """New vertex positions for the same triangles (a posed frame), with their own
+            normals: the creases found at rest are kept, the shading follows the pose."""
+            V = np.asarray(V, dtype=np.float64)
+            self._corner_normals = np.ascontiguousarray(corner_normals_grouped(V, self._F, self._groups), dtype=np.float32)
+            self.setMeshData(vertexes=np.ascontiguousarray(V[self._F], dtype=np.float32))
 
         def parseMeshData(self):
             dirty = super().parseMeshData()
@@ -305,13 +320,8 @@ class View3D(QWidget):
             self.assembled_shown.emit(None)
         allv = []
         item_class = _mesh_item_class()
-        from sketchforge.geometry.normals import corner_normals
-
         for mesh, colour in meshes:
-            V = np.asarray(mesh.V, dtype=np.float64)
-            F = np.asarray(mesh.F, dtype=np.int64)
-            item = item_class(V[F], corner_normals(V, F, CREASE_DEG), shader=SHADER_NAME, color=colour,
-                              glOptions="opaque")
+            item = item_class(mesh.V, mesh.F, shader=SHADER_NAME, color=colour, glOptions="opaque")
             # The drawing stands upright: document (x, y, z) -> world (x, -z, y), so the grid is
             # the ground, y is up and the viewer of the drawing looks along world +y.
             item.rotate(90, 1, 0, 0)
