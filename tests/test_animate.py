@@ -154,9 +154,15 @@ def test_commands_undo_and_replay_bit_identical(real_host, tmp_path):
     # every frame is a closed 2-manifold with the static connectivity, pins where they go
     from sketchforge_animate.pose import Animator
 
-    an = Animator(doc.export_mesh(), anim)
+    rest = doc.export_mesh()
+    an = Animator(rest, anim)
+    E = np.unique(np.sort(np.r_[rest.F[:, [0, 1]], rest.F[:, [1, 2]], rest.F[:, [2, 0]]], axis=1), axis=0)
+    length0 = np.linalg.norm(rest.V[E[:, 0]] - rest.V[E[:, 1]], axis=1)
     for f in (0, 7, 23):
         assert np.allclose(fa[f][an.handles], anim.targets(f), atol=1e-12)
+        # as rigid as possible: the pose moves the pins, the surface keeps its edge lengths
+        length = np.linalg.norm(fa[f][E[:, 0]] - fa[f][E[:, 1]], axis=1)
+        assert np.median(np.abs(length / length0 - 1.0)) < 0.03
     # undo walks back one command at a time
     doc.undo_stack.undo()
     assert Animation.of(doc).pin("a").motion is None

@@ -139,13 +139,6 @@ class GBuffer:
     def n_layers(self) -> int:
         return len(self.bounds) - 1
 
-    def normal_derivatives(self) -> tuple[np.ndarray, np.ndarray]:
-        """(f, 3) float32 ``dn_dx, dn_dy``: change of the owner's normal per pixel to the right
-        and downwards at each owned pixel (finite differences that never cross into another
-        layer), so the screen-space gradient of any n·l. Computed on first use (isophote lines
-        need it, plain shading does not) and kept."""
-        return self._line_data()[:2]
-
     def _line_data(self):
         """dn_dx, dn_dy, the owners' normals column by column, and per owned pixel a bound on
         |∇(n·l)| for any unit l (so lines are only evaluated where they can be)."""
@@ -584,24 +577,6 @@ def _pack(c: np.ndarray) -> np.ndarray:
     p4[:, 2] = c8[:, 0]
     p4[:, 3] = 255
     return p4.view("<u4").ravel()
-
-
-def front_intensity(gbuf: GBuffer, light) -> tuple[np.ndarray, np.ndarray]:
-    """n·l of the front fragment per pixel and the front layer per pixel.
-
-    Returns
-    -------
-    E : (height, width) float32
-        Signed n·l of the layer in front at the pixel centre (NaN where no layer is).
-    owner : (height, width) int32
-        That layer's index, -1 where none.
-    """
-    view = gbuf.view
-    l = np.asarray(light, dtype=np.float32).reshape(3)
-    E = np.full(view.width * view.height, np.nan, dtype=np.float32)
-    ok = gbuf.front >= 0
-    E[ok] = _dot(gbuf.normal[gbuf.front_frag], l)
-    return E.reshape(view.height, view.width), gbuf.front_layer()
 
 
 def isophote_coverage(gbuf: GBuffer, light, K: int, width: float = 1.2) -> np.ndarray:

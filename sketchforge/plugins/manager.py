@@ -258,7 +258,6 @@ class PluginHost:
 
     @cached_property
     def exporters(self) -> dict:
-        exporters: dict = {}
         suffix_owner: dict = {}
 
         def check(exp, plugin):
@@ -276,8 +275,7 @@ class PluginHost:
                 if exp.write_document is None:
                     suffix_owner[s] = (exp.name, plugin)
 
-        exporters = self._collect("sketchforge_exporters", "exporter", check)
-        return exporters
+        return self._collect("sketchforge_exporters", "exporter", check)
 
     def validate(self) -> list[str]:
         """Build every registry now (the app at start-up), so a broken plugin is disabled

@@ -202,10 +202,6 @@ class ArapSolver:
             return igl.min_quad_with_fixed_solve(self._mq, -b, self._empty, self._empty)
         return self._lu.solve(b)
 
-    @property
-    def n_vertices(self) -> int:
-        return len(self.V)
-
     def reset(self) -> None:
         """Forget the warm-start rotations (the next solve starts from the identity)."""
         self._q = np.zeros_like(self._q)

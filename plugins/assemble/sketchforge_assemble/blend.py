@@ -40,7 +40,7 @@ import numpy as np
 import shapely
 
 from .attach import FRONT, Attachment, lo_chain_index
-from .sheet import Sheet
+from .sheet import Sheet, end_taper
 
 
 def profile(t: np.ndarray) -> np.ndarray:
@@ -51,13 +51,6 @@ def profile(t: np.ndarray) -> np.ndarray:
     """
     t = np.clip(t, 0.0, 1.0)
     return (1.0 - t) ** 2
-
-
-def end_taper(xy: np.ndarray, ends: np.ndarray, radius: float) -> np.ndarray:
-    """(n,) float64 in [0, 1]: 0 at the junction's two end points ``ends`` (2, 2), 1 from
-    ``radius`` on."""
-    d = np.min(np.linalg.norm(xy[:, None, :] - ends[None, :, :], axis=2), axis=1)
-    return np.clip(d / radius, 0.0, 1.0)
 
 
 def distance_to(xy: np.ndarray, line_xy: np.ndarray) -> np.ndarray:
@@ -73,28 +66,6 @@ def distance_to(xy: np.ndarray, line_xy: np.ndarray) -> np.ndarray:
         p = A[None] + t[:, :, None] * AB[None]
         best = np.minimum(best, np.min(np.linalg.norm(xy[:, None, :] - p, axis=2), axis=1))
     return best
-
-
-def chain_gradients(xy: np.ndarray, F: np.ndarray, f: np.ndarray, verts: np.ndarray) -> np.ndarray:
-    """(c, 2) float64 gradient of the piecewise-linear field f (n,) over the planar mesh
-    xy (n, 2), F (m, 3) at the vertices ``verts`` (c,): the area-weighted mean of the
-    gradients of the triangles around each."""
-    T = F[np.any(np.isin(F, verts), axis=1)]
-    a, b, c = xy[T[:, 0]], xy[T[:, 1]], xy[T[:, 2]]
-    e1, e2 = b - a, c - a
-    det = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]  # twice the signed area
-    df1, df2 = f[T[:, 1]] - f[T[:, 0]], f[T[:, 2]] - f[T[:, 0]]
-    g = np.c_[df1 * e2[:, 1] - df2 * e1[:, 1], df2 * e1[:, 0] - df1 * e2[:, 0]] / det[:, None]
-    pos = {int(v): k for k, v in enumerate(verts)}
-    acc = np.zeros((len(verts), 2))
-    wsum = np.zeros(len(verts))
-    w = np.abs(det)
-    for col in range(3):
-        k = np.array([pos.get(int(v), -1) for v in T[:, col]])
-        ok = k >= 0
-        np.add.at(acc, k[ok], g[ok] * w[ok, None])
-        np.add.at(wsum, k[ok], w[ok])
-    return acc / np.maximum(wsum, 1e-300)[:, None]
 
 
 def blend_junctions(sheets: list[Sheet], attachments: list[Attachment], front_off: list[np.ndarray],

@@ -163,6 +163,11 @@ def taper(sheet: Sheet, radius_in_h: float = 3.0) -> np.ndarray:
     """
     if len(sheet.junction) == 0:
         return np.ones(sheet.n)
-    ends = sheet.xy[sheet.junction[[0, -1]]]
-    d = np.min(np.linalg.norm(sheet.xy[:, None, :] - ends[None, :, :], axis=2), axis=1)
-    return np.clip(d / (radius_in_h * sheet.h), 0.0, 1.0)
+    return end_taper(sheet.xy, sheet.xy[sheet.junction[[0, -1]]], radius_in_h * sheet.h)
+
+
+def end_taper(xy: np.ndarray, ends: np.ndarray, radius: float) -> np.ndarray:
+    """(n,) float64 in [0, 1]: 0 at the junction's two end points ``ends`` (2, 2), 1 from
+    ``radius`` on."""
+    d = np.min(np.linalg.norm(xy[:, None, :] - ends[None, :, :], axis=2), axis=1)
+    return np.clip(d / radius, 0.0, 1.0)

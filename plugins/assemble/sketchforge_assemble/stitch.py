@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from .attach import FRONT, Attachment, lo_chain_index
-from .sheet import Sheet, directed_edges, interior_on_left
+from .sheet import Sheet, has_directed_edge, interior_on_left
 
 
 def chain_sides(sheet: Sheet, chain: np.ndarray):
@@ -144,9 +144,7 @@ def build_mesh(sheets: list[Sheet], attachments: list[Attachment], delta: list[n
         P = plus_chain[j]
         a, b = lip[:-1], lip[1:]
         k = len(a) // 2  # an edge of two interior vertices when there is one
-        E = directed_edges(faces)
-        lipward = bool(np.any((E[:, 0] == a[k]) & (E[:, 1] == b[k])))
-        if lipward:  # the face walks a -> b
+        if has_directed_edge(faces, a[k], b[k]):  # the face walks a -> b
             strips.append((np.c_[b, a, P[:-1]], at.upper))
             strips.append((np.c_[b, P[:-1], P[1:]], at.upper))
         else:
