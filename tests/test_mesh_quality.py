@@ -41,7 +41,9 @@ def test_relaxation_keeps_the_outline_and_the_angle_guarantee(monkeypatch):
     # Triangle keeps MIN_ANGLE except next to sharp input corners (this outline has some):
     # the relaxation never goes below what Triangle delivered
     assert (cross > 0).all() and ang.min() >= min(MIN_ANGLE, _min_angles(raw.V2, raw.F)[0].min())
-    # relaxing again changes little (near a fixed point)
-    assert np.array_equal(relax_interior(tri.V2, tri.F, k, 0), tri.V2)
-    again = relax_interior(tri.V2, tri.F, k, 1)
-    assert np.abs(again - tri.V2).max() < 0.5 * 0.05
+    # the steps converge: a fifth step moves the vertices far less than the first one did
+    # (measured: rms 0.0011 against 0.0071, max 0.013 against 0.14)
+    first = relax_interior(raw.V2, raw.F, k, 1) - raw.V2
+    fifth = relax_interior(tri.V2, tri.F, k, 1) - tri.V2
+    assert np.sqrt(np.mean(fifth**2)) < 0.3 * np.sqrt(np.mean(first**2))
+    assert np.abs(fifth).max() < 0.3 * np.abs(first).max()

@@ -282,7 +282,7 @@ def test_an_infeasible_depth_problem_is_reported_not_ground_through():
     Ain, bin_ = sp.vstack([I, -I]).tocsr(), np.r_[np.ones(n), np.zeros(n)]
     for method in ("active_set", "osqp"):
         t = time.perf_counter()
-        with pytest.raises(DepthOrderError, match="could not be satisfied|did not converge|budget"):
+        with pytest.raises(DepthOrderError, match="could not be satisfied"):
             solve_depth(P, q, Aeq, beq, Ain, bin_, method=method, max_iter=5 * n)
         # a hang guard, not a speed target: the error must come, not a stall
         assert time.perf_counter() - t < 120

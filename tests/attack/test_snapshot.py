@@ -76,7 +76,7 @@ CASES = {
         ),
         "light: must be a unit direction",
     ),
-    "points too large": (lambda d: d["snapshot"]["layers"][0].__setitem__("points", [[1e308 * 10 if False else 1.5e308, 0]] * 3), None),
+    "points too large": (lambda d: d["snapshot"]["layers"][0].__setitem__("points", [[1.5e308, 0]] * 3), None),
 }
 
 
@@ -88,7 +88,7 @@ def test_bad_snapshot_is_refused_at_load(tmp_path, saved_doc, case):
     for cmd in (("info", path), ("render", path, "--png", tmp_path / "out.png")):
         res = run_cli(*cmd)
         if fragment is None:  # finite, in float range: accepted as the stroke it is
-            assert res.rc in (0, 2), res.err
+            assert res.rc == 0 and res.err.count("\n") <= 1, res.err
             continue
         line = assert_one_line_error(res, fragment)
         assert "snapshot.layers[0]" in line
