@@ -33,6 +33,8 @@ from sketchforge.geometry.normals import vertex_normals
 # Per mesh (meshes are immutable): vertex normals and outline edges, so a new view of the same
 # meshes (pan, zoom) only rasterises.
 _mesh_cache: "weakref.WeakKeyDictionary" = weakref.WeakKeyDictionary()
+#: Views whose fragments are kept per mesh (see :func:`_layer_fragments`).
+VIEWS_KEPT = 3
 
 # Outline edges longer than this (pixels) are split before testing the pixels around them, so
 # the work stays proportional to the outline's length, not to its bounding box.
@@ -324,16 +326,17 @@ def rasterise(meshes: list, view: View, antialias: bool = True) -> GBuffer:
 def _layer_fragments(mesh, view: View, antialias: bool):
     """One mesh's fragments in a view: (pix, alpha, normal, (outline pixels, distances) or None).
 
-    Kept per mesh for the last view, so a change to one layer (an edit, a live preview)
-    rasterises only that layer again."""
+    Kept per mesh for the last few views (:data:`VIEWS_KEPT`: the canvas's, the layer
+    thumbnail's, the one before a pan), so a change to one layer (an edit, a live preview)
+    rasterises only that layer again, and redrawing a thumbnail does not evict the canvas's."""
     cached = _mesh_cache.get(mesh)
     V, F = np.asarray(mesh.V), np.asarray(mesh.F, dtype=np.int64)
     if cached is None:
         cached = {"N": vertex_normals(V, F), "outline": boundary_edges(F)}
         _mesh_cache[mesh] = cached
-    last = cached.get("fragments")
-    if last is not None and last[0] == (view, antialias):
-        return last[1]
+    kept = cached.setdefault("fragments", {})
+    if (view, antialias) in kept:
+        return kept[(view, antialias)]
     N, outline = cached["N"], cached["outline"]
     W, H = int(view.width), int(view.height)
     npx = W * H
@@ -378,7 +381,9 @@ def _layer_fragments(mesh, view: View, antialias: bool):
     result = (pix, alpha.astype(np.float32), n.astype(np.float32), edges)
     for a in (result[0], result[1], result[2], *(edges or ())):
         a.flags.writeable = False  # shared between buffers
-    cached["fragments"] = ((view, antialias), result)
+    kept[(view, antialias)] = result
+    while len(kept) > VIEWS_KEPT:
+        del kept[next(iter(kept))]  # the oldest view
     return result
 
 
