@@ -45,15 +45,18 @@ def temp_prefix(path) -> str:
     return f".{short}.{_name_key(name)}."
 
 
-def _pid_alive(pid: int) -> bool:
+def pid_alive(pid: int) -> bool:
+    """Whether process ``pid`` exists on this host (``os.kill(pid, 0)``). An answer other than
+    "no such process" counts as alive (another user's process, an unexpected error): a live
+    writer's files are never removed on a guess."""
     if pid == os.getpid():
         return True
     try:
-        os.kill(pid, 0)
+        os.kill(pid, 0)  # signal 0: only asks whether the process exists
     except ProcessLookupError:
         return False
     except OSError:
-        return True  # exists, another user's
+        return True
     return True
 
 
@@ -78,7 +81,7 @@ def remove_stale_temps(path) -> list[Path]:
         stale = False
         if name.startswith(prefix):
             pid_text = name[len(prefix) :].split(".", 1)[0]
-            stale = pid_text.isdigit() and not _pid_alive(int(pid_text))
+            stale = pid_text.isdigit() and not pid_alive(int(pid_text))
         elif legacy.match(name):
             try:
                 stale = now - e.stat(follow_symlinks=False).st_mtime > _LEGACY_STALE_S

@@ -10,7 +10,7 @@ import sys
 import unicodedata
 from pathlib import Path
 
-from sketchforge.atomic import check_target, refuse_input_as_output
+from sketchforge.atomic import check_target, refuse_input_as_output, same_file
 from sketchforge.errors import SketchforgeError
 
 SUBCOMMANDS = ("replay", "info", "render")
@@ -34,46 +34,44 @@ def printable(text) -> str:
 
 def cmd_replay(args) -> int:
     from sketchforge.document import fileformat as ff
+    from sketchforge.document.provenance import check_available
+    from sketchforge.plugins.manager import default_host
 
-    # Outputs are checked before any work, so a refusal is the only line printed.
+    # Everything a refusal depends on is checked before any work, so it is the only line printed.
     for out, what in ((args.export, "export"), (args.save, "save")):
         if out:
             refuse_input_as_output(out, [args.doc], what)
             check_target(out)
-    if args.export and args.save and Path(args.export).resolve() == Path(args.save).resolve():
+    if args.export and args.save and same_file(args.export, args.save):
         raise SketchforgeError("--export and --save name the same file; choose two files")
+    if args.frame is not None:
+        if not args.export:
+            raise SketchforgeError("--frame needs --export OUT (the file to write the posed frame to)")
+        if args.layer:
+            raise SketchforgeError("--frame poses the assembled model; it cannot be combined with --layer")
+        if args.frame < 0:
+            raise SketchforgeError(f"--frame must be 0 or more, got {args.frame}")
+    host = default_host()
     if args.export:
-        from sketchforge.plugins.manager import default_host
-
-        default_host().exporter_for(Path(args.export))  # an unknown format, before the replay
+        host.exporter_for(Path(args.export))  # an unknown format, before the replay
     data = ff.read_json(args.doc)
     light, journal = ff.validate_header(data, str(args.doc))
-    from sketchforge.document.provenance import check_available
-    from sketchforge.plugins.manager import default_host
-
-    check_available(data, default_host(), str(args.doc))  # names every missing plugin at once
+    check_available(data, host, str(args.doc))  # names every missing plugin at once
 
     def progress(i, n):
         if args.verbose:
             print(f"replayed {i}/{n}", file=sys.stderr)
 
-    doc = ff.replay_journal(light, journal, str(args.doc), progress=progress)
+    doc = ff.replay_journal(light, journal, str(args.doc), host=host, progress=progress)
     if args.check and data.get("snapshot") is not None:
         snap = ff.document_from_dict(data, str(args.doc))
         diffs = ff.compare(snap, doc)
         if diffs:
             raise SketchforgeError(f"{args.doc}: replay differs from the saved snapshot: " + "; ".join(diffs))
         print("replay matches the snapshot", file=sys.stderr)
-    if args.frame is not None and not args.export:
-        raise SketchforgeError("--frame needs --export OUT (the file to write the posed frame to)")
     if args.export:
         out = Path(args.export)
         if args.frame is not None:
-            if args.layer:
-                raise SketchforgeError("--frame poses the assembled model; it cannot be combined with --layer")
-            if args.frame < 0:
-                raise SketchforgeError(f"--frame must be 0 or more, got {args.frame}")
-            doc.host.exporter_for(out)  # an unknown suffix fails before the pose solve
             mesh = doc.host.pose(doc, args.frame)
             if mesh is None:
                 raise SketchforgeError("--frame needs an animation plugin (sketchforge-animate) and none is installed")

@@ -44,7 +44,7 @@ import uuid
 from dataclasses import dataclass
 from pathlib import Path
 
-from sketchforge.atomic import write_bytes_atomic
+from sketchforge.atomic import pid_alive, write_bytes_atomic
 from sketchforge.document import fileformat as ff
 from sketchforge.errors import SketchforgeError
 
@@ -127,15 +127,7 @@ def writer_alive(meta) -> bool:
     pid = meta.get("pid")
     if type(pid) is not int or pid <= 0 or pid == os.getpid() or meta.get("host") != socket.gethostname():
         return False
-    try:
-        os.kill(pid, 0)  # signal 0: only asks whether the process exists
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True  # it exists (another user's process: a reused pid)
-    except OSError:
-        return False
-    return True
+    return pid_alive(pid)
 
 
 @dataclass(frozen=True)
