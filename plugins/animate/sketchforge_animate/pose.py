@@ -46,15 +46,18 @@ class Animator:
     def __init__(self, mesh: Mesh, anim: Animation) -> None:
         self.mesh = mesh
         self.ids = tuple(p.id for p in anim.pins)
-        self.handles = attach_pins(mesh.V, np.array([p.rest for p in anim.pins]).reshape(-1, 3), list(self.ids))
+        self.rests = np.array([p.rest for p in anim.pins], dtype=np.float64).reshape(-1, 3)
+        self.handles = attach_pins(mesh.V, self.rests, list(self.ids))
         self.solver = ArapSolver(mesh.V, mesh.F, self.handles) if len(self.handles) else None
 
     def fits(self, mesh: Mesh, anim: Animation) -> bool:
         """True when this animator's factorisation serves ``anim`` on ``mesh`` (same pins)."""
         if mesh is not self.mesh or tuple(p.id for p in anim.pins) != self.ids:
             return False
-        rests = np.array([p.rest for p in anim.pins]).reshape(-1, 3)
-        return len(rests) == 0 or np.array_equal(attach_pins(mesh.V, rests, list(self.ids)), self.handles)
+        rests = np.array([p.rest for p in anim.pins], dtype=np.float64).reshape(-1, 3)
+        if np.array_equal(rests, self.rests):
+            return True  # asked on every frame: no nearest-vertex search when nothing moved
+        return np.array_equal(attach_pins(mesh.V, rests, list(self.ids)), self.handles)
 
     def frames(self, anim: Animation, count: int):
         """Yield ``count`` frames (n,3) float64 from frame 0, in order."""
