@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 from sketchforge.atomic import write_bytes_atomic
-from sketchforge.errors import SketchforgeError
 from sketchforge.exporters import write_gltf
 
 from .gltf import animated_glb_bytes
@@ -32,8 +31,6 @@ def write_animation(path, doc, progress=None) -> str:
         frames.append(P.copy())
         if progress is not None:
             progress(f + 1, count)
-    if str(path).lower().endswith(".gltf"):
-        raise SketchforgeError("an animation is written as .glb (binary glTF); choose a .glb file name")
     write_bytes_atomic(path, animated_glb_bytes(mesh.F, frames))
     secs = count / FPS
     return f"{count} frames, {secs:.2f} s at {FPS} fps, {mesh.n_vertices} vertices, {mesh.n_faces} triangles"
