@@ -6,7 +6,7 @@ import numpy as np
 import shapely
 import shapely.ops
 
-from sketchforge.geometry.intensity import vertex_intensity
+from sketchforge.geometry.heightfield import layer_normals
 from sketchforge.geometry.isophotes import isophotes
 from sketchforge.geometry.reflectance import LAMBERTIAN
 from sketchforge_isophote_tool.fidelity import honoured_samples, mean_distance
@@ -33,12 +33,12 @@ def isophote_stroke(mesh, pick, offset=0.0, half=0.25, light=LIGHT):
 
 def fidelity(result, light=LIGHT):
     """(mean distance stroke -> old isophote, mean distance stroke -> new c-isophote, h) at the
-    stroke samples the edit honours. The new shading is the one the app draws (the core's
-    vertex normals, ``vertex_intensity``), marched with the core's ``isophotes``: not the
+    stroke samples the edit honours. The new shading is the one the app draws (the display's
+    vertex normals, ``layer_normals``), marched with the core's ``isophotes``: not the
     solver's own slope operators, so a mismatch between the two would show here."""
     pd = result.layer.planar
     pieces = [np.asarray(g.coords) for g in getattr(result.stroke, "geoms", [result.stroke])]
     P = honoured_samples(pd, pieces, result.band)
-    E = vertex_intensity(result.mesh.V, result.mesh.F, light)
+    E = layer_normals(result.mesh) @ np.asarray(light, dtype=np.float64)
     lines = [L for L in isophotes(result.mesh.V[:, :2], result.mesh.F, E, result.c)[0] if len(L) > 1]
     return mean_distance(P, result.isophote), mean_distance(P, shapely.MultiLineString(lines)), pd.h

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sketchforge.geometry.normals import vertex_normals
+from sketchforge.geometry.heightfield import layer_normals
 
 # Per mesh (meshes are immutable): vertex normals and outline edges, so a new view of the same
 # meshes (pan, zoom) only rasterises.
@@ -332,7 +332,7 @@ def _layer_fragments(mesh, view: View, antialias: bool):
     cached = _mesh_cache.get(mesh)
     V, F = np.asarray(mesh.V), np.asarray(mesh.F, dtype=np.int64)
     if cached is None:
-        cached = {"N": vertex_normals(V, F), "outline": boundary_edges(F)}
+        cached = {"N": layer_normals(mesh), "outline": boundary_edges(F)}
         _mesh_cache[mesh] = cached
     kept = cached.setdefault("fragments", {})
     if (view, antialias) in kept:

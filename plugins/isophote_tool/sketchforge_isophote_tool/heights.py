@@ -1,8 +1,9 @@
 """Heights from the new shading (thesis 4.5–4.6): the shape-from-shading equation
 R(p, q) = E solved for the change of height δz on the layer's own vertices.
 
-E_v(z) = R(Gp z, Gq z)_v is the shading the person sees (vertex-normal slopes are exactly
-linear in z, see :func:`sketchforge.geometry.intensity.gradient_operators`). Gauss–Newton on
+E_v(z) = R(p(z), q(z))_v is the shading the person sees, with the slopes of the layer's
+display normals (:func:`sketchforge.geometry.heightfield.slopes_from_heights`: the
+area-weighted gradient of w = z² over 2z, smooth up to the rim). Gauss–Newton on
 
     Σ_v m_v w_v (E_v(z + δz) − Ê_v)²  +  β h ∫_stroke (E(z + δz) − c)² ds
                                     +  α h² δzᵀ L M⁻¹ L δz,     δz = 0 outside U,
@@ -38,6 +39,7 @@ import scipy.sparse as sp
 
 from sketchforge.errors import SolverError
 from sketchforge.geometry.dirichlet import DirichletSolver
+from sketchforge.geometry.heightfield import SlopeLinearisation
 from sketchforge.geometry.reflectance import evaluate_pq
 
 from .layerdata import LayerData
@@ -120,10 +122,8 @@ def solve_heights(
         return dz
     # Only the rows whose slopes depend on U (U and its one-ring) change: shading is evaluated
     # there alone, and the stroke's barycentric rows are restricted to them.
-    Gp_u, Gq_u = pd.Gp[:, u], pd.Gq[:, u]
-    rows = np.unique(np.concatenate([Gp_u.tocoo().row, u]))
-    Gp_r, Gq_r = pd.Gp[rows], pd.Gq[rows]
-    Ju_p, Ju_q = Gp_u[rows], Gq_u[rows]
+    rows = np.unique(np.concatenate([pd.Gp[:, u].tocoo().row, u]))
+    slopes = SlopeLinearisation(pd.Gp[rows], pd.Gq[rows], rows, u)
     in_u = np.searchsorted(rows, u)  # positions of U's vertices among the rows
     Wd = pd.mass[u] * w[u]
     if stroke_rows is not None:
@@ -134,21 +134,23 @@ def solve_heights(
         B = B_full[:, rows]
         Ws = stroke_weight * pd.h * ws
     reg = alpha * pd.h**2 * pd.Q[u][:, u]
-    JpT, JqT = Ju_p.T.tocsr(), Ju_q.T.tocsr()
     x = np.zeros(len(u))
     z = ld.z.copy()
     solver = None
     for step in range(steps):
         z[u] = ld.z[u] + x
-        E, Rp, Rq = evaluate_pq(ld.model, Gp_r @ z, Gq_r @ z, ld.light)
+        # The slopes are not linear in z (p = Gp z² / 2z): linearised at this surface.
+        lin = slopes.at(z)
+        E, Rp, Rq = evaluate_pq(ld.model, lin.p, lin.q, ld.light)
 
-        # J = diag(R_p) Gp + diag(R_q) Gq (rows x U) is applied, never formed: J v gathers
-        # slope changes on the rows, Jᵀ y pulls row values back through the slope operators.
-        def J(v, Rp=Rp, Rq=Rq):
-            return Rp * (Ju_p @ v) + Rq * (Ju_q @ v)
+        # J = diag(R_p) Jp + diag(R_q) Jq (rows x U) is applied, never formed: J v gathers
+        # slope changes on the rows, Jᵀ y pulls row values back through the slope Jacobians.
+        def J(v, Rp=Rp, Rq=Rq, lin=lin):
+            dp, dq = lin.apply(v)
+            return Rp * dp + Rq * dq
 
-        def Jt(y, Rp=Rp, Rq=Rq):
-            return JpT @ (Rp * y) + JqT @ (Rq * y)
+        def Jt(y, Rp=Rp, Rq=Rq, lin=lin):
+            return lin.apply_t(Rp * y, Rq * y)
 
         def weigh(y):  # rows -> rows: the data and stroke weights of the normal equations
             t = np.zeros(len(rows))
@@ -163,6 +165,7 @@ def solve_heights(
             res += B.T @ (Ws * (B @ E + B_rest - c))
         g = Jt(res) + reg @ x
         if solver is None:
+            Ju_p, Ju_q = lin.matrices()
             Jall = (sp.diags(Rp) @ Ju_p + sp.diags(Rq) @ Ju_q).tocsr()
             J0 = Jall[in_u]
             H = J0.T @ sp.diags(Wd) @ J0 + reg

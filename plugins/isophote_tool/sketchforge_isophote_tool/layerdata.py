@@ -3,9 +3,9 @@
 Two levels, because an edit changes only heights:
 
 :class:`PlanarData` depends on the layer's triangulation in the drawing plane (V2, F) only,
-so it survives every edit of that layer: the slope operators (p, q as exactly linear functions
-of the heights), the squared Laplacian, the lumped mass, the outline, a point locator, the
-distance of each vertex to the outline and the layer's local width there, and the rim margin.
+so it survives every edit of that layer: the gradient operators the slopes p, q come from,
+the squared Laplacian, the lumped mass, the outline, a point locator, the distance of each
+vertex to the outline and the layer's local width there, and the rim margin.
 
 :class:`LayerData` adds what depends on the heights, the light and the reflectance model:
 the shading E at every vertex.
@@ -26,6 +26,7 @@ from scipy.spatial import cKDTree
 
 from sketchforge.geometry import guard
 from sketchforge.geometry.fairing import squared_laplacian_matrix
+from sketchforge.geometry.heightfield import slopes_from_heights
 from sketchforge.geometry.intensity import gradient_operators
 from sketchforge.geometry.laplacian import laplacian_and_mass
 from sketchforge.geometry.locate import TriangleLocator
@@ -52,9 +53,10 @@ class PlanarData:
     h : float
         Mean edge length.
     Gp, Gq : (n, n) scipy.sparse.csr_matrix float64
-        Slope operators: p = Gp @ z, q = Gq @ z are exactly the slopes of the area-weighted
-        vertex normals the app shades with
-        (:func:`sketchforge.geometry.intensity.gradient_operators`).
+        Area-weighted vertex gradients
+        (:func:`sketchforge.geometry.intensity.gradient_operators`); the slopes the app
+        shades with are p = Gp z² / 2z, q = Gq z² / 2z
+        (:func:`sketchforge.geometry.heightfield.slopes_from_heights`).
     Q : (n, n) scipy.sparse.csr_matrix float64
         Squared Laplacian Lᵀ M⁻¹ L (cotangent L, lumped M).
     mass : (n,) float64
@@ -214,7 +216,7 @@ def _planar(mesh: Mesh) -> PlanarData:
     h = float(np.linalg.norm(V2[e[:, 0]] - V2[e[:, 1]], axis=1).mean())
     # First: its guard refuses non-finite positions and zero-area faces before anything divides.
     L, M = laplacian_and_mass(V2, F, what="the layer's mesh")
-    Gp, Gq = gradient_operators(V2, F)  # = the vertex-normal slopes, linear in z
+    Gp, Gq = gradient_operators(V2, F)  # the display slopes are Gp z² / 2z (heightfield)
     outline = outline_polygon(mesh)
     is_contour = np.zeros(len(V2), bool)
     is_contour[mesh.rims] = True
@@ -282,8 +284,10 @@ def mesh_key(mesh: Mesh) -> bytes:
 
 def vertex_shading(pd: PlanarData, z: np.ndarray, light: np.ndarray, model: ReflectanceModel):
     """Shading E (n,) at the vertices for heights z (n,), with its slope gradient R_p, R_q (n,):
-    R at the vertex-normal slopes (Gp z, Gq z), what the app shows."""
-    return evaluate_pq(model, pd.Gp @ z, pd.Gq @ z, light)
+    R at the slopes of the layer's display normals
+    (:func:`sketchforge.geometry.heightfield.slopes_from_heights`), what the app shows."""
+    p, q = slopes_from_heights(pd.Gp, pd.Gq, z)
+    return evaluate_pq(model, p, q, light)
 
 
 def layer_data(mesh: Mesh, light: np.ndarray, model: ReflectanceModel) -> LayerData:
