@@ -291,7 +291,7 @@ def _outline_distance(P, N, edges, width, height):
     return pix, dist, nrm
 
 
-def rasterise(meshes: list, view: View, antialias: bool = True) -> GBuffer:
+def rasterise(meshes: list, view: View, antialias: bool = True, normals: list | None = None) -> GBuffer:
     """Rasterise layers back to front into per-pixel fragments (normals, coverage, layer ids).
 
     Parameters
@@ -303,6 +303,10 @@ def rasterise(meshes: list, view: View, antialias: bool = True) -> GBuffer:
     view : View
     antialias : bool
         Coverage from the distance to each outline; False gives hard pixel-centre silhouettes.
+    normals : list of (n_i, 3) float64 or None
+        Vertex normals to interpolate instead of the display's own
+        (:func:`sketchforge.geometry.heightfield.layer_normals`), one per mesh (None for
+        that mesh's own): for comparing normal fields; such fragments are not cached.
 
     Returns
     -------
@@ -313,7 +317,8 @@ def rasterise(meshes: list, view: View, antialias: bool = True) -> GBuffer:
     for li, mesh in enumerate(meshes):
         if mesh is None or mesh.n_faces == 0:
             continue
-        pix, alpha, n, edges = _layer_fragments(mesh, view, antialias)
+        own = None if normals is None else normals[li]
+        pix, alpha, n, edges = _layer_fragments(mesh, view, antialias, own)
         if edges is not None:
             edges_l.append((li, *edges))
         pix_l.append(pix)
@@ -323,7 +328,7 @@ def rasterise(meshes: list, view: View, antialias: bool = True) -> GBuffer:
     return _assemble(view, len(meshes), pix_l, lay_l, alpha_l, nrm_l, edges_l)
 
 
-def _layer_fragments(mesh, view: View, antialias: bool):
+def _layer_fragments(mesh, view: View, antialias: bool, normals=None):
     """One mesh's fragments in a view: (pix, alpha, normal, (outline pixels, distances) or None).
 
     Kept per mesh for the last few views (:data:`VIEWS_KEPT`: the canvas's, the layer
@@ -331,7 +336,9 @@ def _layer_fragments(mesh, view: View, antialias: bool):
     rasterises only that layer again, and redrawing a thumbnail does not evict the canvas's."""
     cached = _mesh_cache.get(mesh)
     V, F = np.asarray(mesh.V), np.asarray(mesh.F, dtype=np.int64)
-    if cached is None:
+    if normals is not None:
+        cached = {"N": np.asarray(normals, dtype=np.float64).reshape(len(V), 3), "outline": boundary_edges(F)}
+    elif cached is None:
         cached = {"N": layer_normals(mesh), "outline": boundary_edges(F)}
         _mesh_cache[mesh] = cached
     kept = cached.setdefault("fragments", {})

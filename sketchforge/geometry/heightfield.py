@@ -16,8 +16,8 @@ faces' gradients of the piecewise-linear w (the same averaging as
 
     p = (Gx w) / (2z),  q = (Gy w) / (2z),   w = z²,
 
-exact on a sphere's or an ellipsoid's (quadratic w) and measured 2× (interior) to 10× (rim)
-closer to an exact ellipsoid than the area-weighted normals. One definition serves the display
+measured on the exact inflation of an ellipse (default resolution): median error 0.03° against
+0.06°, largest (at the rim) 0.6–1.7° against 5.9–6.6° for the area-weighted normals. One definition serves the display
 (:func:`layer_normals`, per-pixel interpolation in :mod:`gbuffer`) and the sculpt solver
 (:func:`slopes_from_heights`, :class:`SlopeLinearisation`), so the isophotes drawn, the picked one,
 its band and the shading the solver fits are the same field.
