@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from sketchforge.geometry.heightfield import SlopeLinearisation, layer_normals, slopes_at_rows, slopes_from_heights
+from sketchforge.geometry.heightfield import SlopeLinearisation, layer_normals, slopes_from_heights
 from sketchforge.geometry.intensity import gradient_operators
 from sketchforge.geometry.isophote_error import InflatedEllipse
 from sketchforge.geometry.mesh import Mesh
@@ -50,8 +50,8 @@ def test_display_normals_and_the_solver_shading_are_one_field():
     ld = layer_data(m, LIGHT, LAMBERTIAN)
     assert np.abs(ld.E - N @ LIGHT).max() < 1e-12
     rows = np.arange(40, 900)
-    pr, qr = slopes_at_rows(Gx[rows], Gy[rows], m.V[:, 2], rows)
-    assert np.array_equal(pr, p[rows]) and np.array_equal(qr, q[rows])
+    at = SlopeLinearisation(Gx, Gy, rows, rows).at(m.V[:, 2])  # the solver's
+    assert np.array_equal(at.p, p[rows]) and np.array_equal(at.q, q[rows])
 
 
 def test_slope_jacobians_match_finite_differences():
@@ -60,7 +60,7 @@ def test_slope_jacobians_match_finite_differences():
     Gx, Gy = gradient_operators(m.V[:, :2], m.F)
     cols = np.nonzero(z > 0.3 * z.max())[0]
     rows = np.unique(np.concatenate([Gx[:, cols].tocoo().row, cols]))
-    lin = SlopeLinearisation(Gx[rows], Gy[rows], rows, cols)
+    lin = SlopeLinearisation(Gx, Gy, rows, cols)
     at = lin.at(z)
     v = np.random.default_rng(3).standard_normal(len(cols)) * 1e-6 * z.max()
     z2 = z.copy()
@@ -83,3 +83,21 @@ def test_what_is_not_an_inflated_layer_keeps_area_weighted_normals(ellipsoid):
     np.testing.assert_array_equal(layer_normals(below), vertex_normals(below.V, m.F))
     flat = Mesh(m.V * [1, 1, 0], m.F, m.boundary)  # inflation 0
     np.testing.assert_allclose(layer_normals(flat), np.tile([0.0, 0.0, 1.0], (m.n_vertices, 1)), atol=1e-15)
+
+
+@pytest.mark.parametrize("smoothing", [0.5, 0.8])
+def test_a_faired_rim_keeps_its_finite_slope(smoothing):
+    """The fairing bends the rim off the vertical (w ~ distance² there, not ~ distance): its rim
+    vertices and their first ring keep the area-weighted normals, the rest of the layer the
+    w-form, and an unfaired layer's rim stays vertical."""
+    from sketchforge_inflate.inflate import inflate_stroke
+
+    from inflate_shapes import ellipse
+
+    faired = inflate_stroke(ellipse(300, 0.75, 0.5), closed=True, params={"smoothing": smoothing})
+    rim = faired.boundary
+    N, A = layer_normals(faired), vertex_normals(faired.V, faired.F)
+    assert np.abs(N[rim] - A[rim]).max() < 1e-12
+    assert np.all(N[rim, 2] > 0.1)  # tilted, not in the plane
+    plain = inflate_stroke(ellipse(300, 0.75, 0.5), closed=True, params={"smoothing": 0.0})
+    assert np.all(np.abs(layer_normals(plain)[plain.boundary, 2]) <= 1.01 * NZ_MIN)

@@ -30,26 +30,67 @@ gets a finite slope of magnitude 1 / NZ_MIN, its normal 0.6° off the drawing pl
 
 from __future__ import annotations
 
+import hashlib
+import threading
+from collections import OrderedDict
+
 import numpy as np
 import scipy.sparse as sp
 
-from sketchforge.geometry.normals import NZ_MIN, _face_cross, normals_from_slopes, vertex_normals
+from sketchforge.geometry.intensity import gradient_operators
+from sketchforge.geometry.normals import NZ_MIN, normals_from_slopes, vertex_normals
 
 
-def _slopes(gwx, gwy, gzx, gzy, z, nz_min):
-    """(p, q, w_form, free) from the averaged gradients of w and of z at each vertex.
+#: A rim vertex is vertical (the w-form's in-plane normal) where |∇w| there is at least this
+#: fraction of its inner neighbours' (w ~ distance: ratio 1.0 measured on unfaired layers at
+#: any resolution), tilted (the z-form's one-sided slope) where it is at most RIM_FAIRED (w ~
+#: distance²: a faired rim with a finite slope, ratio 0.1–0.5 measured at smoothing 0.5), and
+#: a blend of the two normals in between, so neighbours along a rim never jump between them.
+RIM_VERTICAL = 0.9
+RIM_FAIRED = 0.6
 
-    ``w_form`` marks the vertices that use (−∇w, 2z); ``free`` the ones whose slope is not
-    clamped (where the slope depends on z, for the Jacobian)."""
-    w_form = (z > 0) | ((z == 0) & ((gwx != 0) | (gwy != 0)))
-    nx = np.where(w_form, -gwx, -gzx)
-    ny = np.where(w_form, -gwy, -gzy)
-    nz = np.where(w_form, 2.0 * z, 1.0)
-    norm = np.sqrt(nx * nx + ny * ny + nz * nz)
-    nzu = nz / norm
-    free = nzu >= nz_min
+
+def _field(Gx, Gy, z, nz_min):
+    """(p, q, w_form, free) at every vertex from the heights z (n,) and the full operators.
+
+    ``w_form`` marks the vertices whose slope is Gx z² / 2z (or, at a rim vertex, leans on
+    the in-plane normal); ``free`` the ones whose slope is not clamped and follows its formula
+    (the Jacobian's rows)."""
+    z = np.asarray(z, dtype=np.float64)
+    wz = np.column_stack([z * z, z])  # one product per operator for both fields
+    gx, gy = Gx @ wz, Gy @ wz
+    gwx, gwy, gzx, gzy = gx[:, 0], gy[:, 0], gx[:, 1], gy[:, 1]
+    inner = z > 0
+    # Rim vertices (z = 0 with w rising away from them): is the rim vertical there?
+    a = np.hypot(gwx, gwy)
+    rim = np.nonzero((z == 0) & (a > 0))[0]
+    lam = np.zeros(len(z))
+    wt_inner = np.ones(len(z))
+    if len(rim):
+        P = (abs(Gx[rim]) + abs(Gy[rim])).tocoo()  # the rim vertices' one-rings
+        ok = inner[P.col]
+        total = np.bincount(P.row[ok], a[P.col[ok]], len(rim))
+        count = np.bincount(P.row[ok], None, len(rim))
+        ratio = a[rim] / np.maximum(total / np.maximum(count, 1), 1e-300)
+        lam[rim] = np.clip((ratio - RIM_FAIRED) / (RIM_VERTICAL - RIM_FAIRED), 0.0, 1.0)
+        # the first ring inside follows its rim vertices
+        s_l = np.bincount(P.col[ok], lam[rim][P.row[ok]], len(z))
+        s_c = np.bincount(P.col[ok], None, len(z))
+        near = s_c > 0
+        wt_inner[near] = s_l[near] / s_c[near]
+    w_form = (inner & (wt_inner > 0)) | (lam > 0)
+    # unit normals of both forms; the w-form's is in the plane at a rim vertex
+    nw = np.column_stack([-gwx, -gwy, 2.0 * z])
+    nz = np.column_stack([-gzx, -gzy, np.ones(len(z))])
+    nw /= np.maximum(np.linalg.norm(nw, axis=1, keepdims=True), 1e-300)
+    nz /= np.linalg.norm(nz, axis=1, keepdims=True)
+    wt = np.where(inner, wt_inner, lam)
+    n = wt[:, None] * nw + (1.0 - wt)[:, None] * nz
+    norm = np.linalg.norm(n, axis=1)
+    nzu = n[:, 2] / norm
+    free = (nzu >= nz_min) & ((wt == 1.0) | (wt == 0.0))
     den = np.maximum(nzu, nz_min) * norm  # = n_z unclamped, else nz_min scaled back
-    return -nx / den, -ny / den, w_form, free
+    return -n[:, 0] / den, -n[:, 1] / den, w_form, free
 
 
 def slopes_from_heights(Gx, Gy, z: np.ndarray, nz_min: float = NZ_MIN) -> tuple[np.ndarray, np.ndarray]:
@@ -57,56 +98,21 @@ def slopes_from_heights(Gx, Gy, z: np.ndarray, nz_min: float = NZ_MIN) -> tuple[
 
     Parameters
     ----------
-    Gx, Gy : (k, n) scipy.sparse matrices float64
-        Rows of :func:`sketchforge.geometry.intensity.gradient_operators` (all n, or the k
-        vertices wanted: the result is the same, row by row, bit for bit).
+    Gx, Gy : (n, n) scipy.sparse.csr_matrix float64
+        :func:`sketchforge.geometry.intensity.gradient_operators` of the layer.
     z : (n,) float64
-        Heights of every vertex.
+        Heights.
     nz_min : float
         Clamp of the normal's z component (see :func:`sketchforge.geometry.normals.slopes`).
 
     Returns
     -------
-    p, q : (k,) float64
-        Finite; (Gx z², Gy z²) / 2z where z > 0, the in-plane normal's clamped slope at a rim
-        vertex, (Gx z, Gy z) where z < 0 or the layer is flat there.
+    p, q : (n,) float64
+        Finite: (Gx z², Gy z²) / 2z where z > 0; at a rim vertex (z = 0) the clamped slope of
+        the in-plane normal, the one-sided (Gx z, Gy z), or a blend (:data:`RIM_VERTICAL`);
+        (Gx z, Gy z) where z < 0 or the layer is flat there.
     """
-    p, q, _, _ = _slopes_rows(Gx, Gy, z, _rows_of(Gx, z), nz_min)
-    return p, q
-
-
-def _rows_of(Gx, z) -> np.ndarray:
-    """z at the rows of Gx when it has all n rows; otherwise the caller passes them."""
-    if Gx.shape[0] != len(z):
-        raise ValueError(
-            f"pass z at the operators' {Gx.shape[0]} rows with slopes_at_rows, got {len(z)} heights"
-        )
-    return z
-
-
-def _slopes_rows(Gx, Gy, z, z_rows, nz_min):
-    z = np.asarray(z, dtype=np.float64)
-    wz = np.column_stack([z * z, z])  # one product per operator for both fields
-    gx, gy = Gx @ wz, Gy @ wz
-    return _slopes(gx[:, 0], gy[:, 0], gx[:, 1], gy[:, 1], np.asarray(z_rows, dtype=np.float64), nz_min)
-
-
-def slopes_at_rows(Gx_rows, Gy_rows, z: np.ndarray, rows: np.ndarray, nz_min: float = NZ_MIN):
-    """:func:`slopes_from_heights` at some vertices only.
-
-    Parameters
-    ----------
-    Gx_rows, Gy_rows : (k, n) sparse float64
-        The operators' rows ``rows``.
-    z : (n,) float64
-    rows : (k,) int64
-
-    Returns
-    -------
-    p, q : (k,) float64
-        Equal, bit for bit, to ``slopes_from_heights(Gx, Gy, z)`` at ``rows``.
-    """
-    p, q, _, _ = _slopes_rows(Gx_rows, Gy_rows, z, np.asarray(z)[rows], nz_min)
+    p, q, _, _ = _field(Gx, Gy, z, nz_min)
     return p, q
 
 
@@ -120,31 +126,32 @@ class SlopeLinearisation:
 
     Parameters
     ----------
-    Gx_rows, Gy_rows : (k, n) sparse float64
-        The rows ``rows`` of :func:`sketchforge.geometry.intensity.gradient_operators`.
+    Gx, Gy : (n, n) sparse float64
+        :func:`sketchforge.geometry.intensity.gradient_operators` of the layer.
     rows : (k,) int64, sorted
     cols : (u,) int64
     """
 
-    def __init__(self, Gx_rows, Gy_rows, rows: np.ndarray, cols: np.ndarray, nz_min: float = NZ_MIN):
+    def __init__(self, Gx, Gy, rows: np.ndarray, cols: np.ndarray, nz_min: float = NZ_MIN):
         self.rows = np.asarray(rows, dtype=np.int64)
         self.cols = np.asarray(cols, dtype=np.int64)
         self.nz_min = nz_min
-        self._G = (sp.csr_matrix(Gx_rows), sp.csr_matrix(Gy_rows))
-        # The heights at cols move; the operators' columns there, stacked (p rows, then q
-        # rows), and their transpose are fixed: built once, so a step costs two sparse products.
-        self._Gc = sp.vstack([G[:, self.cols] for G in self._G]).tocsr()
+        self._G = (sp.csr_matrix(Gx), sp.csr_matrix(Gy))
+        # The heights at cols move; the operators' rows and columns there, stacked (p rows,
+        # then q rows), and their transpose are fixed: built once, so a step costs a few
+        # sparse products.
+        self._Gc = sp.vstack([G[self.rows][:, self.cols] for G in self._G]).tocsr()
         self._GcT = self._Gc.T.tocsr()
         pos = np.minimum(np.searchsorted(self.rows, self.cols), len(self.rows) - 1)
         hit = self.rows[pos] == self.cols
         self._diag_row, self._diag_col = pos[hit], np.nonzero(hit)[0]
 
     def at(self, z: np.ndarray) -> "Linearised":
-        """The slopes (p, q at ``rows``, bit for bit :func:`slopes_at_rows`) and their
-        Jacobians at heights z (n,)."""
+        """The slopes (p, q at ``rows``, bit for bit :func:`slopes_from_heights` there) and
+        their Jacobians at heights z (n,)."""
         z = np.asarray(z, dtype=np.float64)
         zr = z[self.rows]
-        p, q, w_form, free = _slopes_rows(*self._G, z, zr, self.nz_min)
+        p, q, w_form, free = (a[self.rows] for a in _field(*self._G, z, self.nz_min))
         wf = w_form & free & (zr > 0)
         inv = np.divide(1.0, zr, out=np.zeros(len(zr)), where=wf)
         zm = (~w_form & free).astype(np.float64)
@@ -211,24 +218,36 @@ def layer_normals(mesh) -> np.ndarray:
     :func:`slopes_from_heights` for a layer (an open surface, z >= 0), the area-weighted
     vertex normals for anything else (a closed assembled model, a posed or folded one).
 
-    The area-weighted means of the face gradients of w and z are accumulated from face
-    cross products like :func:`sketchforge.geometry.normals.vertex_normals` (no sparse
-    operators: a few ms at 10k vertices); they equal the operators' products to rounding.
-    """
+    The gradient operators are kept per planar mesh (an edit changes only heights)."""
     V = np.asarray(mesh.V, dtype=np.float64)
     F = np.asarray(mesh.F, dtype=np.int64)
     z = V[:, 2]
     if len(mesh.boundary) == 0 or len(F) == 0 or not (z >= 0).all():
         return vertex_normals(V, F)
-    cw = _face_cross(np.column_stack([V[:, :2], z * z]), F)
-    cz = _face_cross(V, F)
-    # A face's cross product is 2A·(−∇f, 1) for f = w or z; planar areas are the same in both.
-    acc = np.zeros((len(V), 5))
-    for k in range(3):
-        np.add.at(acc, F[:, k], np.column_stack([cw, cz[:, :2]]))
-    area = acc[:, 2]
-    ok = area > 0
-    g = np.zeros((len(V), 4))
-    g[ok] = -acc[ok][:, [0, 1, 3, 4]] / area[ok, None]
-    p, q, _, _ = _slopes(g[:, 0], g[:, 1], g[:, 2], g[:, 3], z, NZ_MIN)
+    p, q = slopes_from_heights(*_operators(V[:, :2], F), z)
     return normals_from_slopes(p, q)
+
+
+_OPERATORS: "OrderedDict[bytes, tuple]" = OrderedDict()
+_OPERATORS_KEPT = 16
+_LOCK = threading.Lock()
+
+
+def _operators(V2: np.ndarray, F: np.ndarray):
+    """gradient_operators(V2, F), kept for the last few planar meshes (thread-safe: the canvas
+    rasterises on a worker thread)."""
+    h = hashlib.blake2b(digest_size=16)
+    for a in (V2, F):
+        h.update(np.ascontiguousarray(a).tobytes())
+    key = h.digest()
+    with _LOCK:
+        hit = _OPERATORS.get(key)
+        if hit is not None:
+            _OPERATORS.move_to_end(key)
+            return hit
+    ops = gradient_operators(V2, F)
+    with _LOCK:
+        _OPERATORS[key] = ops
+        while len(_OPERATORS) > _OPERATORS_KEPT:
+            _OPERATORS.popitem(last=False)
+    return ops

@@ -123,7 +123,7 @@ def solve_heights(
     # Only the rows whose slopes depend on U (U and its one-ring) change: shading is evaluated
     # there alone, and the stroke's barycentric rows are restricted to them.
     rows = np.unique(np.concatenate([pd.Gp[:, u].tocoo().row, u]))
-    slopes = SlopeLinearisation(pd.Gp[rows], pd.Gq[rows], rows, u)
+    slopes = SlopeLinearisation(pd.Gp, pd.Gq, rows, u)
     in_u = np.searchsorted(rows, u)  # positions of U's vertices among the rows
     Wd = pd.mass[u] * w[u]
     if stroke_rows is not None:
