@@ -23,13 +23,13 @@ def mesh(request):
 def test_drawn_lines_run_on_the_exact_isophotes_in_one_piece(mesh):
     view = gb.View.framing([mesh], 600, 600, 0.05)
     w = line_wobble(SURFACE, mesh, view, LIGHT, 8)
-    assert w.centre_pixels > 3000
+    assert w.centre_pixels > 2500
     # a perfect 1.2 px line has its centre pixels within 0.6 px of the level
     assert w.median < 0.4 and w.p95 < 0.9 and w.max < 3.0, w
     assert w.pieces == w.exact_pieces == (1,) * 8, w
     # the area-weighted vertex normals drew the same levels zig-zagging and in pieces
     old = line_wobble(SURFACE, mesh, view, LIGHT, 8, normals=vertex_normals(mesh.V, mesh.F))
-    assert old.p95 > 2.0 and old.extra_pieces >= 5, old
+    assert old.p95 > 1.5 and old.extra_pieces >= 5, old
 
 
 def test_picked_isophotes_follow_the_exact_ones(mesh):

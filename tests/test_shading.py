@@ -121,9 +121,9 @@ def test_intensity_from_mesh_normals_converges_on_gaussian_bump():
 
 
 def test_gradient_operators_give_the_slopes_of_the_vertex_normals():
-    """(Gx z, Gy z) are exactly the slopes of the area-weighted vertex normals the app shades
-    with (the isophote sculpt fits heights through these operators), and Gx f is
-    vertex_gradient's answer for any field f."""
+    """(Gx z, Gy z) are exactly the slopes of the area-weighted vertex normals (the app's
+    height-field normals and the isophote sculpt's slopes are built on these operators), and
+    Gx f is vertex_gradient's answer for any field f."""
     from sketchforge.geometry.intensity import gradient_operators
     from sketchforge.geometry.normals import slopes, vertex_normals
 

@@ -2,10 +2,10 @@
 
 An inflated layer meets the drawing plane at a right angle: near its rim z ~ sqrt(distance),
 so z's second derivatives are unbounded there, and normals averaged from z's own triangles
-(area-weighted vertex normals) are noisy next to the rim: measured on an exact ellipsoid,
-up to 6° at the rim, which drew the highest isophotes near the lit rim as 2–5 ragged pieces
-each. w = z² behaves like the distance to the rim (for the inflation's Poisson solution it is
-that solution, times inflation²), smooth up to and across the rim. Since ∇w = 2z∇z,
+(area-weighted vertex normals) are noisy next to the rim: measured on the exact inflation of
+an ellipse, up to 6° at the rim, which drew the highest isophotes near the lit rim as 2–5
+ragged pieces each. w = z² behaves like the distance to the rim (for the inflation's Poisson
+solution it is that solution, times inflation²), smooth up to the rim. Since ∇w = 2z∇z,
 
     n ∝ (−∇z, 1) ∝ (−∇w, 2z),
 
@@ -14,17 +14,25 @@ normal −∇w/|∇w| the true surface has. ∇w at a vertex is the area-weighte
 faces' gradients of the piecewise-linear w (the same averaging as
 :func:`sketchforge.geometry.intensity.gradient_operators`), so the slopes are
 
-    p = (Gx w) / (2z),  q = (Gy w) / (2z),   w = z²,
+    p = (Gx w) / (2z),  q = (Gy w) / (2z),   w = z².
 
-measured on the exact inflation of an ellipse (default resolution): median error 0.03° against
-0.06°, largest (at the rim) 0.6–1.7° against 5.9–6.6° for the area-weighted normals. One definition serves the display
-(:func:`layer_normals`, per-pixel interpolation in :mod:`gbuffer`) and the sculpt solver
-(:func:`slopes_from_heights`, :class:`SlopeLinearisation`), so the isophotes drawn, the picked one,
-its band and the shading the solver fits are the same field.
+On that exact ellipse (default resolution) the normals' median error is 0.03° (0.06° for the
+area-weighted ones) and the largest, at the rim, 0.6–1.7° (5.9–6.6°); the isophotes drawn
+from them are as close to the exact ones as exact vertex normals draw them
+(``benchmarks/bench_isophotes.py``).
 
-Where this does not apply — a vertex with z < 0, or one where both ∇w and z vanish (a flat
-layer) — the slopes are those of the area-weighted vertex normals, (Gx z, Gy z). Slopes are
-clamped like :func:`sketchforge.geometry.normals.slopes` (|n_z| >= NZ_MIN), so a rim vertex
+A faired rim (the inflate plugin's smoothing) is not vertical: z ~ distance there, w ~
+distance², and the w-form would stand its rim vertices up. Such a rim vertex's |∇w| is a
+fraction (0.1–0.5) of its inner neighbours' (1.0 on an unfaired rim), so the rim vertices
+blend from the w-form to the area-weighted normal by that ratio (:data:`RIM_VERTICAL`,
+:data:`RIM_FAIRED`), and their first ring inside follows them.
+
+One definition serves the display (:func:`layer_normals`, interpolated per pixel by
+:mod:`gbuffer`) and the sculpt solver (:func:`slopes_from_heights`,
+:class:`SlopeLinearisation`), so the isophotes drawn, the picked one, its band and the shading
+the solver fits are the same field. Where the w-form does not apply — z < 0, or a flat layer —
+the slopes are those of the area-weighted vertex normals, (Gx z, Gy z). Slopes are clamped
+like :func:`sketchforge.geometry.normals.slopes` (n_z >= NZ_MIN), so a vertical rim vertex
 gets a finite slope of magnitude 1 / NZ_MIN, its normal 0.6° off the drawing plane.
 """
 

@@ -77,8 +77,9 @@ def gradient_operators(V2: np.ndarray, F: np.ndarray):
 
     For a height field z this is also the slope (p, q) of the area-weighted vertex normals
     (:func:`sketchforge.geometry.normals.vertex_normals`): a face's unnormalised normal is
-    2A·(−p_f, −q_f, 1), so their sum has slopes Σ A p_f / Σ A. Solvers that fit heights to a
-    shading use them to work on the very shading the app draws, linearly in z.
+    2A·(−p_f, −q_f, 1), so their sum has slopes Σ A p_f / Σ A. The app's layers shade with
+    the slopes (Gx z², Gy z²) / 2z instead (:mod:`sketchforge.geometry.heightfield`, smooth up
+    to the rim), built on these operators.
 
     Parameters
     ----------

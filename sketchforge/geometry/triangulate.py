@@ -197,8 +197,8 @@ def relax_interior(V2: np.ndarray, F: np.ndarray, k: int, steps: int = RELAX_STE
     triangles, ``steps`` times (Lloyd-like smoothing; the boundary stays exactly as drawn).
 
     Why: Triangle's quality mesh has angles >= MIN_ANGLE but irregular vertex valences, and on
-    such 1-rings the area-weighted vertex normals the app shades with (and the sculpt's slope
-    operators, the same average) are only first-order accurate: isophotes wobble at the
+    such 1-rings area-weighted vertex averages (the gradient operators the app's normals and
+    the sculpt's slopes are built on) are only first-order accurate: isophotes wobble at the
     triangle scale even where the surface is smooth (with exact normals at the same vertices
     the lines are straight). Measured on a unit disk at h = 0.03, inflated to the hemisphere:
     the normal error for r < 0.9 drops from median 0.20° / p95 0.51° / max 1.24° to 0.06° /
