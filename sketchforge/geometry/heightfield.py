@@ -80,7 +80,8 @@ def _field(Gx, Gy, z, nz_min):
         total = np.bincount(P.row[ok], a[P.col[ok]], len(rim))
         count = np.bincount(P.row[ok], None, len(rim))
         ratio = a[rim] / np.maximum(total / np.maximum(count, 1), 1e-300)
-        lam[rim] = np.clip((ratio - RIM_FAIRED) / (RIM_VERTICAL - RIM_FAIRED), 0.0, 1.0)
+        # no neighbour above the plane (a flat or sunken spot): not a rim of a raised surface
+        lam[rim] = np.where(count > 0, np.clip((ratio - RIM_FAIRED) / (RIM_VERTICAL - RIM_FAIRED), 0.0, 1.0), 0.0)
         # the first ring inside follows its rim vertices
         s_l = np.bincount(P.col[ok], lam[rim][P.row[ok]], len(z))
         s_c = np.bincount(P.col[ok], None, len(z))
@@ -223,14 +224,15 @@ class Linearised:
 
 def layer_normals(mesh) -> np.ndarray:
     """Unit normals (n, 3) float64 at a mesh's vertices: the height-field normals of
-    :func:`slopes_from_heights` for a layer (an open surface, z >= 0), the area-weighted
-    vertex normals for anything else (a closed assembled model, a posed or folded one).
+    :func:`slopes_from_heights` for a layer (an open surface; vertex by vertex, so wherever
+    z < 0 they are the area-weighted ones, as the sculpt solver sees them), the area-weighted
+    vertex normals for a closed mesh (an assembled model, a posed one).
 
     The gradient operators are kept per planar mesh (an edit changes only heights)."""
     V = np.asarray(mesh.V, dtype=np.float64)
     F = np.asarray(mesh.F, dtype=np.int64)
     z = V[:, 2]
-    if len(mesh.boundary) == 0 or len(F) == 0 or not (z >= 0).all():
+    if len(mesh.boundary) == 0 or len(F) == 0:
         return vertex_normals(V, F)
     p, q = slopes_from_heights(*_operators(V[:, :2], F), z)
     return normals_from_slopes(p, q)
