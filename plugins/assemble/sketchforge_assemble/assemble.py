@@ -20,7 +20,7 @@ from sketchforge.geometry.mesh import Mesh
 from .attach import Attachment, find_attachments
 from .blend import blend_junctions
 from .depth import build_problem, settle_free_parts, solve_depth
-from .fair import fair_seams, fairing_is_safe, supports
+from .fair import fair_seams, fairing_is_safe, seam_zone, supports
 from .remesh import insert_chains
 from .sheet import sheet_from_mesh, taper
 from .stitch import build_mesh
@@ -194,12 +194,13 @@ def assemble_detailed(meshes: Sequence[Mesh | None], closed: Sequence[bool] | No
     timings["stitch"] = time.perf_counter() - t
     if lips is not None and p["fair"] > 0:
         t = time.perf_counter()
+        A, zone = seam_zone(F, len(V), seam, int(p["fair"]))
         # A free part resting on a face near a junction keeps the face under it as it was
         # solved (fairing it away would leave the part floating, or sunk into it).
-        under_free = np.zeros(len(V), bool)
+        moved = zone.copy()
         for k in sorted(set(range(len(sheets))) - in_att):
-            under_free |= supports(V, F, face_layer, face_kind, k, sheets[k].polygon().buffer(sheets[k].h))
-        V, moved = fair_seams(V, F, seam, int(p["fair"]), under_free)
+            moved &= ~supports(V, F, face_layer, face_kind, k, sheets[k].polygon().buffer(sheets[k].h), zone)
+        V = fair_seams(V, F, moved, A)
         timings["fair"] = time.perf_counter() - t
         t = time.perf_counter()
         safe = fairing_is_safe(V, F, moved, float(np.median([s.h for s in sheets])))

@@ -51,9 +51,23 @@ def ring_region(A: sp.csr_matrix, seed: np.ndarray, rings: int) -> np.ndarray:
     return region
 
 
+def seam_zone(F: np.ndarray, n: int, seam: np.ndarray, rings: int):
+    """The vertices :func:`fair_seams` may move: those at most ``rings`` edges from ``seam``
+    (k,) int64 over the triangles F (m, 3) of n vertices.
+
+    Returns
+    -------
+    A : (n, n) csr_matrix
+        The vertex adjacency (:func:`adjacency`), for :func:`fair_seams`.
+    zone : (n,) bool
+    """
+    A = adjacency(F, n)
+    return A, ring_region(A, np.asarray(seam, np.int64), rings)
+
+
 def supports(V: np.ndarray, F: np.ndarray, face_layer: np.ndarray, face_kind: np.ndarray, part: int,
-             footprint) -> np.ndarray:
-    """(n,) bool: the vertices of the faces a free part rests on, within its footprint.
+             footprint, zone: np.ndarray) -> np.ndarray:
+    """(n,) bool: the vertices within ``zone`` of the faces a free part rests on.
 
     Parameters
     ----------
@@ -65,6 +79,8 @@ def supports(V: np.ndarray, F: np.ndarray, face_layer: np.ndarray, face_kind: np
         The free part's layer.
     footprint : shapely geometry
         Where in the drawing plane it may rest on something (its outline, a little widened).
+    zone : (n,) bool
+        The vertices that would move (:func:`seam_zone`); only these are looked at.
 
     Every layer is a height field with its front face above its back face, so below the part
     only a front face can hold it and, of those, the one nearest to it in z (the median gap
@@ -73,19 +89,23 @@ def supports(V: np.ndarray, F: np.ndarray, face_layer: np.ndarray, face_kind: np
     from scipy.spatial import cKDTree
 
     out = np.zeros(len(V), bool)
+    cand = np.flatnonzero(zone)
+    cand = cand[shapely.contains_xy(footprint, V[cand, 0], V[cand, 1])]
     own = np.unique(F[face_layer == part])
-    if len(own) == 0:
+    if len(cand) == 0 or len(own) == 0:
         return out
+    mark = np.zeros(len(V), bool)
+    mark[cand] = True
+    near = np.flatnonzero(mark[F].any(axis=1))  # the faces with a candidate vertex
     tree = cKDTree(V[own, :2])
     for kind, sign in ((0, 1.0), (1, -1.0)):
         best, best_gap = None, np.inf
-        for layer in np.unique(face_layer[face_kind == kind]):
+        mine = near[face_kind[near] == kind]
+        for layer in np.unique(face_layer[mine]):
             if layer == part:
                 continue
-            v = np.unique(F[(face_layer == layer) & (face_kind == kind)])
-            v = v[shapely.contains_xy(footprint, V[v, 0], V[v, 1])]
-            if len(v) == 0:
-                continue
+            v = np.unique(F[mine[face_layer[mine] == layer]])
+            v = v[mark[v]]
             # the part's front and back vertex share their xy: the two nearest are both
             _, nn = tree.query(V[v, :2], k=2)
             z = V[own[nn], 2]
@@ -98,8 +118,8 @@ def supports(V: np.ndarray, F: np.ndarray, face_layer: np.ndarray, face_kind: np
     return out
 
 
-def fair_seams(V: np.ndarray, F: np.ndarray, seam: np.ndarray, rings: int = 10, keep: np.ndarray | None = None):
-    """Bi-Laplacian fairing of the vertices within ``rings`` rings of ``seam``.
+def fair_seams(V: np.ndarray, F: np.ndarray, moved: np.ndarray, A: sp.csr_matrix | None = None) -> np.ndarray:
+    """Bi-Laplacian fairing of the vertices ``moved``.
 
     Parameters
     ----------
@@ -107,32 +127,25 @@ def fair_seams(V: np.ndarray, F: np.ndarray, seam: np.ndarray, rings: int = 10, 
         Vertex positions of a closed mesh.
     F : (m, 3) int64
         Its triangles.
-    seam : (k,) int64
-        The glued junction chains (see :func:`.stitch.build_mesh`).
-    rings : int
-        How many rings of edges around the seam move (>= 1).
-    keep : (n,) bool, optional
-        Vertices that must not move even within the rings: those under (or over) a free
-        part, which rests on them at the clearance the depth solve gave it.
+    moved : (n,) bool
+        The vertices that move (:func:`seam_zone`, less those a free part rests on, see
+        :func:`supports`); every other vertex is fixed.
+    A : (n, n) csr_matrix, optional
+        The vertex adjacency, if already built (:func:`seam_zone`).
 
     Returns
     -------
-    V2 : (n, 3) float64
+    (n, 3) float64
         ``V`` with the moved vertices replaced; every other vertex is bit-identical.
-    moved : (n,) bool
-        The vertices that moved.
 
     Solves  min Σ_i |(L x)_i|² / d_i  over the moved vertices (L the graph Laplacian, d_i the
     vertex degree, the usual lumped mass), the others fixed: one sparse LU of the moved
     block, three right-hand sides.
     """
-    A = adjacency(F, len(V))
-    moved = ring_region(A, np.asarray(seam, np.int64), rings)
-    if keep is not None:
-        moved &= ~keep
+    A = adjacency(F, len(V)) if A is None else A
     free = np.flatnonzero(moved)
     if len(free) == 0:
-        return V.copy(), moved
+        return V.copy()
     deg = np.asarray(A.sum(axis=1)).ravel()
     L = (sp.diags(deg) - A).tocsr()
     # Only the rows of L near the moved vertices matter: restrict before squaring.
@@ -145,7 +158,7 @@ def fair_seams(V: np.ndarray, F: np.ndarray, seam: np.ndarray, rings: int = 10, 
     X = splu(Qf[:, free].tocsc(), permc_spec="COLAMD").solve(rhs)
     V2 = V.copy()
     V2[free] = X
-    return V2, moved
+    return V2
 
 
 def fairing_is_safe(V: np.ndarray, F: np.ndarray, moved: np.ndarray, h: float) -> bool:
