@@ -162,3 +162,22 @@ def test_fillet_starts_the_part_where_the_host_is():
         d = np.linalg.norm(V[on_body, :2] - V[v, :2], axis=1)
         ring = on_body[(d > 0.3 * h) & (d < 1.5 * h)]
         assert np.min(V[ring, 2]) - 1.0 * h <= V[v, 2] <= np.max(V[ring, 2]) + 5.0 * h
+
+
+def test_a_model_inside_the_fairing_rings_keeps_its_fillet():
+    # A small, coarse model: 50 rings cover all of it, so nothing would hold the fairing in
+    # place (a singular system); it keeps the fillet's shape instead, closed and clean.
+    from sketchforge_inflate import inflate_stroke
+
+    t = np.linspace(0, 2 * np.pi, 48, endpoint=False)
+    a = np.radians(np.linspace(100, 400, 40))
+    params = {"resolution": 0.08, "inflation": 1.0, "smoothing": 0.5}
+    body = inflate_stroke(np.c_[0.6 * np.cos(t), 0.4 * np.sin(t)], closed=True, params=params)
+    arm = inflate_stroke(np.c_[0.35 + 0.25 * np.cos(a), -0.2 + 0.25 * np.sin(a)], closed=False, params=params)
+    fillet_only = assemble_detailed([body, arm], params={"fair": 0})
+    whole = assemble_detailed([body, arm], params={"fair": 50})
+    assert not whole.warnings and whole.mesh.identical(fillet_only.mesh)
+    _check_closed(whole)
+    faired = assemble_detailed([body, arm])  # 10 rings leave the body's far side to hold it
+    assert not np.array_equal(faired.mesh.V, fillet_only.mesh.V)
+    _check_closed(faired)

@@ -4,7 +4,7 @@ smoothed by a bi-Laplacian with everything farther away fixed.
 Why after the fillet. The fillet of :mod:`.blend` opens the U-turn under a part into a
 crevice with a vertical strip, but it is built from per-vertex height offsets along the
 distance to the junction, so where two of them meet (the junction's two ends, the strip's
-top and bottom) the surface still bends by 60-140 degrees over one edge. Minimising the
+top and bottom) the surface still bends by up to ~150 degrees over one edge. Minimising the
 squared Laplacian of the positions in a few rings around the seam spreads each of those
 bends over the rings (a bi-Laplacian surface is as smooth as its fixed surroundings allow),
 while the surface beyond them keeps every vertex as the depth solve placed it.
@@ -24,6 +24,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 import shapely
+from scipy.sparse.csgraph import connected_components
 from scipy.sparse.linalg import splu
 
 from .diagnostics import intersecting_pairs
@@ -136,13 +137,20 @@ def fair_seams(V: np.ndarray, F: np.ndarray, moved: np.ndarray, A: sp.csr_matrix
     Returns
     -------
     (n, 3) float64
-        ``V`` with the moved vertices replaced; every other vertex is bit-identical.
+        ``V`` with the moved vertices replaced; every other vertex is bit-identical (and so is
+        every vertex of a component that ``moved`` covers whole).
 
     Solves  min Σ_i |(L x)_i|² / d_i  over the moved vertices (L the graph Laplacian, d_i the
     vertex degree, the usual lumped mass), the others fixed: one sparse LU of the moved
     block, three right-hand sides.
     """
     A = adjacency(F, len(V)) if A is None else A
+    # A component with no fixed vertex (a small model inside the rings) has no boundary to
+    # hold it: its system would be singular, so it keeps its place.
+    _, label = connected_components(A, directed=False)
+    held = np.zeros(label.max() + 1, bool)
+    held[label[~moved]] = True
+    moved = moved & held[label]
     free = np.flatnonzero(moved)
     if len(free) == 0:
         return V.copy()
