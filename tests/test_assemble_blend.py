@@ -86,10 +86,11 @@ def test_junctions_blend_on_the_examples(name):
     assert blended.max_violation <= 1e-6 and blended.glue_error < 1e-3
 
 
-@pytest.mark.parametrize("seed", [11, 18, 29])
+@pytest.mark.parametrize("seed", [18, 29, 34])
 def test_junctions_blend_on_random_creatures(seed):
-    # seeds whose heads or limbs still folded above 90 degrees with 6 rings of fairing (the
-    # full 30 are in benchmarks/bench_junctions.py)
+    # seeds whose heads or limbs still folded above 90 degrees with fewer rings of fairing (6
+    # rings: 18 and 29; 10 rings: 34, a limb behind the body); the full 30 are in
+    # benchmarks/bench_junctions.py
     _, meshes, closed = meshes_from_journal(random_creature(seed))
     res = assemble_detailed(meshes, closed)
     _check_closed(res)
@@ -100,8 +101,9 @@ def test_junctions_blend_on_random_creatures(seed):
 
 def test_fairing_is_local_and_keeps_what_rests_on_the_host():
     # Fairing moves only vertices near the junctions: the free eye on the toucan's head, 2.6
-    # edge lengths from the beak's junction, keeps its faces and the head under it, so it
-    # still rests on the head at the depth solve's clearance.
+    # edge lengths from the beak's junction, keeps its faces and the head's front face under
+    # it, so it still rests on the head at the depth solve's clearance (the head's back face
+    # and the body further down are faired as usual).
     layers, meshes, closed = _example("toucan")
     ids = [layer.id for layer in layers]
     raw = assemble_detailed(meshes, closed, params={"fair": 0})
@@ -110,11 +112,28 @@ def test_fairing_is_local_and_keeps_what_rests_on_the_host():
     moved = np.any(raw.mesh.V != res.mesh.V, axis=1)
     eye = np.unique(res.mesh.F[res.face_layer == ids.index("eye")])
     assert not moved[eye].any()
-    under = shapely.contains_xy(shapely.Polygon(meshes[ids.index("eye")].V[meshes[ids.index("eye")].boundary, :2]),
-                                res.mesh.V[:, 0], res.mesh.V[:, 1])
-    assert under.sum() > 20 and not moved[under].any()
-    # and it is local: most of the model is untouched
-    assert 0 < moved.mean() < 0.5
+    eye_mesh = meshes[ids.index("eye")]
+    head_front = np.unique(res.mesh.F[(res.face_layer == ids.index("head")) & (res.face_kind == 0)])
+    V = res.mesh.V[head_front]
+    under = head_front[shapely.contains_xy(shapely.Polygon(eye_mesh.V[eye_mesh.boundary, :2]), V[:, 0], V[:, 1])]
+    assert len(under) >= 10 and not moved[under].any()
+    # the fairing reaches that far: without the eye the head's front there would move
+    near = np.min(np.linalg.norm(res.mesh.V[head_front, None, :2] - eye_mesh.V[None, :, :2], axis=2), axis=1)
+    assert moved[head_front[(near > 0.06) & (near < 0.1)]].any()
+    # the eye's back face over the head's front face as the fairing left it: the lowest eye
+    # vertex above its nearest head vertex, as without fairing
+    def clearance(r):
+        back = np.unique(r.mesh.F[(r.face_layer == ids.index("eye")) & (r.face_kind == 1)])
+        d = np.linalg.norm(r.mesh.V[back, None, :2] - r.mesh.V[None, head_front, :2], axis=2)
+        return np.min(r.mesh.V[back, 2] - r.mesh.V[head_front[np.argmin(d, axis=1)], 2])
+
+    assert clearance(res) == pytest.approx(clearance(raw), abs=1e-12) and clearance(res) > 0
+    # and it is local: what moves lies within 20 edge lengths (h = 0.025) of a junction
+    # (measured: 0.42), the rest of the model is bit-identical
+    from sketchforge_assemble.blend import distance_to
+
+    d = np.min([distance_to(raw.mesh.V[:, :2], m.V[m.junction, :2]) for m in meshes if len(m.junction)], axis=0)
+    assert moved.any() and d[moved].max() < 20 * 0.025 and (d > 20 * 0.025).sum() > 500
 
 
 def test_unsafe_fairing_falls_back_to_the_plain_sleeve(monkeypatch):
@@ -185,6 +204,6 @@ def test_a_model_inside_the_fairing_rings_keeps_its_fillet():
     whole = assemble_detailed([body, arm], params={"fair": 50})
     assert not whole.warnings and whole.mesh.identical(fillet_only.mesh)
     _check_closed(whole)
-    faired = assemble_detailed([body, arm])  # 10 rings leave the body's far side to hold it
+    faired = assemble_detailed([body, arm])  # 14 rings leave the body's far side to hold it
     assert not np.array_equal(faired.mesh.V, fillet_only.mesh.V)
     _check_closed(faired)

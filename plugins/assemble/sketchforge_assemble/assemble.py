@@ -44,7 +44,7 @@ DEFAULT_PARAMS: Mapping[str, object] = {
     "solver": "osqp",
     "on_bad_junction": "raise",
     "fillet": 4.0,
-    "fair": 10,
+    "fair": 14,
 }
 
 

@@ -30,7 +30,7 @@ edges above 90° and lowers the largest angle from ~177° to ~125°, but the tur
 where the strip meets the faces) keep it well above the issue's 45° target, and a few random
 creatures get one self-intersecting pair there. :mod:`.fair` then smooths the rings around
 every junction of the assembled mesh, which brings every tested model within the target; the
-two together are the default (``fillet`` 4, ``fair`` 10).
+two together are the default (``fillet`` 4, ``fair`` 14).
 
 All amounts fade to zero at the two ends of the junction, where the part's front and back
 faces meet in one vertex (see :func:`.sheet.taper`).
