@@ -1,6 +1,7 @@
 """Junction folds (issue 12, point 1): the dihedral measure, the seeded random creatures, and
-the opt-in blended junction (``fillet``), which must keep every topological guarantee of the
-plain sleeve while folding less."""
+the blended junction (``fillet`` + ``fair``, the default), which must keep every topological
+guarantee of the plain sleeve and reach the issue's target: no dihedral angle above 90 degrees,
+99.9% of them at most 45."""
 
 from __future__ import annotations
 
@@ -9,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import shapely
 
 from sketchforge_assemble import assemble_detailed
 from sketchforge_assemble import diagnostics as dg
@@ -55,25 +57,124 @@ def test_random_creatures_are_deterministic_and_attach():
     _check_closed(res)
 
 
+def _folds(res):
+    d = dg.dihedral_angles(res.mesh.V, res.mesh.F)
+    return float(d.max()), int(np.sum(d > 90)), float(np.mean(d <= 45))
+
+
+def test_a_random_creature_without_room_for_a_head_is_refused():
+    # seed 43's head chord lies in the band along the body's outline at every size: the
+    # generator shrank it forever
+    with pytest.raises(ValueError, match="no head fits"):
+        random_creature(43)
+
+
 @pytest.mark.parametrize("name", ["creature", "toucan"])
-def test_fillet_keeps_the_mesh_closed_and_folds_less(name):
+def test_junctions_blend_on_the_examples(name):
     layers, meshes, closed = _example(name)
-    plain = assemble_detailed(meshes, closed)
-    blended = assemble_detailed(meshes, closed, params={"fillet": 4.0})
+    plain = assemble_detailed(meshes, closed, params={"fillet": 0.0})
+    blended = assemble_detailed(meshes, closed)
     _check_closed(blended)
-    d0 = dg.dihedral_angles(plain.mesh.V, plain.mesh.F)
-    d1 = dg.dihedral_angles(blended.mesh.V, blended.mesh.F)
-    # measured: creature 179.5 -> 126 degrees, 100 -> 37 edges above 90; toucan 179 -> 127, 56 -> 19
-    assert d0.max() > 170 and d1.max() < 140
-    assert np.sum(d1 > 90) <= 0.5 * np.sum(d0 > 90)
-    # the blend only reshapes junctions: free parts keep their faces
+    assert not blended.warnings  # no junction fell back to the plain sleeve
+    # measured: plain creature 179.5 degrees, 106 edges above 90; blended 57.8, 0 (99.99% <= 45);
+    # toucan 178.9 -> 85.4 (99.96% <= 45)
+    top0, over0, _ = _folds(plain)
+    top, over, flat = _folds(blended)
+    assert top0 > 170 and over0 > 50
+    assert top <= 90 and over == 0 and flat >= 0.999
+    # the blend only reshapes junctions: depth order and glue still hold
     assert blended.max_violation <= 1e-6 and blended.glue_error < 1e-3
+
+
+@pytest.mark.parametrize("seed", [18, 29, 34])
+def test_junctions_blend_on_random_creatures(seed):
+    # seeds whose heads or limbs still folded above 90 degrees with fewer rings of fairing (6
+    # rings: 18 and 29; 10 rings: 34, a limb behind the body); the full 30 are in
+    # benchmarks/bench_junctions.py
+    _, meshes, closed = meshes_from_journal(random_creature(seed))
+    res = assemble_detailed(meshes, closed)
+    _check_closed(res)
+    assert not res.warnings
+    top, over, flat = _folds(res)
+    assert top <= 90 and flat >= 0.999, (top, over, flat)
+
+
+def test_fairing_is_local_and_keeps_what_rests_on_the_host():
+    # Fairing moves only vertices near the junctions: the free eye on the toucan's head, 2.6
+    # edge lengths from the beak's junction, keeps its faces and the head's front face under
+    # it, so it still rests on the head at the depth solve's clearance (the head's back face
+    # and the body further down are faired as usual).
+    layers, meshes, closed = _example("toucan")
+    ids = [layer.id for layer in layers]
+    raw = assemble_detailed(meshes, closed, params={"fair": 0})
+    res = assemble_detailed(meshes, closed)
+    assert np.array_equal(raw.mesh.F, res.mesh.F)
+    moved = np.any(raw.mesh.V != res.mesh.V, axis=1)
+    eye = np.unique(res.mesh.F[res.face_layer == ids.index("eye")])
+    assert not moved[eye].any()
+    eye_mesh = meshes[ids.index("eye")]
+    head_front = np.unique(res.mesh.F[(res.face_layer == ids.index("head")) & (res.face_kind == 0)])
+    V = res.mesh.V[head_front]
+    under = head_front[shapely.contains_xy(shapely.Polygon(eye_mesh.V[eye_mesh.boundary, :2]), V[:, 0], V[:, 1])]
+    assert len(under) >= 10 and not moved[under].any()
+    # the fairing reaches that far: without the eye the head's front there would move
+    near = np.min(np.linalg.norm(res.mesh.V[head_front, None, :2] - eye_mesh.V[None, :, :2], axis=2), axis=1)
+    assert moved[head_front[(near > 0.06) & (near < 0.1)]].any()
+    # the eye's back face over the head's front face as the fairing left it: the lowest eye
+    # vertex above its nearest head vertex, as without fairing
+    def clearance(r):
+        back = np.unique(r.mesh.F[(r.face_layer == ids.index("eye")) & (r.face_kind == 1)])
+        d = np.linalg.norm(r.mesh.V[back, None, :2] - r.mesh.V[None, head_front, :2], axis=2)
+        return np.min(r.mesh.V[back, 2] - r.mesh.V[head_front[np.argmin(d, axis=1)], 2])
+
+    assert clearance(res) == pytest.approx(clearance(raw), abs=1e-12) and clearance(res) > 0
+    # and it is local: what moves lies within 20 edge lengths (h = 0.025) of a junction
+    # (measured: 0.42), the rest of the model is bit-identical
+    from sketchforge_assemble.blend import distance_to
+
+    d = np.min([distance_to(raw.mesh.V[:, :2], m.V[m.junction, :2]) for m in meshes if len(m.junction)], axis=0)
+    assert moved.any() and d[moved].max() < 20 * 0.025 and (d > 20 * 0.025).sum() > 500
+
+
+def test_unsafe_fairing_falls_back_to_the_plain_sleeve(monkeypatch):
+    # If the blended junction would cross itself, the model is still handed out, glued by the
+    # plain sleeve (which never crosses itself), and the person is told why.
+    import sketchforge_assemble.assemble as asm
+
+    layers, meshes, closed = _example("creature")
+    monkeypatch.setattr(asm, "fairing_is_safe", lambda *a, **k: False)
+    res = assemble_detailed(meshes, closed)
+    plain = assemble_detailed(meshes, closed, params={"fillet": 0.0})
+    assert res.mesh.identical(plain.mesh)
+    assert len(res.warnings) == 1 and "crossing itself" in res.warnings[0]
+
+
+def test_fairing_safety_check_sees_a_crossing_and_a_flat_triangle():
+    from sketchforge_assemble.fair import fairing_is_safe
+
+    V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0.2, 0.2, -0.5], [0.3, 0.2, 0.5], [0.2, 0.4, 0.5]], float)
+    F = np.array([[0, 1, 2], [3, 4, 5]])
+    moved = np.array([False, False, False, True, True, True])
+    assert not fairing_is_safe(V, F, moved, 1.0)  # the second triangle pierces the first
+    V[3:, 2] += 1.0
+    assert fairing_is_safe(V, F, moved, 1.0)
+    V[5] = V[3] + 0.5 * (V[4] - V[3])  # flat
+    assert not fairing_is_safe(V, F, moved, 1.0)
+
+
+@pytest.mark.parametrize("bad", [-1, 2.5, True, 51, "ten"])
+def test_fair_parameter_is_checked(bad):
+    from sketchforge.errors import ParameterError
+
+    _, meshes, closed = _example("creature")
+    with pytest.raises(ParameterError, match="'fair'"):
+        assemble_detailed(meshes, closed, params={"fair": bad})
 
 
 def test_fillet_starts_the_part_where_the_host_is():
     layers, meshes, closed = _example("creature")
     ids = [layer.id for layer in layers]
-    res = assemble_detailed(meshes, closed, params={"fillet": 4.0})
+    res = assemble_detailed(meshes, closed)
     arm, body = ids.index("arm_front"), ids.index("body")
     V, F = res.mesh.V, res.mesh.F
     j = meshes[arm].V[meshes[arm].junction, :2]
@@ -87,3 +188,22 @@ def test_fillet_starts_the_part_where_the_host_is():
         d = np.linalg.norm(V[on_body, :2] - V[v, :2], axis=1)
         ring = on_body[(d > 0.3 * h) & (d < 1.5 * h)]
         assert np.min(V[ring, 2]) - 1.0 * h <= V[v, 2] <= np.max(V[ring, 2]) + 5.0 * h
+
+
+def test_a_model_inside_the_fairing_rings_keeps_its_fillet():
+    # A small, coarse model: 50 rings cover all of it, so nothing would hold the fairing in
+    # place (a singular system); it keeps the fillet's shape instead, closed and clean.
+    from sketchforge_inflate import inflate_stroke
+
+    t = np.linspace(0, 2 * np.pi, 48, endpoint=False)
+    a = np.radians(np.linspace(100, 400, 40))
+    params = {"resolution": 0.08, "inflation": 1.0, "smoothing": 0.5}
+    body = inflate_stroke(np.c_[0.6 * np.cos(t), 0.4 * np.sin(t)], closed=True, params=params)
+    arm = inflate_stroke(np.c_[0.35 + 0.25 * np.cos(a), -0.2 + 0.25 * np.sin(a)], closed=False, params=params)
+    fillet_only = assemble_detailed([body, arm], params={"fair": 0})
+    whole = assemble_detailed([body, arm], params={"fair": 50})
+    assert not whole.warnings and whole.mesh.identical(fillet_only.mesh)
+    _check_closed(whole)
+    faired = assemble_detailed([body, arm])  # 14 rings leave the body's far side to hold it
+    assert not np.array_equal(faired.mesh.V, fillet_only.mesh.V)
+    _check_closed(faired)

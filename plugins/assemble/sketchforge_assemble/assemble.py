@@ -1,8 +1,9 @@
 """Layers -> one closed, outward-oriented 2-manifold mesh (thesis 3.2 and 4.7).
 
 Pipeline: planar sheets (:mod:`.sheet`) -> attachments (:mod:`.attach`) -> junctions cut into
-the faces below (:mod:`.remesh`) -> depth QP (:mod:`.depth`) -> faces, slits and rim bridges
-(:mod:`.stitch`).
+the faces below (:mod:`.remesh`) -> fillets at the junctions (:mod:`.blend`) -> depth QP
+(:mod:`.depth`) -> faces, slits and rim bridges (:mod:`.stitch`) -> the junctions faired
+(:mod:`.fair`).
 """
 
 from __future__ import annotations
@@ -19,6 +20,7 @@ from sketchforge.geometry.mesh import Mesh
 from .attach import Attachment, find_attachments
 from .blend import blend_junctions
 from .depth import build_problem, settle_free_parts, solve_depth
+from .fair import fair_seams, fairing_is_safe, seam_zone, supports
 from .remesh import insert_chains
 from .sheet import sheet_from_mesh, taper
 from .stitch import build_mesh
@@ -30,9 +32,10 @@ from .stitch import build_mesh
 #: the parts (see :func:`.depth.build_problem`); ``solver``: "osqp" (a dual active set finishes
 #: if a row is left violated) or "active_set" (the active set alone, see
 #: :func:`.depth.solve_depth`); ``on_bad_junction``: "raise" or "free"; ``fillet``: width, in edge
-#: lengths of the part, of the blended junction of :mod:`.blend` (0, the default, keeps the plain
-#: sleeve: the blend still leaves folds above 45 degrees and, on some random creatures, a
-#: self-intersection at a junction's end, see the README).
+#: lengths of the part, of the blended junction of :mod:`.blend` (0 keeps the plain sleeve, which
+#: folds by up to 180 degrees where a part meets its host); ``fair``: how many rings of edges
+#: around every blended junction :mod:`.fair` smooths (0: none; only with ``fillet`` > 0). A
+#: blended junction that would cross itself falls back to the plain sleeve, with a warning.
 DEFAULT_PARAMS: Mapping[str, object] = {
     "margin": 0.1,
     "gap": 0.1,
@@ -40,7 +43,8 @@ DEFAULT_PARAMS: Mapping[str, object] = {
     "stiffness": 20.0,
     "solver": "osqp",
     "on_bad_junction": "raise",
-    "fillet": 0.0,
+    "fillet": 4.0,
+    "fair": 14,
 }
 
 
@@ -92,6 +96,8 @@ def _params(params) -> dict:
     p.update(params or {})
     if not (isinstance(p["fillet"], (int, float)) and np.isfinite(p["fillet"]) and p["fillet"] >= 0):
         raise ParameterError(f"assembly parameter 'fillet' must be a number >= 0, got {p['fillet']!r}")
+    if not (isinstance(p["fair"], (int, np.integer)) and not isinstance(p["fair"], bool) and 0 <= p["fair"] <= 50):
+        raise ParameterError(f"assembly parameter 'fair' must be a whole number of rings from 0 to 50, got {p['fair']!r}")
     for key in ("margin", "gap", "reg", "stiffness"):
         if not (isinstance(p[key], (int, float)) and np.isfinite(p[key]) and p[key] > 0):
             raise ParameterError(f"assembly parameter '{key}' must be a positive number, got {p[key]!r}")
@@ -184,8 +190,28 @@ def assemble_detailed(meshes: Sequence[Mesh | None], closed: Sequence[bool] | No
 
     t = time.perf_counter()
     delta = [x[offsets[k]:offsets[k + 1]] for k in range(len(sheets))]
-    V, F, face_layer, face_kind = build_mesh(sheets, attachments, delta, front_off, back_off, lips)
+    V, F, face_layer, face_kind, seam = build_mesh(sheets, attachments, delta, front_off, back_off, lips)
     timings["stitch"] = time.perf_counter() - t
+    if lips is not None and p["fair"] > 0:
+        t = time.perf_counter()
+        A, zone = seam_zone(F, len(V), seam, int(p["fair"]))
+        # A free part resting on a face near a junction keeps the face under it as it was
+        # solved (fairing it away would leave the part floating, or sunk into it).
+        moved = zone.copy()
+        for k in sorted(set(range(len(sheets))) - in_att):
+            moved &= ~supports(V, F, face_layer, face_kind, k, sheets[k].polygon().buffer(sheets[k].h), zone)
+        V = fair_seams(V, F, moved, A)
+        timings["fair"] = time.perf_counter() - t
+        t = time.perf_counter()
+        safe = fairing_is_safe(V, F, moved, float(np.median([s.h for s in sheets])))
+        timings["fair_check"] = time.perf_counter() - t
+        if not safe:
+            # The blended junction would cross itself (or flatten a triangle): the plain
+            # sleeve never does, so the model is still handed out, with its folds, and why.
+            plain = assemble_detailed(meshes, closed, {**p, "fillet": 0.0}, names)
+            plain.warnings.append("a junction could not be blended without the surface crossing itself; "
+                                  "its parts are glued with a plain fold (assembly parameter 'fillet')")
+            return plain
     timings["total"] = time.perf_counter() - t0
 
     # components: one per group of attached parts

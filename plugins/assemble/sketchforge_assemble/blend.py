@@ -24,11 +24,13 @@ every ordering and glue row):
   where the host is and the part's faces are shaped relative to the host, not to the
   drawing plane.
 
-Status (measured by ``benchmarks/bench_junctions.py``): this halves or better the edges above
-90° and lowers the largest angle from ~177° to ~125°, but does not reach 99.9% of edges at
-most 45°: the turns that are left sit mostly within three edge lengths of a junction's ends,
-where every amount fades out and the geometry falls back to the plain sleeve; and a few random
-creatures get one self-intersecting pair there. Hence it is opt-in (``fillet`` > 0).
+Status (measured by ``benchmarks/bench_junctions.py``): on its own this halves or better the
+edges above 90° and lowers the largest angle from ~177° to ~125°, but the turns that are left
+(mostly within three edge lengths of a junction's ends, where every amount fades out, and
+where the strip meets the faces) keep it well above the issue's 45° target, and a few random
+creatures get one self-intersecting pair there. :mod:`.fair` then smooths the rings around
+every junction of the assembled mesh, which brings every tested model within the target; the
+two together are the default (``fillet`` 4, ``fair`` 14).
 
 All amounts fade to zero at the two ends of the junction, where the part's front and back
 faces meet in one vertex (see :func:`.sheet.taper`).

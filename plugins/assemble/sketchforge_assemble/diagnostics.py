@@ -74,39 +74,68 @@ def _edge_crosses_triangle(p, q, a, b, c):
     return straddle & inside
 
 
-def candidate_pairs(V: np.ndarray, F: np.ndarray) -> np.ndarray:
-    """(k, 2) int64 triangle pairs whose bounding boxes overlap (broad phase).
+def candidate_pairs(V: np.ndarray, F: np.ndarray, among: np.ndarray | None = None) -> np.ndarray:
+    """(k, 2) int64 triangle pairs ``i < j`` whose bounding boxes overlap (broad phase).
 
-    Centroids go in a KD-tree queried with twice the largest centroid-to-corner distance,
-    then pairs are kept if their axis-aligned boxes overlap.
+    Centroids go in KD-trees, one per size class (corner radius within a power of two), each
+    class queried with the largest radii of the two classes: one long triangle (a rim bridge,
+    a coarse layer) then widens only the queries of its own class, not every query. Pairs are
+    kept if their centroids lie within the sum of their radii and their axis-aligned boxes
+    overlap. With ``among`` (indices or (m,) bool), only pairs with at least one triangle in
+    it.
     """
     T = V[F]
     cen = T.mean(axis=1)
     rad = np.linalg.norm(T - cen[:, None, :], axis=2).max(axis=1)
-    tree = cKDTree(cen)
-    pairs = tree.query_pairs(r=2.0 * float(rad.max()), output_type="ndarray")
-    if len(pairs) == 0:
-        return pairs.reshape(0, 2)
+    if len(F) < 2:
+        return np.zeros((0, 2), np.int64)
+    scale = max(float(np.median(rad)), 1e-300)
+    size = np.ceil(np.log2(np.maximum(rad / scale, 1.0))).astype(np.int64)
+    classes = [np.flatnonzero(size == k) for k in np.unique(size)]
+    trees = [cKDTree(cen[c]) for c in classes]
+    if among is None:
+        query = classes
+    else:
+        mask = np.zeros(len(F), bool)
+        mask[among] = True
+        query = [c[mask[c]] for c in classes]
+    found = []
+    for a, qa in enumerate(query):
+        if len(qa) == 0:
+            continue
+        qtree = cKDTree(cen[qa]) if among is not None else trees[a]
+        for b, cb in enumerate(classes):
+            if among is None and b < a:
+                continue
+            m = qtree.sparse_distance_matrix(trees[b], float(rad[qa].max() + rad[cb].max()), output_type="ndarray")
+            found.append(np.c_[qa[m["i"]], cb[m["j"]]])
+    if not found:
+        return np.zeros((0, 2), np.int64)
+    pairs = np.vstack(found)
+    # the exact tests before the de-duplication: far fewer pairs are left to sort
     d = np.linalg.norm(cen[pairs[:, 0]] - cen[pairs[:, 1]], axis=1)
-    pairs = pairs[d <= rad[pairs[:, 0]] + rad[pairs[:, 1]]]
+    pairs = pairs[(d <= rad[pairs[:, 0]] + rad[pairs[:, 1]]) & (pairs[:, 0] != pairs[:, 1])]
     lo, hi = T.min(axis=1), T.max(axis=1)
     ok = np.all((lo[pairs[:, 0]] <= hi[pairs[:, 1]]) & (lo[pairs[:, 1]] <= hi[pairs[:, 0]]), axis=1)
-    return pairs[ok]
+    pairs = np.sort(pairs[ok], axis=1).astype(np.int64)
+    key = np.unique(pairs[:, 0] * len(F) + pairs[:, 1])  # 1-D: far faster than unique rows
+    return np.c_[key // len(F), key % len(F)]
 
 
 def intersecting_pairs(V: np.ndarray, F: np.ndarray, face_group: np.ndarray | None = None,
-                       chunk: int = 200_000) -> np.ndarray:
+                       chunk: int = 200_000, among: np.ndarray | None = None) -> np.ndarray:
     """Triangle pairs that intersect (narrow phase on the broad-phase candidates).
 
     Pairs that share a vertex are skipped (neighbours always touch there); coplanar overlaps
     are not counted. With ``face_group`` (m,), only pairs from different groups (e.g. layers)
-    are tested.
+    are tested; with ``among`` (indices or (m,) bool), only pairs with at least one triangle in
+    it (e.g. the triangles an operation moved).
 
     Returns
     -------
     (k, 2) int64 triangle index pairs.
     """
-    pairs = candidate_pairs(V, F)
+    pairs = candidate_pairs(V, F, among)
     if face_group is not None and len(pairs):
         pairs = pairs[face_group[pairs[:, 0]] != face_group[pairs[:, 1]]]
     if len(pairs):

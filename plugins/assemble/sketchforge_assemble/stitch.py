@@ -83,6 +83,9 @@ def build_mesh(sheets: list[Sheet], attachments: list[Attachment], delta: list[n
         Layer index of each triangle.
     face_kind : (m,) int8
         0 front face, 1 back face, 2 rim bridge.
+    seam : (k,) int64
+        The vertices along the glued junctions (every part's front and back junction chains
+        and the lips' own vertices), for :func:`.fair.fair_seams`.
     """
     sizes = np.array([s.n for s in sheets])
     base = np.r_[0, np.cumsum(2 * sizes)]
@@ -103,6 +106,7 @@ def build_mesh(sheets: list[Sheet], attachments: list[Attachment], delta: list[n
         remap[back[i][ends]] = front[i][ends]
 
     extra = []  # (k, 3) rows of lip vertices appended after V
+    seam = [np.r_[front[i][sheets[i].junction], back[i][sheets[i].junction]] for i in attached]
     strips = []  # (t, 3) strip triangles, with the layer of the part
     n_v = len(V)
 
@@ -137,6 +141,7 @@ def build_mesh(sheets: list[Sheet], attachments: list[Attachment], delta: list[n
                                            else -back_off[at.lower][chain])
         lip = np.r_[front[at.upper][j[0]], n_v + np.arange(len(chain) - 2), front[at.upper][j[-1]]]
         extra.append(np.c_[lo.xy[chain[1:-1]], face_z[1:-1] + sgn * lips[a_i][1:-1]])
+        seam.append(n_v + np.arange(len(chain) - 2))
         n_v += len(chain) - 2
         faces[corners[:, 0], col] = np.where(plus, lip[pos], minus_chain[j[pos]])
         # The strip runs against the lower face's "+" triangles along the lip, so it walks the
@@ -193,4 +198,5 @@ def build_mesh(sheets: list[Sheet], attachments: list[Attachment], delta: list[n
     used = np.zeros(len(V), bool)
     used[F] = True
     new = np.cumsum(used) - 1
-    return V[used], new[F].astype(np.int64), face_layer.astype(np.int64), face_kind
+    seam = np.unique(remap[np.concatenate(seam)]) if seam else np.zeros(0, np.int64)
+    return V[used], new[F].astype(np.int64), face_layer.astype(np.int64), face_kind, new[seam].astype(np.int64)

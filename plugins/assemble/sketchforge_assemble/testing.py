@@ -38,6 +38,11 @@ def random_creature(seed: int, resolution: float = 0.03) -> dict:
     and one that would put its junction over another part (or cover another part's
     junction) is left out, so a creature may have fewer limbs than drawn (at least 2 in
     practice). Deterministic for a given ``seed``.
+
+    Raises
+    ------
+    ValueError
+        For the few seeds whose head cannot be placed (e.g. 43).
     """
     import numpy as np
 
@@ -71,6 +76,10 @@ def random_creature(seed: int, resolution: float = 0.03) -> dict:
     while not inner.contains(shapely.LineString([c + r * np.array([np.cos(a[0]), np.sin(a[0])]),
                                                  c + r * np.array([np.cos(a[-1]), np.sin(a[-1])])])):
         r *= 0.9  # a head so large that its junction would leave the body
+        if r < 0.1:
+            # the chord of a smaller head lies within the 0.05 band along the outline, where
+            # no head fits: shrinking further would never end (seed 43)
+            raise ValueError(f"random creature {seed}: no head fits on the body; take another seed")
     layer("head", np.c_[c[0] + r * np.cos(a), c[1] + r * np.sin(a)], False)
 
     # limbs: capsules pointing outwards from inside the body, spread around its lower half; a
