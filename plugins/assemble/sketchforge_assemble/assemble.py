@@ -18,7 +18,7 @@ from sketchforge.geometry.mesh import Mesh
 
 from .attach import Attachment, find_attachments
 from .blend import blend_junctions
-from .depth import build_problem, settle_free_parts, solve_depth
+from .depth import build_problem, settle_free_parts, solve_without_free_parts
 from .remesh import insert_chains
 from .sheet import sheet_from_mesh, taper
 from .stitch import build_mesh
@@ -166,13 +166,16 @@ def assemble_detailed(meshes: Sequence[Mesh | None], closed: Sequence[bool] | No
 
     t = time.perf_counter()
     pad = 0.5 * gap
-    x, sinfo = solve_depth(P, q, Aeq, beq, Ain, bin_, method=p["solver"], pad=pad)
+    # Free parts (no attachment either way) are left out of the QP and sit on what lies below
+    # them instead of floating at their rest depth; glued layers do not move (see
+    # depth.solve_without_free_parts and depth.settle_free_parts).
+    in_att = {a.upper for a in attachments} | {a.lower for a in attachments}
+    free = [i for i in range(len(sheets)) if i not in in_att]
+    x, sinfo = solve_without_free_parts(P, q, Aeq, beq, Ain, bin_, offsets, free, pinfo["rest_depth"],
+                                        method=p["solver"], pad=pad)
     sinfo.update(pinfo)
     sinfo["gap"] = gap
-    # Free parts (no attachment either way) sit on what lies below them instead of floating
-    # at their rest depth; glued layers do not move (see depth.settle_free_parts).
-    in_att = {a.upper for a in attachments} | {a.lower for a in attachments}
-    x, shift = settle_free_parts(x, Ain, bin_, offsets, [i for i in range(len(sheets)) if i not in in_att], pad)
+    x, shift = settle_free_parts(x, Ain, bin_, offsets, free, pad)
     sinfo["free_shift"] = {keep[i]: v for i, v in shift.items()}
     if shift and sinfo.get("iterations", 0) == 0 and len(bin_):  # OSQP's count, as in solve_depth
         sinfo["active"] = int(np.sum(Ain @ x - bin_ <= pad + 1e-6))
