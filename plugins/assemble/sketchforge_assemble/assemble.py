@@ -18,6 +18,7 @@ from sketchforge.geometry.mesh import Mesh
 
 from .attach import Attachment, find_attachments
 from .blend import blend_junctions
+from .cache import AssemblyCache, memo
 from .depth import build_problem, settle_free_parts, solve_without_free_parts
 from .remesh import insert_chains
 from .sheet import sheet_from_mesh, taper
@@ -87,6 +88,13 @@ class AssemblyResult:
     solver: dict = field(default_factory=dict)
 
 
+def _sheet(cache: AssemblyCache | None, k: int, name: str, mesh: Mesh, free: bool):
+    """:func:`.sheet.sheet_from_mesh` through the cache (keyed by the mesh's arrays)."""
+    sheet = memo(cache, "sheet", (mesh.V, mesh.F, mesh.boundary, mesh.junction, tuple(mesh.holes), free),
+                 lambda: sheet_from_mesh(k, name, mesh, free))
+    return sheet.evolve(layer=k, name=name)
+
+
 def _params(params) -> dict:
     p = dict(DEFAULT_PARAMS)
     p.update(params or {})
@@ -103,7 +111,8 @@ def _params(params) -> dict:
 
 
 def assemble_detailed(meshes: Sequence[Mesh | None], closed: Sequence[bool] | None = None,
-                      params=None, names: Sequence[str] | None = None) -> AssemblyResult:
+                      params=None, names: Sequence[str] | None = None,
+                      cache: AssemblyCache | None = None) -> AssemblyResult:
     """Assemble layer meshes, back to front, and report diagnostics.
 
     Parameters
@@ -117,6 +126,10 @@ def assemble_detailed(meshes: Sequence[Mesh | None], closed: Sequence[bool] | No
         See :data:`DEFAULT_PARAMS`.
     names : list of str, optional
         Layer names used in error messages (default "layer 0", ...).
+    cache : AssemblyCache, optional
+        Keeps per-layer sheets, junction cuts, operators, per-pair depth rows and the glued
+        parts' solve between calls, so that re-assembling after one layer changed redoes only
+        what depends on it (see :mod:`.cache`). The result is bit-identical with or without.
 
     Returns
     -------
@@ -132,7 +145,7 @@ def assemble_detailed(meshes: Sequence[Mesh | None], closed: Sequence[bool] | No
     if not keep:
         raise ParameterError("there is no layer with a mesh to assemble")
     knames = [names[i] for i in keep]
-    sheets = [sheet_from_mesh(k, knames[k], meshes[i], bool(closed[i])) for k, i in enumerate(keep)]
+    sheets = [_sheet(cache, k, knames[k], meshes[i], bool(closed[i])) for k, i in enumerate(keep)]
 
     attachments, warnings = find_attachments(sheets, knames, p["on_bad_junction"])
     attached = {a.upper for a in attachments}
@@ -147,7 +160,10 @@ def assemble_detailed(meshes: Sequence[Mesh | None], closed: Sequence[bool] | No
     for lo in sorted({a.lower for a in attachments}):
         mine = [a for a in attachments if a.lower == lo]
         chains = [sheets[a.upper].xy[sheets[a.upper].junction] for a in mine]
-        sheets[lo] = insert_chains(sheets[lo], chains, knames, [a.upper for a in mine])
+        s = sheets[lo]
+        cut = memo(cache, "remesh", (s.xy, s.z, s.F, s.boundary, s.junction, s.holes, s.h, chains),
+                   lambda: insert_chains(s, chains, knames, [a.upper for a in mine]))
+        sheets[lo] = cut.evolve(layer=lo, name=knames[lo])
     timings["remesh"] = time.perf_counter() - t
 
     t = time.perf_counter()
@@ -161,7 +177,7 @@ def assemble_detailed(meshes: Sequence[Mesh | None], closed: Sequence[bool] | No
     offsets = np.r_[0, np.cumsum([s.n for s in sheets])]
     gap = p["gap"] * float(np.median([s.h for s in sheets]))
     P, q, Aeq, beq, Ain, bin_, pinfo = build_problem(sheets, offsets, front_off, back_off, attachments, gap,
-                                                    p["reg"], p["stiffness"], glue, springs)
+                                                    p["reg"], p["stiffness"], glue, springs, cache=cache)
     timings["constraints"] = time.perf_counter() - t
 
     t = time.perf_counter()
@@ -172,7 +188,8 @@ def assemble_detailed(meshes: Sequence[Mesh | None], closed: Sequence[bool] | No
     in_att = {a.upper for a in attachments} | {a.lower for a in attachments}
     free = [i for i in range(len(sheets)) if i not in in_att]
     x, sinfo = solve_without_free_parts(P, q, Aeq, beq, Ain, bin_, offsets, free, pinfo["rest_depth"],
-                                        method=p["solver"], pad=pad)
+                                        method=p["solver"], pad=pad, cache=cache)
+    sinfo = dict(sinfo)  # the cached solve's info is shared
     sinfo.update(pinfo)
     sinfo["gap"] = gap
     x, shift = settle_free_parts(x, Ain, bin_, offsets, free, pad)

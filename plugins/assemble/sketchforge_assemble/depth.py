@@ -55,6 +55,7 @@ from sketchforge.geometry.laplacian import laplacian_and_mass
 from sketchforge.geometry.locate import TriangleLocator
 
 from .attach import FRONT, Attachment, lo_chain_index
+from .cache import AssemblyCache, memo
 from .errors import DepthOrderError
 from .sheet import unique_edges
 
@@ -76,6 +77,18 @@ class _Rows:
         self.b.append(rhs)
         self.m += k
 
+    def add_block(self, other: "_Rows", colmap, layers) -> None:
+        """Append the rows of ``other`` (columns and pairs numbered within it) with each column
+        c replaced by ``colmap(c)`` and each pair entry p by ``layers[p]``."""
+        layers = np.asarray(layers)
+        for r, c, v, b, pair in zip(other.r, other.c, other.v, other.b, other.pair):
+            self.r.append(r + self.m)
+            self.c.append(colmap(c))
+            self.v.append(v)
+            self.b.append(b)
+            self.pair.append(layers[pair])
+        self.m += other.m
+
     def matrix(self, n: int):
         if self.m == 0:
             return sp.csr_matrix((0, n)), np.zeros(0)
@@ -86,7 +99,7 @@ class _Rows:
 
 
 def build_problem(sheets, offsets, front_off, back_off, attachments: list[Attachment], gap: float, reg: float,
-                  stiffness: float = 20.0, glue_lift=None, springs=None):
+                  stiffness: float = 20.0, glue_lift=None, springs=None, cache: AssemblyCache | None = None):
     """Assemble the QP of the module docstring.
 
     Parameters
@@ -117,6 +130,10 @@ def build_problem(sheets, offsets, front_off, back_off, attachments: list[Attach
         Per attachment, soft rows ``(part_cols, host_cols, bary, weight, target)`` (sheet-local
         indices) added to the objective as  weight·(δ_part - Σ bary·δ_host - target)²
         (:func:`.blend.blend_junctions`).
+    cache : AssemblyCache, optional
+        Memo of each sheet's Laplacian, mass, edges, outline and locator and of each
+        overlapping pair's depth rows (see :mod:`.cache`); the problem is bit-identical with
+        or without it.
 
     Returns
     -------
@@ -127,10 +144,11 @@ def build_problem(sheets, offsets, front_off, back_off, attachments: list[Attach
     diag = float(np.linalg.norm(allxy.max(0) - allxy.min(0))) or 1.0
     w = reg / diag**2
     blocks, blocks_m = [], []
-    for s in sheets:
+    mesh_keys = [(s.xy, s.F) for s in sheets]
+    for s, mk in zip(sheets, mesh_keys):
         # Every sheet's xy and F passed guard.mesh in the plane once, where they were made
         # (sheet_from_mesh, or insert_chains for a sheet with junctions cut in): not again.
-        L, M = laplacian_and_mass(s.xy, s.F, checked=True)
+        L, M = memo(cache, "laplacian", mk, lambda s=s: laplacian_and_mass(s.xy, s.F, checked=True))
         k = 1.0 + (stiffness if s.chains else 0.0)
         blocks.append((k * (-L) + w * M).tocsc())
         blocks_m.append(M)
@@ -173,13 +191,14 @@ def build_problem(sheets, offsets, front_off, back_off, attachments: list[Attach
         glued[key].append(("u", at.upper, j))
         glued[key].append(("l", at.lower, c))
 
-    polys = [s.polygon() for s in sheets]
-    edges = [unique_edges(s.F) for s in sheets]  # once per sheet, not once per overlapping pair
+    polys = [memo(cache, "polygon", (s.xy, s.boundary, s.holes), s.polygon) for s in sheets]
+    # once per sheet, not once per overlapping pair
+    edges = [memo(cache, "edges", (s.F,), lambda s=s: unique_edges(s.F)) for s in sheets]
     locators: dict[int, TriangleLocator] = {}  # point location, once per sheet that overlaps another
 
     def loc(i):
         if i not in locators:
-            locators[i] = TriangleLocator(sheets[i].xy, sheets[i].F)
+            locators[i] = memo(cache, "locator", mesh_keys[i], lambda: TriangleLocator(sheets[i].xy, sheets[i].F))
         return locators[i]
 
     n_pairs = 0
@@ -194,13 +213,30 @@ def build_problem(sheets, offsets, front_off, back_off, attachments: list[Attach
             skip = {i: np.zeros(sheets[i].n), k: np.zeros(sheets[k].n)}
             for _, layer, idx in glued.get((i, k), []):
                 skip[layer][idx] = 1.0
-            # C>=: vertices of the nearer layer k over layer i: back_k(v) - front_i(p) >= gap.
-            _pair_rows(ineq, sheets, offsets, k, i, loc(i), skip[k], skip[i], back_off[k], front_off[i], gap, +1)
-            # C<=: vertices of layer i under layer k: back_k(p) - front_i(v) >= gap.
-            _pair_rows(ineq, sheets, offsets, i, k, loc(k), skip[i], skip[k], front_off[i], back_off[k], gap, -1)
-            # and where their edges cross
-            _crossing_rows(ineq, sheets, offsets, k, i, edges[k], edges[i], overlap, skip[k], skip[i],
-                           back_off[k], front_off[i], gap)
+
+            def rows(i=i, k=k, overlap=overlap, skip=skip):
+                # Columns numbered within the pair (sheet i first, then k), so that the rows of
+                # an unchanged pair are the same wherever the two sheets sit in δ.
+                local = {i: 0, k: sheets[i].n}
+                out = _Rows()
+                # C>=: vertices of the nearer layer k over layer i: back_k(v) - front_i(p) >= gap.
+                _pair_rows(out, sheets, local, k, i, loc(i), skip[k], skip[i], back_off[k], front_off[i], gap, +1)
+                # C<=: vertices of layer i under layer k: back_k(p) - front_i(v) >= gap.
+                _pair_rows(out, sheets, local, i, k, loc(k), skip[i], skip[k], front_off[i], back_off[k], gap, -1)
+                # and where their edges cross
+                _crossing_rows(out, sheets, local, k, i, edges[k], edges[i], overlap, skip[k], skip[i],
+                               back_off[k], front_off[i], gap)
+                out.pair = [np.where(pr == i, 0, 1) for pr in out.pair]  # 0: sheet i, 1: sheet k
+                return out
+
+            block = memo(cache, "pair_rows", mesh_keys[i] + mesh_keys[k] + (
+                sheets[i].boundary, sheets[i].holes, sheets[k].boundary, sheets[k].holes, skip[i], skip[k], front_off[i], back_off[k], sheets[i].h, sheets[k].h, float(gap)), rows)
+            n_i = sheets[i].n
+
+            def colmap(c, a=int(offsets[i]), b=int(offsets[k]) - n_i, n_i=n_i):
+                return np.where(c < n_i, c + a, c + b)
+
+            ineq.add_block(block, colmap, (i, k))
     Aeq, beq = eq.matrix(N)
     Ain, bin_ = ineq.matrix(N)
     # Rest depth of each layer: the constant offsets that stack the layers back to front
@@ -711,7 +747,7 @@ def _active_set(P, q, Aeq, beq, Ain, bin_, warm, tol, max_iter, memory_budget=ME
 
 
 def solve_without_free_parts(P, q, Aeq, beq, Ain, bin_, offsets, free, rest, method: str = "osqp",
-                             pad: float = 0.0):
+                             pad: float = 0.0, cache: AssemblyCache | None = None):
     """:func:`solve_depth` with the free parts left out of the QP, then placed at their rest
     depth (:func:`settle_free_parts` lowers them afterwards, as it would after a solve of
     the whole problem).
@@ -737,6 +773,9 @@ def solve_without_free_parts(P, q, Aeq, beq, Ain, bin_, offsets, free, rest, met
         Rest depth of each sheet (the constant its mass term pulls towards, see
         :func:`build_problem`).
     method, pad : as :func:`solve_depth`
+    cache : AssemblyCache, optional
+        Memo of the glued parts' solve, keyed by their whole QP: editing a free part (an eye)
+        re-places it without solving again.
 
     Returns
     -------
@@ -764,8 +803,10 @@ def solve_without_free_parts(P, q, Aeq, beq, Ain, bin_, offsets, free, rest, met
         if len(glued):
             P = sp.csc_matrix(P)
             keep = ~touch
-            xg, gi = solve_depth(P[glued][:, glued], q[glued], sp.csr_matrix(Aeq)[:, glued], beq,
-                                 Ain[keep][:, glued], bin_[keep], method=method, pad=pad)
+            sub = (P[glued][:, glued], q[glued], sp.csr_matrix(Aeq)[:, glued], beq, Ain[keep][:, glued], bin_[keep])
+            key = tuple(a for m in sub for a in ((m.data, m.indices, m.indptr, m.shape) if sp.issparse(m) else (m,)))
+            xg, gi = memo(cache, "depth_solve", key + (method, float(pad)),
+                          lambda: solve_depth(*sub, method=method, pad=pad))
             info.update(gi)
             x[glued] = xg
         for f in free:
