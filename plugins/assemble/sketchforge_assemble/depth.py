@@ -57,7 +57,16 @@ from sketchforge.geometry.locate import TriangleLocator
 from .attach import FRONT, Attachment, lo_chain_index
 from .cache import AssemblyCache, memo
 from .errors import DepthOrderError
-from .sheet import unique_edges
+from .sheet import directed_edges
+
+
+def _unique_edges(F: np.ndarray) -> np.ndarray:
+    """:func:`.sheet.unique_edges` (the same array: (e, 2) int64, rows sorted, no repeats), with
+    each edge packed into one int64 key: a 1-D unique instead of a row-wise one, ~10x faster."""
+    E = np.sort(directed_edges(F), axis=1)
+    n = int(F.max(initial=0)) + 1
+    key = np.unique(E[:, 0] * n + E[:, 1])
+    return np.c_[key // n, key % n].astype(np.int64)
 
 
 class _Rows:
@@ -193,7 +202,7 @@ def build_problem(sheets, offsets, front_off, back_off, attachments: list[Attach
 
     polys = [memo(cache, "polygon", (s.xy, s.boundary, s.holes), s.polygon) for s in sheets]
     # once per sheet, not once per overlapping pair
-    edges = [memo(cache, "edges", (s.F,), lambda s=s: unique_edges(s.F)) for s in sheets]
+    edges = [memo(cache, "edges", (s.F,), lambda s=s: _unique_edges(s.F)) for s in sheets]
     locators: dict[int, TriangleLocator] = {}  # point location, once per sheet that overlaps another
 
     def loc(i):
@@ -311,9 +320,11 @@ def _crossing_rows(rows, sheets, offsets, k, i, ek, ei, region, skip_k, skip_i, 
     lk = np.linalg.norm(b - a, axis=1)
     li = np.linalg.norm(d - c, axis=1)
     tk, ti = cKDTree(0.5 * (a + b)), cKDTree(0.5 * (c + d))
-    pairs = tk.query_ball_tree(ti, r=0.5 * (lk.max() + li.max()))
-    pk = np.repeat(np.arange(len(ek)), [len(p) for p in pairs])
-    pi = np.fromiter((j for p in pairs for j in p), dtype=np.int64, count=len(pk))
+    # every pair of edges whose midpoints are within the longest half-edges of each other (pairs
+    # at distance 0 included), as arrays rather than Python lists, in a fixed order
+    near = tk.sparse_distance_matrix(ti, 0.5 * (lk.max() + li.max()), output_type="ndarray")
+    order = np.lexsort((near["j"], near["i"]))
+    pk, pi = near["i"][order].astype(np.int64), near["j"][order].astype(np.int64)
     if len(pk) == 0:
         return
     r, sv = b[pk] - a[pk], d[pi] - c[pi]
