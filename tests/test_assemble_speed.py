@@ -196,3 +196,33 @@ def test_screened_rows_give_the_answer_of_all_rows(screen, monkeypatch):
     # the exact optimum of the whole QP, on the glued parts (the eye's rows are inactive there)
     xe = _exact()[2][glued]
     assert np.abs(x - xe).max() < pad  # half a gap: OSQP's accuracy, screened or not
+
+
+def _shifted(mesh: Mesh, dx: float) -> Mesh:
+    V = mesh.V.copy()
+    V[:, 0] += dx
+    return Mesh(V, mesh.F, boundary=mesh.boundary, junction=mesh.junction, holes=mesh.holes)
+
+
+def test_separate_groups_are_solved_and_cached_apart():
+    # two body + front arm + eye groups side by side: two independent QPs; editing the second
+    # arm re-solves only the second group, bit-identical to scratch
+    layers, meshes, closed = _creature()
+    ids = [layer.id for layer in layers]
+    pick = [ids.index(n) for n in ("body", "arm_front", "eye")]
+    two = [meshes[i] for i in pick] + [_shifted(meshes[i], 3.0) for i in pick]
+    cl = [closed[i] for i in pick] * 2
+    cache = AssemblyCache()
+    first = assemble_detailed(two, cl, cache=cache)
+    assert first.solver["groups"] == 2 and first.components == 4  # two glued groups, two eyes
+    assert first.max_violation <= 0.0
+    edited = list(two)
+    edited[4] = _thicker(two[4], 1.05)
+    cache.counts.clear()
+    res = assemble_detailed(edited, cl, cache=cache)
+    assert cache.counts["depth_solve", "hit"] == 1 and cache.counts["depth_solve", "miss"] == 1
+    _same(res, assemble_detailed(edited, cl))
+    # the untouched group's vertices did not move at all
+    a = np.isin(first.face_layer, [0, 1, 2])
+    assert np.array_equal(first.mesh.F[a], res.mesh.F[a])
+    assert np.array_equal(first.mesh.V[np.unique(first.mesh.F[a])], res.mesh.V[np.unique(res.mesh.F[a])])

@@ -48,6 +48,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as sla
+from scipy.sparse.csgraph import connected_components
 from scipy.linalg import cho_solve, cholesky, solve_triangular
 
 from sketchforge.geometry import guard
@@ -797,39 +798,65 @@ def solve_without_free_parts(P, q, Aeq, beq, Ain, bin_, offsets, free, rest, met
     """
     N = P.shape[0]
     free = sorted(free)
-    Ain = sp.csr_matrix(Ain)
-    is_free = np.zeros(N, bool)
-    for f in free:
-        is_free[offsets[f]:offsets[f + 1]] = True
+    P, Aeq, Ain = sp.csc_matrix(P), sp.csr_matrix(Aeq), sp.csr_matrix(Ain)
+    k = len(offsets) - 1
+    layer_of = np.repeat(np.arange(k), np.diff(offsets))  # (N,) sheet of each unknown
+    is_free = np.zeros(k, bool)
+    is_free[free] = True
     x = np.zeros(N)
-    info = {"method": method, "osqp_iterations": 0, "iterations": 0, "free_in_solve": False}
-    touch = np.zeros(len(bin_), bool)
-    if free and len(bin_):
-        touch = (abs(Ain) @ is_free.astype(np.float64)) > 0
-    glued = np.flatnonzero(~is_free)
-    if not free:
-        x, info = solve_depth(P, q, Aeq, beq, Ain, bin_, method=method, pad=pad)
-        info["free_in_solve"] = False
-    else:
-        if len(glued):
-            P = sp.csc_matrix(P)
-            keep = ~touch
-            sub = (P[glued][:, glued], q[glued], sp.csr_matrix(Aeq)[:, glued], beq, Ain[keep][:, glued], bin_[keep])
-            key = tuple(a for m in sub for a in ((m.data, m.indices, m.indptr, m.shape) if sp.issparse(m) else (m,)))
-            xg, gi = memo(cache, "depth_solve", key + (method, float(pad)),
-                          lambda: solve_depth(*sub, method=method, pad=pad))
-            info.update(gi)
-            x[glued] = xg
-        for f in free:
-            x[offsets[f]:offsets[f + 1]] = rest[f]
-        if touch.any() and float(np.min(Ain[touch] @ x - bin_[touch])) < 0.0:
-            x, info = solve_depth(P, q, Aeq, beq, Ain, bin_, method=method, pad=pad)
-            info["free_in_solve"] = True
-        else:
-            info["free_in_solve"] = False
+    info = {"method": method, "osqp_iterations": 0, "iterations": 0, "free_in_solve": False, "groups": 0}
+    eq_lo, eq_hi = _row_layers(Aeq, layer_of)
+    in_lo, in_hi = _row_layers(Ain, layer_of)
+    touch = is_free[in_lo] | is_free[in_hi]  # depth rows of a free part
+    # Independent groups: glued sheets linked by a glue or depth row. Each is its own QP (in
+    # the same problem they would not interact), solved and cached on its own, so editing
+    # one creature of a crowd re-solves only that creature.
+    links = np.r_[eq_lo, in_lo[~touch]], np.r_[eq_hi, in_hi[~touch]]
+    n_grp, group = connected_components(sp.coo_matrix((np.ones(len(links[0])), links), shape=(k, k)), directed=False)
+    for g in range(n_grp):
+        members = np.flatnonzero((group == g) & ~is_free)
+        if len(members) == 0:
+            continue
+        cols = np.flatnonzero(np.isin(layer_of, members))
+        er = np.flatnonzero(np.isin(eq_lo, members))
+        ir = np.flatnonzero(~touch & np.isin(in_lo, members))
+        sub = (P[cols][:, cols], q[cols], Aeq[er][:, cols], beq[er], Ain[ir][:, cols], bin_[ir])
+        xg, gi = _memo_solve(cache, sub, method, pad)
+        x[cols] = xg
+        info["groups"] += 1
+        for key in ("osqp_iterations", "iterations", "osqp_rounds", "osqp_rows"):
+            if key in gi:
+                info[key] = info.get(key, 0) + gi[key]
+        if "osqp_status" in gi and info.get("osqp_status", "solved") == "solved":
+            info["osqp_status"] = gi["osqp_status"]
+        info["active"] = info.get("active", 0) + gi.get("active", 0)
+    for f in free:
+        x[offsets[f]:offsets[f + 1]] = rest[f]
+    if touch.any() and float(np.min(Ain[touch] @ x - bin_[touch])) < 0.0:
+        x, info = _memo_solve(cache, (P, q, Aeq, beq, Ain, bin_), method, pad)
+        info = dict(info, free_in_solve=True, groups=1)
     if free and len(bin_) and info.get("iterations", 0) == 0:  # OSQP's count, as in solve_depth
         info["active"] = int(np.sum(Ain @ x - bin_ <= pad + 1e-6))
     return x, info
+
+
+def _row_layers(A, layer_of):
+    """(first, last) sheet touched by each row of A (CSR, every row with an entry): (r,) int64 twice."""
+    if A.shape[0] == 0:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    lay = layer_of[A.indices]
+    starts = A.indptr[:-1]
+    if np.any(np.diff(A.indptr) == 0):
+        raise ValueError("a constraint row without coefficients")
+    return np.minimum.reduceat(lay, starts), np.maximum.reduceat(lay, starts)
+
+
+def _memo_solve(cache, sub, method, pad):
+    """:func:`solve_depth` of ``sub`` = (P, q, Aeq, beq, Ain, bin_) through the cache, keyed by
+    the whole problem; the info returned is a copy (the cached one is shared)."""
+    key = tuple(a for m in sub for a in ((m.data, m.indices, m.indptr, m.shape) if sp.issparse(m) else (m,)))
+    x, info = memo(cache, "depth_solve", key + (method, float(pad)), lambda: solve_depth(*sub, method=method, pad=pad))
+    return x, dict(info)
 
 
 def settle_free_parts(x, Ain, bin_, offsets, free, pad: float = 0.0):
