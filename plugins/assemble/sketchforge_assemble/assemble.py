@@ -2,7 +2,8 @@
 
 Pipeline: planar sheets (:mod:`.sheet`) -> attachments (:mod:`.attach`) -> junctions cut into
 the faces below (:mod:`.remesh`) -> depth QP (:mod:`.depth`) -> faces, slits and rim bridges
-(:mod:`.stitch`).
+(:mod:`.stitch`). With an :class:`~.cache.AssemblyCache`, the per-layer and per-pair steps
+and each group's solve are reused when their inputs are bit-identical (:mod:`.cache`).
 """
 
 from __future__ import annotations

@@ -50,6 +50,26 @@ def digest(*parts) -> bytes:
     return h.digest()
 
 
+def nbytes(value, _depth: int = 0) -> int:
+    """Approximate memory held by a cached value: the bytes of the numpy arrays (sparse
+    matrices' too) reachable through tuples, lists, dicts and object attributes, a few levels
+    deep; other objects count 64 bytes."""
+    if _depth > 4:
+        return 0
+    if isinstance(value, np.ndarray):
+        return int(value.nbytes)
+    if isinstance(value, (tuple, list)):
+        return sum(nbytes(v, _depth + 1) for v in value)
+    if isinstance(value, dict):
+        return sum(nbytes(v, _depth + 1) for v in value.values())
+    attrs = getattr(value, "__dict__", None)
+    if attrs is None and hasattr(value, "__dataclass_fields__"):
+        attrs = {k: getattr(value, k) for k in value.__dataclass_fields__}
+    if attrs:
+        return 64 + sum(nbytes(v, _depth + 1) for v in attrs.values())
+    return 64
+
+
 class AssemblyCache:
     """Least-recently-used memo of assembly results (see the module docstring).
 
@@ -57,11 +77,17 @@ class AssemblyCache:
     ----------
     max_entries : int
         Entries kept (a sheet, a Laplacian, a pair's rows... each count one). The creature
-        uses ~60; the default keeps a few versions of every layer of a 30-layer document.
+        uses 50 entries (~4.6 MB) per version of its layers.
+    max_bytes : int
+        Memory the entries may hold (:func:`nbytes`); the least recently used go first. The
+        default keeps a few versions of every layer of a 100k-vertex document.
     """
 
-    def __init__(self, max_entries: int = 512):
+    def __init__(self, max_entries: int = 512, max_bytes: int = 256 << 20):
         self.max_entries = int(max_entries)
+        self.max_bytes = int(max_bytes)
+        self.bytes = 0
+        self._size: dict[tuple, int] = {}
         self._memo: OrderedDict[tuple, object] = OrderedDict()
         self._lock = threading.Lock()  # the app assembles on a worker thread
         self.hits = 0
@@ -82,17 +108,24 @@ class AssemblyCache:
                 self.counts[kind, "hit"] += 1
                 return self._memo[k]
         value = make()  # outside the lock: two threads may both compute it, both get equal values
+        size = nbytes(value)
         with self._lock:
             self.misses += 1
             self.counts[kind, "miss"] += 1
-            self._memo[k] = value
-            while len(self._memo) > self.max_entries:
-                self._memo.popitem(last=False)
+            if k not in self._memo:
+                self._memo[k] = value
+                self._size[k] = size
+                self.bytes += size
+            while len(self._memo) > 1 and (len(self._memo) > self.max_entries or self.bytes > self.max_bytes):
+                old, _ = self._memo.popitem(last=False)
+                self.bytes -= self._size.pop(old)
         return value
 
     def clear(self) -> None:
         with self._lock:
             self._memo.clear()
+            self._size.clear()
+            self.bytes = 0
             self.hits = self.misses = 0
             self.counts.clear()
 
