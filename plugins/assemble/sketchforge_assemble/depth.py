@@ -442,6 +442,29 @@ SCREEN_PADS = 6.0
 EPS = 1e-4
 
 
+#: How much harder the screening guess pulls towards the rest depths (see :func:`_screening_guess`).
+ANCHOR = 1000.0
+
+
+def _screening_guess(P, q, Aeq, beq):
+    """(N,) the glue-only solution with the pull towards the rest depths ``ANCHOR`` times
+    stronger, or None (see :func:`_equality_solution`).
+
+    Why. The plain glue-only solution lets every part swing through the layer it hangs from
+    (the creature: 4 532 of 11 570 rows violated there, 72 gaps off the optimum), so nearly
+    half the rows look relevant. Anchored, the parts stay near their rest stack and only the
+    rows near the junctions come close (creature: 2 022 rows, 300 iterations in two rounds
+    instead of 475 in one). Only a guess: which rows go in first and where OSQP starts, never
+    the answer. The pull's weight is read off P: the energy's only term that does not vanish
+    on a constant offset is the mass term (Laplacian and springs are differences), so
+    P·1 = w·M·1, and q = -w·M·rest on those rows.
+    """
+    d = np.maximum(np.asarray(P @ np.ones(P.shape[0])).ravel(), 0.0)
+    Pa = (P + sp.diags(ANCHOR * d)).tocsc()
+    qa = q + ANCHOR * np.where(d > 0, q, 0.0)
+    return _equality_solution(Pa, qa, Aeq, beq)
+
+
 def _equality_solution(P, q, Aeq, beq):
     """(N,) minimiser of ½δᵀPδ + qᵀδ subject to the glue rows alone (one sparse LU of the KKT
     matrix), or None when the glue rows make it singular (then nothing is screened)."""
@@ -461,8 +484,8 @@ def _osqp_screened(P, q, Aeq, beq, Ain, bin_, pad, rounds: int = 6):
 
     Why. Of the ~11k depth rows of the creature fewer than 200 are active at the optimum, and
     OSQP's cost per iteration (and, measured, its iteration count) grows with the rows it
-    carries. The rows whose slack at the glue-only solution (:func:`_equality_solution`) is
-    below ``SCREEN_PADS`` pads go to the first round, from that solution; any other row that
+    carries. The rows whose slack at an anchored glue-only solution (:func:`_screening_guess`)
+    is below ``SCREEN_PADS`` pads go to the first round, from that solution; any other row that
     the round's answer leaves closer than that joins and OSQP runs again, warm-started. A
     solution of fewer rows that satisfies all of them solves the whole problem (the rows left
     out are inactive), so the answer is the same QP's, to OSQP's accuracy; the caller still
@@ -478,7 +501,7 @@ def _osqp_screened(P, q, Aeq, beq, Ain, bin_, pad, rounds: int = 6):
     import osqp
 
     r = len(bin_)
-    x0 = _equality_solution(P, q, Aeq, beq) if pad > 0 and r else None
+    x0 = _screening_guess(P, q, Aeq, beq) if pad > 0 and r else None
     if x0 is None:
         use = np.ones(r, bool)
     else:
