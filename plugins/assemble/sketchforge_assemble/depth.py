@@ -328,6 +328,8 @@ def _crossing_rows(rows, sheets, offsets, k, i, ek, ei, region, skip_k, skip_i, 
     # every pair of edges whose midpoints are within the longest half-edges of each other (pairs
     # at distance 0 included), as arrays rather than Python lists, in a fixed order
     near = tk.sparse_distance_matrix(ti, 0.5 * (lk.max() + li.max()), output_type="ndarray")
+    # two segments that cross have midpoints within half their summed lengths
+    near = near[near["v"] <= 0.5 * (lk[near["i"]] + li[near["j"]]) * (1 + 1e-9)]
     order = np.lexsort((near["j"], near["i"]))
     pk, pi = near["i"][order].astype(np.int64), near["j"][order].astype(np.int64)
     if len(pk) == 0:
@@ -832,8 +834,10 @@ def solve_without_free_parts(P, q, Aeq, beq, Ain, bin_, offsets, free, rest, met
     layer_of = np.repeat(np.arange(k), np.diff(offsets))  # (N,) sheet of each unknown
     eq_lo, eq_hi = _row_layers(Aeq, layer_of)
     in_lo, in_hi = _row_layers(Ain, layer_of)
-    # a group's solve is reused within this call too (when a free part joins another group)
-    cache = cache if cache is not None else AssemblyCache()
+    # A group's solve is reused when a free part joins another group: through the cache, or
+    # within this call by its members (its rows are then the same: a free part that joined
+    # and touches it would be one of them).
+    local: dict[tuple, tuple] = {}
     out = np.zeros(k, bool)  # free parts left out of the QP
     out[free] = True
     while True:
@@ -854,7 +858,12 @@ def solve_without_free_parts(P, q, Aeq, beq, Ain, bin_, offsets, free, rest, met
             er = np.flatnonzero(np.isin(eq_lo, members))
             ir = np.flatnonzero(~touch & np.isin(in_lo, members))
             sub = (P[cols][:, cols], q[cols], Aeq[er][:, cols], beq[er], Ain[ir][:, cols], bin_[ir])
-            xg, gi = _memo_solve(cache, sub, method, pad)
+            if cache is None:
+                if tuple(members) not in local:
+                    local[tuple(members)] = solve_depth(*sub, method=method, pad=pad)
+                xg, gi = local[tuple(members)]
+            else:
+                xg, gi = _memo_solve(cache, sub, method, pad)
             x[cols] = xg
             info["groups"] += 1
             for key in ("osqp_iterations", "iterations", "osqp_rounds", "osqp_rows", "active"):
