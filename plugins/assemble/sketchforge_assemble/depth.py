@@ -40,9 +40,9 @@ unknowns, 12k rows, 177 active at the optimum): OSQP 0.4 s; the active set from 
 set about 1.5 s, from scratch about 2 s (430 steps), both to the same objective as a 1e-9 OSQP
 solve. What OSQP is given (issue 12's speed work, see :func:`solve_without_free_parts` and
 :func:`_osqp_screened`): the free parts are left out, each independent group of glued layers
-is solved on its own, and only the rows within 3 gaps of the glue-only solution go in first
-(creature: 4 788 of 11 570 rows, 475 iterations instead of 1675, CPU ~0.33 s instead of
-~1.3 s; within 0.1-0.25 gaps of the exact optimum, as before). Monster Mash's loop (every violated row becomes an equality row, rows with a negative
+is solved on its own, and only the rows within 3 gaps of an anchored glue-only solution go in
+first (creature: 2 022 of 11 570 rows, 300 iterations in two rounds instead of 1675, CPU
+~0.25 s instead of ~1.3 s; within 0.1-0.25 gaps of the exact optimum, as before). Monster Mash's loop (every violated row becomes an equality row, rows with a negative
 multiplier leave) is not used: it collects linearly dependent rows of touching faces, and then
 a ridge hides the singular system and whether it ends at the optimum depends on round-off.
 """
@@ -376,7 +376,7 @@ def solve_depth(P, q, Aeq, beq, Ain, bin_, method: str = "osqp", pad: float = 0.
         "osqp" (default): OSQP to 1e-4 on the rows tightened by ``pad``, so that its residual
         still leaves every true row satisfied (measured on the creature: 1300 iterations,
         0.4 s, objective within 0.2% of a 1e-5 solve that needs 20000 iterations), given the
-        rows near the glue-only solution first (:func:`_osqp_screened`); if some row
+        rows near an anchored glue-only solution first (:func:`_osqp_screened`); if some row
         is still violated, the dual active-set method (:func:`_active_set`) finishes from
         OSQP's active set. "active_set": the active-set method alone, from the equality rows.
     pad : float
@@ -437,8 +437,8 @@ def solve_depth(P, q, Aeq, beq, Ain, bin_, method: str = "osqp", pad: float = 0.
     return x, info
 
 
-#: Rows whose slack at the glue-only solution is below this many pads go to OSQP's first
-#: round (see :func:`_osqp_screened`); 6 pads = 3 gaps.
+#: Rows whose slack at the screening guess is below this many pads go to OSQP's first round
+#: (see :func:`_osqp_screened`); 6 pads = 3 gaps.
 SCREEN_PADS = 6.0
 #: OSQP's absolute and relative tolerance (see :func:`solve_depth`).
 EPS = 1e-4
