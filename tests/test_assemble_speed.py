@@ -201,6 +201,11 @@ def test_screened_rows_give_the_answer_of_all_rows(screen, monkeypatch):
         assert info["osqp_rows"] < 0.3 * len(bg)
         guess = depth._screening_guess(Pg, qg, Aeqg, beq)
         assert np.max(np.abs(Aeqg @ guess - beq)) < 1e-9  # glued exactly, anchored near the rest stack
+        # libigl's LDLᵀ answers what SuperLU's KKT solve (its fallback) answers
+        d = np.maximum(Pg @ np.ones(Pg.shape[0]), 0.0)
+        lu = depth._equality_solution((Pg + sp.diags(depth.ANCHOR * d)).tocsc(),
+                                      qg + depth.ANCHOR * np.where(d > 0, qg, 0.0), Aeqg, beq)
+        assert np.abs(guess - lu).max() < 1e-9
     # the exact optimum of the whole QP, on the glued parts (the eye's rows are inactive there)
     xe = _exact()[2][glued]
     assert np.abs(x - xe).max() < pad  # half a gap: OSQP's accuracy, screened or not
