@@ -88,9 +88,9 @@ def one_layer_changed(doc, layer_ids=("arm_front", "eye", "body"), repeats=5) ->
             ref = assemble_detailed(edited, closed)
             scratch.append(time.perf_counter() - t)
             same += res.mesh.identical(ref.mesh)
-        print(f"  {lid} changed: re-assembly median {1000 * np.median(wall):.0f} ms (CPU {1000 * np.median(cpu):.0f} ms) "
-              f"vs {1000 * np.median(scratch):.0f} ms from scratch; {same} of {repeats} meshes bit-identical to "
-              f"scratch; load {os.getloadavg()[0]:.1f}")
+        print(f"  {lid} changed: re-assembly median {1000 * np.median(wall):.0f} ms "
+              f"(CPU {1000 * np.median(cpu):.0f} ms) vs {1000 * np.median(scratch):.0f} ms from scratch; "
+              f"{same} of {repeats} meshes bit-identical to scratch; load {os.getloadavg()[0]:.1f}")
 
 
 def random_creatures(n: int) -> None:
@@ -107,7 +107,8 @@ def random_creatures(n: int) -> None:
         verts.append(sum(m.n_vertices for m in meshes))
         bad += res.max_violation > 0 or len(intersecting_pairs(res.mesh.V, res.mesh.F, res.face_layer)) > 0
     print(f"  {n} random creatures ({min(verts)}-{max(verts)} layer vertices): median {np.median(wall):.2f} s, "
-          f"p90 {np.percentile(wall, 90):.2f} s (CPU median {np.median(cpu):.2f} s, p90 {np.percentile(cpu, 90):.2f} s; "
+          f"p90 {np.percentile(wall, 90):.2f} s (CPU median {np.median(cpu):.2f} s, "
+          f"p90 {np.percentile(cpu, 90):.2f} s; "
           f"load {os.getloadavg()[0]:.1f}); {bad} with a violated depth row or an intersection")
 
 

@@ -42,8 +42,9 @@ solve. What OSQP is given (issue 12's speed work, see :func:`solve_without_free_
 :func:`_osqp_screened`): the free parts are left out, each independent group of glued layers
 is solved on its own, and only the rows within 3 gaps of an anchored glue-only solution go in
 first (creature: 2 022 of 11 570 rows, 300 iterations in two rounds instead of 1675, CPU
-~0.25 s instead of ~1.3 s; within 0.1-0.25 gaps of the exact optimum, as before). Monster Mash's loop (every violated row becomes an equality row, rows with a negative
-multiplier leave) is not used: it collects linearly dependent rows of touching faces, and then
+~0.25 s instead of ~1.3 s; within 0.1-0.25 gaps of the exact optimum, as before). Monster
+Mash's loop (every violated row becomes an equality row, rows with a negative multiplier
+leave) is not used: it collects linearly dependent rows of touching faces, and then
 a ridge hides the singular system and whether it ends at the optimum depends on round-off.
 """
 
@@ -244,7 +245,8 @@ def build_problem(sheets, offsets, front_off, back_off, attachments: list[Attach
                 return out
 
             block = memo(cache, "pair_rows", mesh_keys[i] + mesh_keys[k] + (
-                sheets[i].boundary, sheets[i].holes, sheets[k].boundary, sheets[k].holes, skip[i], skip[k], front_off[i], back_off[k], sheets[i].h, sheets[k].h, float(gap)), rows)
+                sheets[i].boundary, sheets[i].holes, sheets[k].boundary, sheets[k].holes, skip[i], skip[k],
+                front_off[i], back_off[k], sheets[i].h, sheets[k].h, float(gap)), rows)
             n_i = sheets[i].n
 
             def colmap(c, a=int(offsets[i]), b=int(offsets[k]) - n_i, n_i=n_i):
@@ -474,7 +476,7 @@ def _screening_guess(P, q, Aeq, beq):
             x = np.asarray(igl.min_quad_with_fixed(Pa, qa[:, None], np.zeros(0, np.int64), np.zeros((0, 1)),
                                                    sp.csc_matrix(Aeq), np.asarray(beq, np.float64)[:, None],
                                                    True)).ravel()
-        except (RuntimeError, ValueError):  # a failed factorisation: SuperLU below says why
+        except (RuntimeError, ValueError, TypeError):  # failed factorisation, other binding: SuperLU
             x = None
         if x is not None and x.shape == (P.shape[0],) and np.all(np.isfinite(x)):
             return x
