@@ -281,7 +281,7 @@ def test_active_set_matches_osqp_on_a_small_document():
 @lru_cache(maxsize=None)
 def _small_qp():
     """The depth QP (P, q, Aeq, beq, Ain, bin_) and OSQP's pad of the small body + arm document."""
-    import sketchforge_assemble.assemble as asm
+    import sketchforge_assemble.depth as asm  # the assembly calls solve_depth through this module
 
     body = _inflate(_ellipse(0, 0, 0.6, 0.4), True, 0.08)
     arm = _inflate(_arc(0.35, -0.2, 0.25, 100, 400), False, 0.08)

@@ -3,7 +3,8 @@
 Pipeline: planar sheets (:mod:`.sheet`) -> attachments (:mod:`.attach`) -> junctions cut into
 the faces below (:mod:`.remesh`) -> fillets at the junctions (:mod:`.blend`) -> depth QP
 (:mod:`.depth`) -> faces, slits and rim bridges (:mod:`.stitch`) -> the junctions faired
-(:mod:`.fair`).
+(:mod:`.fair`). With an :class:`~.cache.AssemblyCache`, the per-layer and per-pair steps
+and each group's solve are reused when their inputs are bit-identical (:mod:`.cache`).
 """
 
 from __future__ import annotations
@@ -19,7 +20,8 @@ from sketchforge.geometry.mesh import Mesh
 
 from .attach import Attachment, find_attachments
 from .blend import blend_junctions
-from .depth import build_problem, settle_free_parts, solve_depth
+from .cache import AssemblyCache, memo
+from .depth import build_problem, settle_free_parts, solve_without_free_parts
 from .fair import fair_seams, fairing_is_safe, seam_zone, supports
 from .remesh import insert_chains
 from .sheet import sheet_from_mesh, taper
@@ -91,6 +93,13 @@ class AssemblyResult:
     solver: dict = field(default_factory=dict)
 
 
+def _sheet(cache: AssemblyCache | None, k: int, name: str, mesh: Mesh, free: bool):
+    """:func:`.sheet.sheet_from_mesh` through the cache (keyed by the mesh's arrays)."""
+    sheet = memo(cache, "sheet", (mesh.V, mesh.F, mesh.boundary, mesh.junction, tuple(mesh.holes), free),
+                 lambda: sheet_from_mesh(k, name, mesh, free))
+    return sheet.evolve(layer=k, name=name)
+
+
 def _params(params) -> dict:
     p = dict(DEFAULT_PARAMS)
     p.update(params or {})
@@ -109,7 +118,8 @@ def _params(params) -> dict:
 
 
 def assemble_detailed(meshes: Sequence[Mesh | None], closed: Sequence[bool] | None = None,
-                      params=None, names: Sequence[str] | None = None) -> AssemblyResult:
+                      params=None, names: Sequence[str] | None = None,
+                      cache: AssemblyCache | None = None) -> AssemblyResult:
     """Assemble layer meshes, back to front, and report diagnostics.
 
     Parameters
@@ -123,6 +133,10 @@ def assemble_detailed(meshes: Sequence[Mesh | None], closed: Sequence[bool] | No
         See :data:`DEFAULT_PARAMS`.
     names : list of str, optional
         Layer names used in error messages (default "layer 0", ...).
+    cache : AssemblyCache, optional
+        Keeps per-layer sheets, junction cuts, operators, per-pair depth rows and the glued
+        parts' solve between calls, so that re-assembling after one layer changed redoes only
+        what depends on it (see :mod:`.cache`). The result is bit-identical with or without.
 
     Returns
     -------
@@ -138,7 +152,7 @@ def assemble_detailed(meshes: Sequence[Mesh | None], closed: Sequence[bool] | No
     if not keep:
         raise ParameterError("there is no layer with a mesh to assemble")
     knames = [names[i] for i in keep]
-    sheets = [sheet_from_mesh(k, knames[k], meshes[i], bool(closed[i])) for k, i in enumerate(keep)]
+    sheets = [_sheet(cache, k, knames[k], meshes[i], bool(closed[i])) for k, i in enumerate(keep)]
 
     attachments, warnings = find_attachments(sheets, knames, p["on_bad_junction"])
     attached = {a.upper for a in attachments}
@@ -153,7 +167,10 @@ def assemble_detailed(meshes: Sequence[Mesh | None], closed: Sequence[bool] | No
     for lo in sorted({a.lower for a in attachments}):
         mine = [a for a in attachments if a.lower == lo]
         chains = [sheets[a.upper].xy[sheets[a.upper].junction] for a in mine]
-        sheets[lo] = insert_chains(sheets[lo], chains, knames, [a.upper for a in mine])
+        s = sheets[lo]
+        cut = memo(cache, "remesh", (s.xy, s.z, s.F, s.boundary, s.junction, s.holes, s.h, chains),
+                   lambda: insert_chains(s, chains, knames, [a.upper for a in mine]))
+        sheets[lo] = cut.evolve(layer=lo, name=knames[lo])
     timings["remesh"] = time.perf_counter() - t
 
     t = time.perf_counter()
@@ -167,18 +184,22 @@ def assemble_detailed(meshes: Sequence[Mesh | None], closed: Sequence[bool] | No
     offsets = np.r_[0, np.cumsum([s.n for s in sheets])]
     gap = p["gap"] * float(np.median([s.h for s in sheets]))
     P, q, Aeq, beq, Ain, bin_, pinfo = build_problem(sheets, offsets, front_off, back_off, attachments, gap,
-                                                    p["reg"], p["stiffness"], glue, springs)
+                                                    p["reg"], p["stiffness"], glue, springs, cache=cache)
     timings["constraints"] = time.perf_counter() - t
 
     t = time.perf_counter()
     pad = 0.5 * gap
-    x, sinfo = solve_depth(P, q, Aeq, beq, Ain, bin_, method=p["solver"], pad=pad)
+    # Free parts (no attachment either way) are left out of the QP and sit on what lies below
+    # them instead of floating at their rest depth; glued layers do not move (see
+    # depth.solve_without_free_parts and depth.settle_free_parts).
+    in_att = {a.upper for a in attachments} | {a.lower for a in attachments}
+    free = [i for i in range(len(sheets)) if i not in in_att]
+    x, sinfo = solve_without_free_parts(P, q, Aeq, beq, Ain, bin_, offsets, free, pinfo["rest_depth"],
+                                        method=p["solver"], pad=pad, cache=cache)
+    sinfo = dict(sinfo)  # the cached solve's info is shared
     sinfo.update(pinfo)
     sinfo["gap"] = gap
-    # Free parts (no attachment either way) sit on what lies below them instead of floating
-    # at their rest depth; glued layers do not move (see depth.settle_free_parts).
-    in_att = {a.upper for a in attachments} | {a.lower for a in attachments}
-    x, shift = settle_free_parts(x, Ain, bin_, offsets, [i for i in range(len(sheets)) if i not in in_att], pad)
+    x, shift = settle_free_parts(x, Ain, bin_, offsets, free, pad)
     sinfo["free_shift"] = {keep[i]: v for i, v in shift.items()}
     if shift and sinfo.get("iterations", 0) == 0 and len(bin_):  # OSQP's count, as in solve_depth
         sinfo["active"] = int(np.sum(Ain @ x - bin_ <= pad + 1e-6))

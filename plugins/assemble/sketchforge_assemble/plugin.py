@@ -5,6 +5,11 @@ from __future__ import annotations
 from sketchforge.plugins.hookspecs import hookimpl
 
 from .assemble import assemble_detailed
+from .cache import AssemblyCache
+
+#: Shared by every assembly through the hook (the app's assembled view, ``replay``): a
+#: re-assembly after one layer changed redoes only what depends on that layer.
+CACHE = AssemblyCache()
 
 
 @hookimpl
@@ -17,5 +22,6 @@ def sketchforge_assemble(layers, params):
         closed=[bool(layer.closed) for layer in layers],
         params=dict(params or {}),
         names=[layer.name or layer.id for layer in layers],
+        cache=CACHE,
     )
     return result.mesh
