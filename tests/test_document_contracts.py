@@ -5,6 +5,7 @@ or inside another macro, error lines for huge integers, moves and scales about a
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -20,7 +21,17 @@ from sketchforge.document.commands import (
     scale_about,
 )
 from sketchforge.document.layer import Light
+from sketchforge.document.commands import Command
+from sketchforge.document.fileformat import _short
 from sketchforge.errors import DocumentFormatError, ParameterError
+
+
+def exactly(message: str) -> str:
+    """A pytest.raises pattern for exactly this message (users read these lines)."""
+    return "^" + re.escape(message) + "$"
+
+
+NO_LENGTH = "the light direction is undefined: drag away from the centre of the drawing"
 
 
 # --- the light --------------------------------------------------------------------------------
@@ -38,22 +49,28 @@ def test_light_from_drag_points_from_the_centre_to_the_mouse(center, point, angl
 
 
 @pytest.mark.parametrize("center, point, message", [
-    ((0.0, 0.0, 0.0), (1.0, 0.0), "2D centre and a 2D point"),
-    ((0.0, 0.0), (1.0,), "2D centre and a 2D point"),
-    ((0.0, np.nan), (1.0, 0.0), "finite coordinates"),
-    ((0.0, 0.0), (np.inf, 0.0), "finite coordinates"),
-    ((0.0, 0.0), (0.0, 0.0), "drag away from the centre"),
+    ((0.0, 0.0, 0.0), (1.0, 0.0), "a light drag needs a 2D centre and a 2D point"),
+    ((0.0, 0.0), (1.0,), "a light drag needs a 2D centre and a 2D point"),
+    ((0.0, np.nan), (1.0, 0.0), "a light drag needs finite coordinates"),
+    ((0.0, 0.0), (np.inf, 0.0), "a light drag needs finite coordinates"),
+    ((0.0, 0.0), (0.0, 0.0), NO_LENGTH),
     # "no length" is relative to the coordinates: 1e-9 is a drag at the origin, not at 1e6
-    ((1e6, 1e6), (1e6 + 1e-9, 1e6), "drag away from the centre"),
+    ((1e6, 1e6), (1e6 + 1e-9, 1e6), NO_LENGTH),
+    ((-1e6, 0.0), (-1e6, 1e-9), NO_LENGTH),  # the centre's size counts
+    ((0.0, 0.0), (1e-12, 0.0), NO_LENGTH),    # exactly at the limit
 ])
 def test_light_from_a_drag_of_no_length_or_bad_points_is_refused(center, point, message):
-    with pytest.raises(ParameterError, match=message):
+    with pytest.raises(ParameterError, match=exactly(message)):
         Light.from_drag(center, point)
 
 
 def test_light_from_a_tiny_drag_near_the_origin_is_a_direction():
-    light = Light.from_drag((0.0, 0.0), (0.0, 1e-9))
-    assert light.angle == pytest.approx(90.0)
+    assert Light.from_drag((0.0, 0.0), (0.0, 1e-9)).angle == pytest.approx(90.0)
+    assert Light.from_drag((0.0, 0.0), (0.0, 1.5e-12)).angle == pytest.approx(90.0)  # just above 1e-12
+    assert Light.from_drag((0.5, 0.0), (0.5, 1.5e-12)).angle == pytest.approx(90.0)  # scale is at least 1
+    # integer coordinates beyond int64 (a script's) are still numbers
+    assert Light.from_drag((0, 0), (2**70, 0)).angle == 0.0
+    assert Light.from_drag((2**70, 0), (0, 0)).angle == 180.0
 
 
 @pytest.mark.parametrize("degrees", [0.0, 30.0, 90.0, 200.0, -45.0])
@@ -70,7 +87,7 @@ def _state(doc):
 
 def test_end_macro_without_begin_is_an_error(fan_host):
     doc = Document(host=fan_host)
-    with pytest.raises(RuntimeError, match="end_macro without begin_macro"):
+    with pytest.raises(RuntimeError, match=exactly("end_macro without begin_macro")):
         doc.undo_stack.end_macro()
 
 
@@ -181,7 +198,7 @@ def test_macro_from_a_journal_needs_a_registry_and_a_bounded_depth(fan_host):
     m = MacroCommand.from_dict(entry, registry)
     assert m.text() == "T" and [c.to_dict()["id"] for c in m.children] == ["a"]
     assert MacroCommand.from_dict({"command": "macro", "children": []}, registry).text() == "Group"
-    with pytest.raises(DocumentFormatError, match="needs a command registry"):
+    with pytest.raises(DocumentFormatError, match=exactly("a macro needs a command registry to read its children")):
         MacroCommand.from_dict(entry)
     nested = {"command": "macro", "children": []}
     for _ in range(16):
@@ -239,7 +256,7 @@ def test_rotate_about_keeps_the_centre_and_turns_counter_clockwise():
 
 @pytest.mark.parametrize("offset", [(1.0,), (1.0, 2.0, 3.0), (np.nan, 0.0), (0.0, np.inf)])
 def test_translate_layer_refuses_an_offset_that_is_not_two_finite_numbers(offset):
-    with pytest.raises(ParameterError, match="two finite numbers"):
+    with pytest.raises(ParameterError, match=exactly("a move's offset must be two finite numbers")):
         TranslateLayer(layer="a", offset=offset)
 
 
@@ -249,3 +266,65 @@ def test_translate_layer_reads_and_names_itself(fan_host):
     assert cmd.text() == "Move layer"
     with pytest.raises(DocumentFormatError, match="'offset' must be 2 numbers"):
         fan_host.commands.from_dict({"command": "translate_layer", "layer": "a", "offset": [1, 2, 3]})
+
+
+def test_translate_layer_moves_by_an_integer_offset_as_by_floats(fan_host):
+    doc = Document(host=fan_host)
+    doc.push(AddLayer(id="a"))
+    from sketchforge.document.commands import SetContour
+
+    doc.push(SetContour(layer="a", points=[[0, 0], [1, 0], [1, 1], [0, 1]], closed=True))
+    V0 = doc.layer("a").mesh.V.copy()
+    doc.push(TranslateLayer(layer="a", offset=(2, -1)))
+    V1 = doc.layer("a").mesh.V
+    assert V1.dtype == np.float64
+    assert np.array_equal(V1[:, :2], V0[:, :2] + [2.0, -1.0]) and np.array_equal(V1[:, 2], V0[:, 2])
+    assert TranslateLayer(layer="a", offset=[[1], [2]]).offset == [1.0, 2.0]
+    assert TranslateLayer(layer="a", offset=(2**70, 0)).offset == [float(2**70), 0.0]
+
+
+def test_scale_about_takes_any_two_number_centre():
+    m = scale_about([[1], [2]], 2)
+    assert m.dtype == np.float64 and _apply(m, (1.0, 2.0)) == pytest.approx((1.0, 2.0))
+    assert _apply(scale_about((1, 1), 3), (2, 2)) == pytest.approx((4.0, 4.0))
+    assert _apply(scale_about((2**70, 0), 1.0), (0.0, 0.0)) == pytest.approx((0.0, 0.0))
+
+
+def test_transform_layer_reads_only_a_2x3_matrix_of_numbers(fan_host):
+    reg = fan_host.commands
+    ok = reg.from_dict({"command": "transform_layer", "layer": "a", "matrix": [[1, 0, 2], [0, 1, 3]]})
+    assert ok.layer == "a"
+    bad = exactly("command 'transform_layer': 'matrix' must be [[a, b, tx], [c, d, ty]] numbers")
+    for m in ([[1, 0, 2]], [[1, 0, 2], [0, 1]], [[1, 0, 2], (0, 1, 3)], [[1, 0, 2], [0, 1, "3"]],
+              [[1, 0, 2], [0, 1, True]], [[1, 0, 2], [0, 1, 3], [0, 0, 1]]):
+        with pytest.raises(DocumentFormatError, match=bad):
+            reg.from_dict({"command": "transform_layer", "layer": "a", "matrix": m})
+
+
+def test_a_document_takes_an_assembly_done_elsewhere_only_for_its_current_layers(fan_host):
+    doc = Document(host=fan_host)
+    doc.push(AddLayer(id="a"))
+    stale = doc.geometry_revision
+    doc.push(AddLayer(id="b"))
+    doc.offer_assembled(stale, "stale mesh")
+    assert doc.assembled() != "stale mesh"
+    doc.offer_assembled(doc.geometry_revision, "worker's mesh")
+    assert doc.assembled() == "worker's mesh"  # not assembled again
+
+
+def test_commands_name_themselves_and_do_not_merge_unless_they_say_so():
+    class PaintThing(Command):
+        name = "paint_thing"
+
+    assert PaintThing().text() == "Paint thing"
+    assert PaintThing().merge(PaintThing()) is False
+    with pytest.raises(NotImplementedError, match=exactly("command 'paint_thing' cannot be re-applied")):
+        PaintThing.reapply(None, None, {})
+
+
+def test_long_values_in_error_lines_are_cut_to_sixty_characters():
+    assert _short("x" * 58) == repr("x" * 58)  # 60 characters with the quotes: kept
+    assert _short("x" * 59) == repr("x" * 59)[:57] + "..."
+    assert len(_short(list(range(100)))) == 60
+    assert _short([1, 2], n=5) == "[1, 2]"[:2] + "..."
+    assert _short(None) == "None"
