@@ -478,3 +478,19 @@ def test_a_new_layer_is_named_only_from_its_own_add_layer(tmp_path):
     [item] = find_recoverable(tmp_path)
     assert describe_stop(item) == "sketchforge stopped while computing 'Draw layer' on a new layer."
     saver.end_solve(token)
+
+
+def test_a_pending_file_that_is_not_our_record_is_left_alone(tmp_path):
+    doc = dirty_doc()
+    doc.undo_stack.set_clean()
+    saver = Autosaver(doc, interval_s=0, folder=tmp_path)
+    token = saver.begin_solve(contour("a"))
+    assert len(find_recoverable(tmp_path)) == 1
+    data = json.loads(saver.pending_path.read_text())
+    assert data["format"] == "sketchforge-pending" and data["saved_at"] <= saver.pending_path.stat().st_mtime + 1
+    # the same record from another program (or an older, different format): not offered
+    data["format"] = "SKETCHFORGE-PENDING"
+    saver.pending_path.write_text(json.dumps(data))
+    assert find_recoverable(tmp_path) == []
+    assert saver.pending_path.exists()  # and not deleted: it is not ours to remove
+    saver.end_solve(token)
