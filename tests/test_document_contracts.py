@@ -328,3 +328,176 @@ def test_long_values_in_error_lines_are_cut_to_sixty_characters():
     assert len(_short(list(range(100)))) == 60
     assert _short([1, 2], n=5) == "[1, 2]"[:2] + "..."
     assert _short(None) == "None"
+
+
+# --- all or nothing: a command that fails part-way --------------------------------------------
+class _Mirror:
+    """A view: keeps its own copy of the layer list from the document's signals only."""
+
+    def __init__(self, doc):
+        self.layers = list(doc.layers)
+        self.light = doc.light
+        self.plugin_keys_seen = []
+        doc.layer_inserted.connect(lambda i, layer: self.layers.insert(i, layer))
+        doc.layer_removed.connect(lambda i, layer: self.layers.pop(i))
+        doc.layer_changed.connect(self._changed)
+        doc.layer_moved.connect(lambda src, dst: self.layers.insert(dst, self.layers.pop(src)))
+        doc.light_changed.connect(lambda light: setattr(self, "light", light))
+        doc.plugin_data_changed.connect(self.plugin_keys_seen.append)
+
+    def _changed(self, i, new, old):
+        assert self.layers[i] is old
+        self.layers[i] = new
+
+
+class _Wreck(Command):
+    """A buggy plugin command: changes the document through its private mutators, then raises."""
+
+    name = "wreck"
+
+    def __init__(self, steps):
+        self.steps = steps
+
+    def do(self, doc):
+        for step in self.steps:
+            step(doc)
+        raise RuntimeError("plugin bug")
+
+    def undo(self, doc):  # pragma: no cover - never recorded
+        raise AssertionError
+
+
+def _three_layer_doc(fan_host):
+    from sketchforge.document.commands import SetContour
+
+    doc = Document(host=fan_host)
+    for lid in ("a", "b", "c"):
+        doc.push(AddLayer(id=lid))
+    doc.push(SetContour(layer="b", points=[[0, 0], [1, 0], [1, 1], [0, 1]], closed=True))
+    doc._set_plugin_data("kept", {"x": 1})
+    doc._set_plugin_data("changed", [1, 2])
+    return doc
+
+
+@pytest.mark.parametrize("case", ["replace two", "remove", "insert", "remove and insert", "reorder",
+                                  "light", "plugin data", "everything"])
+def test_a_command_failing_part_way_leaves_the_document_and_its_views_as_before(fan_host, case):
+    from dataclasses import replace
+
+    doc = _three_layer_doc(fan_host)
+    view = _Mirror(doc)
+    before_layers, before_light = doc.layers, doc.light
+    before_data = {k: doc.plugin_data(k) for k in doc.plugin_data_keys}
+    count, index = doc.undo_stack.count(), doc.undo_stack.index
+
+    def replace_two(d):
+        d._replace_layer(replace(d.layer("a"), name="A!"))
+        d._replace_layer(replace(d.layer("c"), visible=False))
+
+    def remove(d):
+        d._remove_layer(1)
+
+    def insert(d):
+        d._insert_layer(0, replace(d.layer("a"), id="new"))
+
+    def reorder(d):
+        d._move_layer(0, 2)
+
+    def light(d):
+        d._set_light(Light.from_angle(123.0))
+
+    def data(d):
+        d._set_plugin_data("changed", [9])
+        d._set_plugin_data("kept", None)
+        d._set_plugin_data("added", "value")
+
+    steps = {"replace two": [replace_two], "remove": [remove], "insert": [insert],
+             "remove and insert": [remove, insert], "reorder": [reorder], "light": [light],
+             "plugin data": [data], "everything": [replace_two, remove, insert, light, data]}[case]
+    from sketchforge.errors import PluginError
+
+    with pytest.raises(PluginError, match="command 'wreck' failed in do: RuntimeError: plugin bug; the document is unchanged"):
+        doc.push(_Wreck(steps))
+    # the very same layer objects, in order; the light; the plugin data
+    assert len(doc.layers) == len(before_layers)
+    assert all(a is b for a, b in zip(doc.layers, before_layers))
+    assert doc.light == before_light
+    assert {k: doc.plugin_data(k) for k in doc.plugin_data_keys} == before_data
+    assert (doc.undo_stack.count(), doc.undo_stack.index) == (count, index)
+    # a view that followed the signals shows the same again
+    assert len(view.layers) == len(before_layers) and all(a is b for a, b in zip(view.layers, before_layers))
+    assert view.light == before_light
+    if case in ("plugin data", "everything"):
+        assert sorted(set(view.plugin_keys_seen)) == ["added", "changed", "kept"]
+
+
+def test_adopting_another_document_takes_its_first_light_journal_and_plugin_data(fan_host):
+    src = _three_layer_doc(fan_host)
+    src.initial_light = Light.from_angle(10.0)
+    src.base_journal = [{"command": "add_layer", "id": "z"}]
+    dst = Document(host=fan_host)
+    dst._set_plugin_data("old", 1)
+    dst.adopt(src)
+    assert dst.layer_ids() == ["a", "b", "c"] and dst.light == src.light
+    assert dst.initial_light == Light.from_angle(10.0)
+    assert dst.base_journal == [{"command": "add_layer", "id": "z"}]
+    assert dst.plugin_data("changed") == [1, 2] and dst.plugin_data("old") is None
+    assert dst.same_state(src) and not dst.same_state(Document(host=fan_host))
+    assert dst.undo_stack.count() == 0 and dst.undo_stack.is_clean()
+
+
+def test_layers_are_the_same_state_only_when_every_field_is_equal():
+    from dataclasses import replace
+
+    from sketchforge.document.layer import Layer
+
+    base = Layer(id="a", name="A", points=np.array([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]]),
+                 holes=(np.array([[0.1, 0.1], [0.2, 0.1], [0.1, 0.2]]),))
+    assert base.same_state(replace(base)) and not base.same_state("not a layer")
+    assert not base.same_state(replace(base, points=None))
+    assert not replace(base, points=None).same_state(base)
+    assert replace(base, points=None).same_state(replace(base, points=None))
+    assert not base.same_state(replace(base, points=base.points[:2]))
+    assert not base.same_state(replace(base, points=base.points + 1e-15))
+    assert not base.same_state(replace(base, holes=()))
+    assert not base.same_state(replace(base, holes=(base.holes[0] * 1.01,)))
+    assert not base.same_state(replace(base, holes=(base.holes[0][:, ::-1].copy(),)))
+    assert not base.same_state(replace(base, name="B"))
+    assert not base.same_state(replace(base, visible=False))
+
+
+def test_reset_clean_means_no_state_in_the_history_is_the_saved_file(fan_host):
+    doc = Document(host=fan_host)
+    stack = doc.undo_stack
+    assert stack.is_clean() and stack.clean_index == 0
+    doc.push(AddLayer(id="a"))
+    doc.push(AddLayer(id="b"))
+    stack.set_clean()
+    stack.reset_clean()
+    assert stack.clean_index == -1
+    for _ in range(2):
+        assert not stack.is_clean()
+        stack.undo()
+    assert not stack.is_clean()
+    for _ in range(2):
+        stack.redo()
+        assert not stack.is_clean()
+
+
+def test_a_disconnected_slot_is_no_longer_called_and_disconnecting_twice_is_harmless():
+    from sketchforge.document.events import Signal
+
+    sig = Signal(int, name="s")
+    got = []
+
+    def slot(v):
+        got.append(v)
+
+    other = []
+    sig.connect(slot)
+    sig.connect(other.append)
+    sig.emit(1)
+    sig.disconnect(slot)
+    sig.disconnect(slot)
+    sig.emit(2)
+    assert got == [1] and other == [1, 2]
