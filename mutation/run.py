@@ -43,6 +43,7 @@ SCOPES: dict[str, tuple[str, str, list[str], list[str]]] = {
         "tests/test_transform.py", "tests/test_limits.py", "tests/test_document_contracts.py",
         "tests/test_holes.py", "tests/test_contour.py", "tests/test_parts.py",
         "tests/test_tools.py", "tests/test_fuzz_loader.py", "tests/attack",
+        "tests/test_plugin_platform.py",
     ]),
     "geometry": ("sketchforge", "sketchforge", ["sketchforge/geometry/*"], [
         "tests/test_contour.py", "tests/test_inflate.py", "tests/test_laplacian.py",
@@ -80,6 +81,7 @@ SLOW_TESTS = [
     "tests/test_regressions_planted.py::test_a_part_attaches_to_the_nearest_layer_behind_it",
     "tests/attack/test_terminal.py",
     "tests/attack/test_special_files.py",
+    "tests/test_plugin_platform.py::test_pytest_fixtures_are_installed_and_strict",
 ]
 
 # Files the tests read through paths relative to the repository root.

@@ -501,3 +501,26 @@ def test_a_disconnected_slot_is_no_longer_called_and_disconnecting_twice_is_harm
     sig.disconnect(slot)
     sig.emit(2)
     assert got == [1] and other == [1, 2]
+
+
+def test_plugin_data_is_set_removed_and_announced_and_every_change_is_a_new_revision(fan_host):
+    doc = Document(host=fan_host)
+    seen = []
+    doc.plugin_data_changed.connect(seen.append)
+    assert doc.plugin_data("anim") is None and doc.plugin_data("anim", default=7) == 7
+    revisions = [doc.revision]
+    doc._set_plugin_data("anim", {"pins": []})
+    revisions.append(doc.revision)
+    doc._set_plugin_data("other", 1)
+    revisions.append(doc.revision)
+    assert doc.plugin_data("anim", default=7) == {"pins": []} and sorted(doc.plugin_data_keys) == ["anim", "other"]
+    doc._set_plugin_data("anim", None)  # None removes
+    revisions.append(doc.revision)
+    doc._set_plugin_data("never set", None)  # removing what is not there is harmless
+    revisions.append(doc.revision)
+    assert doc.plugin_data_keys == ["other"] and doc.plugin_data("anim", default=7) == 7
+    assert seen == ["anim", "other", "anim", "never set"]
+    # autosave and views compare revisions: each change must give one never seen before
+    assert all(b > a for a, b in zip(revisions, revisions[1:]))
+    doc.push(AddLayer(id="a"))
+    assert doc.revision > revisions[-1]
