@@ -524,3 +524,93 @@ def test_plugin_data_is_set_removed_and_announced_and_every_change_is_a_new_revi
     assert all(b > a for a, b in zip(revisions, revisions[1:]))
     doc.push(AddLayer(id="a"))
     assert doc.revision > revisions[-1]
+
+
+def test_new_layer_ids_skip_every_taken_one(fan_host):
+    doc = Document(host=fan_host)
+    for lid in ("layer1", "layer2", "layer4"):
+        doc.push(AddLayer(id=lid))
+    assert doc.new_layer_id() == "layer3"
+    doc.push(AddLayer(id="layer3"))
+    assert doc.new_layer_id() == "layer5" and doc.new_layer_id("leg") == "leg1"
+    doc.push(AddLayer())  # an id chosen by the document
+    assert doc.layer_ids()[-1] == "layer5" and doc.new_layer_id() == "layer6"
+
+
+def test_a_light_change_is_a_new_revision_but_not_new_geometry(fan_host):
+    doc = Document(host=fan_host)
+    rev, geo = doc.revision, doc.geometry_revision
+    doc._set_light(Light.from_angle(30.0))
+    assert doc.revision > rev and doc.geometry_revision == geo
+
+
+def _two_layer_doc(fan_host):
+    from sketchforge.document.commands import SetContour, SetLayerVisible
+
+    doc = Document(host=fan_host)
+    for lid in ("a", "b", "c"):
+        doc.push(AddLayer(id=lid))
+    doc.push(SetContour(layer="a", points=[[0, 0], [1, 0], [1, 1], [0, 1]], closed=True))
+    doc.push(SetContour(layer="b", points=[[2, 0], [3, 0], [3, 1], [2, 1]], closed=True))
+    doc.push(SetContour(layer="c", points=[[4, 0], [5, 0], [5, 1], [4, 1]], closed=True))
+    doc.push(SetLayerVisible(layer="c", visible=False))
+    return doc
+
+
+def test_the_assembled_model_takes_the_visible_layers_with_meshes_once_per_change(fan_host, monkeypatch):
+    from sketchforge.document.commands import SetLayerVisible
+
+    doc = _two_layer_doc(fan_host)
+    doc.push(AddLayer(id="empty"))  # visible, no mesh
+    calls = []
+    monkeypatch.setattr(doc.host, "assemble", lambda layers, params=None: calls.append(([l.id for l in layers], params)) or "model")
+    monkeypatch.setattr(doc.host, "has_assembler", lambda: True)
+    assert doc.assembled() == "model" and doc.assembled() == "model"
+    assert calls == [(["a", "b"], {})]  # once, the hidden and the empty layer left out
+    assert doc.export_mesh() == "model" and len(calls) == 1
+    doc.push(SetLayerVisible(layer="a", visible=False))
+    doc.push(SetLayerVisible(layer="b", visible=False))
+    assert doc.assembled() is None and len(calls) == 1  # nothing to assemble: no call
+    with pytest.raises(Exception, match=exactly("there is nothing to export: no visible layer has a mesh")):
+        doc.export_mesh()
+
+
+def test_export_without_an_assembler_merges_the_visible_layers(fan_host):
+    doc = _two_layer_doc(fan_host)
+    a, b = doc.layer("a").mesh, doc.layer("b").mesh
+    merged = doc.export_mesh()
+    assert merged.V.shape[0] == a.V.shape[0] + b.V.shape[0] and merged.F.shape[0] == a.F.shape[0] + b.F.shape[0]
+    assert doc.export_mesh("c") is doc.layer("c").mesh  # one layer: hidden or not
+    with pytest.raises(Exception, match=exactly("layer 'empty' has no mesh (no contour was drawn)")):
+        doc.push(AddLayer(id="empty"))
+        doc.export_mesh("empty")
+
+
+def test_differences_name_what_differs(fan_host):
+    from dataclasses import replace
+
+    one, two = _two_layer_doc(fan_host), _two_layer_doc(fan_host)
+    assert one.differences(two) == []
+    two._set_light(Light.from_angle(10.0))
+    assert one.differences(two) == [f"light differs: {one.light} vs {two.light}"]
+    two._set_light(one.light)
+    two._replace_layer(replace(two.layer("a"), name="Other"))
+    assert one.differences(two) == ["layer 'a': fields differ"]
+    two._replace_layer(replace(two.layer("a"), name=one.layer("a").name, mesh=None))
+    assert one.differences(two) == ["layer 'a': mesh differ"]
+    assert two.differences(one) == ["layer 'a': mesh differ"]
+    two._replace_layer(one.layer("a"))
+    m = one.layer("b").mesh
+    from sketchforge.geometry.mesh import Mesh
+
+    V = m.V.copy()
+    V[0, 2] += 1e-12
+    two._replace_layer(replace(one.layer("b"), mesh=Mesh(V, m.F, m.boundary, m.junction, m.holes)))
+    assert one.differences(two) == ["layer 'b': mesh differ"]
+    two._replace_layer(one.layer("b"))
+    two._set_plugin_data("only here", 1)
+    assert one.differences(two) == ["plugin data 'only here' differs"]
+    assert two.differences(one) == ["plugin data 'only here' differs"]
+    three = _two_layer_doc(fan_host)
+    three.push(AddLayer(id="d"))
+    assert one.differences(three) == ["layers differ: ['a', 'b', 'c'] vs ['a', 'b', 'c', 'd']"]
