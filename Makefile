@@ -9,7 +9,7 @@ PLUGINS := plugins/inflate plugins/isophote_tool plugins/assemble plugins/animat
 # `make test` runs their own tests (pyproject's testpaths) against sketchforge's fixtures.
 EXAMPLE_PLUGINS := examples/plugins/soft_brdf examples/plugins/bump_brush examples/plugins/off_exporter
 
-.PHONY: run deps test venv bench screenshots clean
+.PHONY: run deps test venv bench mutate screenshots clean
 
 # What Qt's xcb window plugin needs on a minimal Debian/Ubuntu image (the same list as
 # sketchforge/qt/platform_check.py's XCB_LIBRARIES; a test keeps the two equal).
@@ -45,6 +45,14 @@ test: $(STAMP)
 
 bench: $(STAMP)
 	for b in benchmarks/bench_*.py; do $(BIN)/python $$b || exit 1; done
+
+# Mutation testing (mutmut), on demand, not in CI: `make mutate SCOPE=document` (or geometry,
+# inflate, isophote_tool, assemble, animate, all). Scores and survivors go to mutation/results/;
+# a second run re-tests only what changed. Hours of CPU for `all` on 2 cores.
+SCOPE ?= document
+mutate: $(STAMP)
+	$(BIN)/python -m pip install -q -e '.[test,mutation]'
+	$(BIN)/python mutation/run.py $(SCOPE)
 
 # Regenerate the README's screenshots (observation needs OpenGL: Xvfb + Mesa).
 screenshots: $(STAMP)

@@ -44,3 +44,35 @@ def test_every_command_round_trips():
         assert registry.from_dict(entry).to_dict() == entry, entry["command"]
     # A new command without an example here fails this test until one is added.
     assert set(registry.names()) == {e["command"] for e in EXAMPLES}
+
+
+def _other_type(v):
+    """A value of a type the field cannot hold."""
+    return [1] if isinstance(v, dict) else {"not": "this"}
+
+
+def test_a_bad_or_missing_field_names_the_command_and_the_field():
+    """A damaged journal entry is refused with a line naming the command and the field, for
+    every command (a user finds the entry in the file from that line)."""
+    from sketchforge.errors import SketchforgeError
+
+    registry = default_host().commands
+    checked = 0
+    for entry in EXAMPLES:
+        name = entry["command"]
+        for key in [k for k in entry if k != "command"]:
+            bad = dict(entry, **{key: _other_type(entry[key])})
+            try:
+                registry.from_dict(bad)
+            except SketchforgeError as e:
+                msg = str(e)
+                assert f"'{name}'" in msg, (name, key, msg)
+                checked += 1
+            else:
+                raise AssertionError(f"{name}: {key}={bad[key]!r} was accepted")
+            missing = {k: v for k, v in entry.items() if k != key}
+            try:
+                registry.from_dict(missing)  # accepted when the field is optional
+            except SketchforgeError as e:
+                assert f"'{name}'" in str(e) and key in str(e), (name, key, str(e))
+    assert checked > 60

@@ -421,3 +421,76 @@ def test_a_solve_s_record_outlives_a_save_and_an_open_until_the_solve_ends(tmp_p
     assert opened.save_now() is True
     opened.discard()
     assert list(folder.iterdir()) == []
+
+
+def test_the_pending_record_names_the_step_its_macro_and_what_came_before(tmp_path):
+    """The record is what a person (or support) reads after a crash: the step, the macro it was
+    part of, the macro's earlier commands, and whether the work was unsaved."""
+    from sketchforge.document import commands as C
+
+    doc = dirty_doc()
+    saver = Autosaver(doc, interval_s=0, folder=tmp_path)
+    add = C.AddLayer(id="b", layer_name="Beta")
+    other = C.AddLayer(id="c", layer_name="Gamma")
+    token = saver.begin_solve(contour("b"), macro="Draw layer", before=[other, add])
+    [record] = json.loads(saver.pending_path.read_text())["running"]
+    assert record["text"] == "Draw layer" and record["macro"] == "Draw layer"
+    assert record["before"] == [other.to_dict(), add.to_dict()]
+    assert record["command"] == contour("b").to_dict()
+    assert (record["layer"], record["layer_name"], record["new_layer"]) == ("b", "Beta", True)
+    assert record["unsaved"] is True
+    saver.end_solve(token)
+
+    # a solve without a command (an assembly) and a plugin command that cannot be written
+    class Odd(C.Command):
+        name = "odd"
+
+        def to_dict(self):
+            return {"command": "odd", "data": object()}
+
+        def text(self):
+            return "Odd thing"
+
+    doc.undo_stack.set_clean()
+    t1 = saver.begin_solve()
+    t2 = saver.begin_solve(Odd(), before=[Odd()])
+    t3 = saver.begin_solve(text="Assemble")
+    records = json.loads(saver.pending_path.read_text())["running"]
+    assert [r["text"] for r in records] == ["a computation", "Odd thing", "Assemble"]
+    assert [r["command"] for r in records] == [None, None, None]
+    assert records[1]["before"] == [] and records[1]["macro"] is None
+    assert all(r["unsaved"] is False and r["layer"] is None and r["new_layer"] is False for r in records)
+    for t in (t1, t2, t3):
+        saver.end_solve(t)
+    assert not saver.pending_path.exists()
+
+
+def test_a_new_layer_is_named_only_from_its_own_add_layer(tmp_path):
+    from sketchforge.document import commands as C
+
+    doc = dirty_doc()
+    saver = Autosaver(doc, interval_s=0, folder=tmp_path)
+    unrelated = C.AddLayer(id="z", layer_name="Zed")
+    renamed = C.RenameLayer(layer="b", new_name="Not an add")
+    token = saver.begin_solve(contour("b"), macro="Draw layer", before=[unrelated, renamed])
+    [record] = json.loads(saver.pending_path.read_text())["running"]
+    assert record["layer_name"] is None and record["new_layer"] is True
+    [item] = find_recoverable(tmp_path)
+    assert describe_stop(item) == "sketchforge stopped while computing 'Draw layer' on a new layer."
+    saver.end_solve(token)
+
+
+def test_a_pending_file_that_is_not_our_record_is_left_alone(tmp_path):
+    doc = dirty_doc()
+    doc.undo_stack.set_clean()
+    saver = Autosaver(doc, interval_s=0, folder=tmp_path)
+    token = saver.begin_solve(contour("a"))
+    assert len(find_recoverable(tmp_path)) == 1
+    data = json.loads(saver.pending_path.read_text())
+    assert data["format"] == "sketchforge-pending" and data["saved_at"] <= saver.pending_path.stat().st_mtime + 1
+    # the same record from another program (or an older, different format): not offered
+    data["format"] = "SKETCHFORGE-PENDING"
+    saver.pending_path.write_text(json.dumps(data))
+    assert find_recoverable(tmp_path) == []
+    assert saver.pending_path.exists()  # and not deleted: it is not ours to remove
+    saver.end_solve(token)

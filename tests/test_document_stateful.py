@@ -28,7 +28,7 @@ from sketchforge.document.commands import (
     new_gesture_id,
 )
 from sketchforge.plugins.testing import FanInflater, make_test_host
-from tests_support import assert_save_open_replay_agree, assert_undo_all_redo_all
+from tests_support import IN_MUTATION_RUN, assert_save_open_replay_agree, assert_undo_all_redo_all, examples
 
 HOST = make_test_host(FanInflater())
 
@@ -171,5 +171,6 @@ class DocumentMachine(RuleBasedStateMachine):
 
 TestDocumentMachine = DocumentMachine.TestCase
 TestDocumentMachine.settings = settings(
-    max_examples=40, stateful_step_count=15, deadline=None, suppress_health_check=[HealthCheck.too_slow]
+    max_examples=examples(40), stateful_step_count=15, deadline=None, derandomize=IN_MUTATION_RUN,
+    suppress_health_check=[HealthCheck.too_slow],
 )

@@ -251,3 +251,33 @@ def test_stroke_of_100k_points_inflates():
     mesh = inflate_stroke(pts, False, {"resolution": 0.05})
     _check_contract(mesh)
     assert 1_000 < mesh.n_vertices < 3_000
+
+
+def test_a_ring_is_faired_by_its_own_width_not_its_outline():
+    """With holes, the fairing's length unit comes from the surface's own area and rim length
+    (outline minus holes, outline plus hole rims): an annulus 0.4 wide is smoothed like a band
+    0.4 wide, so next to its inner rim it stays within 5% of the unfaired height (a unit taken
+    from the filled disk would flatten it by far more)."""
+    t = np.linspace(0.0, 2.0 * np.pi, 200, endpoint=False)
+    outer = np.c_[np.cos(t), np.sin(t)]
+    hole = 0.6 * outer[::-1]
+    meshes = [inflate_stroke(outer, closed=True, params={"resolution": 0.03, "smoothing": s}, holes=[hole])
+              for s in (0.0, 0.5)]
+    heights = []
+    for m in meshes:
+        r = np.hypot(m.V[:, 0], m.V[:, 1])
+        heights.append((m.V[:, 2].max(), m.V[(r > 0.63) & (r < 0.66), 2].mean()))
+    (peak0, near0), (peak1, near1) = heights
+    assert abs(peak1 - peak0) < 0.002 * peak0
+    assert 0.95 * near0 < near1 < 0.995 * near0  # smoothed, but only a little
+
+
+def test_the_vertex_limit_passed_in_is_the_one_checked():
+    from sketchforge.errors import LimitError
+
+    t = np.linspace(0.0, 2.0 * np.pi, 100, endpoint=False)
+    disk = np.c_[np.cos(t), np.sin(t)]
+    n = len(inflate_stroke(disk, closed=True, params={"resolution": 0.05}).V)
+    with pytest.raises(LimitError):
+        inflate_stroke(disk, closed=True, params={"resolution": 0.05}, max_vertices=n // 2)
+    assert len(inflate_stroke(disk, closed=True, params={"resolution": 0.05}, max_vertices=2 * n).V) == n

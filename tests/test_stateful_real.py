@@ -15,7 +15,7 @@ from sketchforge.document import fileformat as ff
 from sketchforge.document.commands import new_gesture_id
 from sketchforge.errors import SketchforgeError
 from sketchforge.plugins.manager import default_host
-from tests_support import assert_save_open_replay_agree, assert_undo_all_redo_all
+from tests_support import assert_save_open_replay_agree, assert_undo_all_redo_all, examples
 
 COARSE = {"resolution": 0.09, "inflation": 1.0, "smoothing": 0.5}
 
@@ -128,5 +128,5 @@ class RealDocumentMachine(RuleBasedStateMachine):
 
 TestRealDocument = RealDocumentMachine.TestCase
 TestRealDocument.settings = settings(
-    max_examples=20, stateful_step_count=10, deadline=None, derandomize=True, suppress_health_check=list(HealthCheck)
+    max_examples=examples(20), stateful_step_count=10, deadline=None, derandomize=True, suppress_health_check=list(HealthCheck)
 )

@@ -11,6 +11,7 @@ from sketchforge.geometry.contour import segment_crossings
 from sketchforge.geometry.strokes import clean_open_stroke
 from sketchforge_isophote_tool import sculpt
 from sketchforge_isophote_tool.testing import LIGHT, inflated
+from tests_support import examples
 
 H = 0.03
 
@@ -113,7 +114,7 @@ def _polyline(draw):
     return P
 
 
-@settings(max_examples=150, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=examples(150), deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow])
 @given(st.data())
 def test_any_polyline_cleans_to_a_simple_one_or_a_clear_error(data):
     P = _polyline(data.draw)
@@ -142,7 +143,7 @@ def _band_ring(mesh, band):
     return np.asarray(poly.exterior.coords)
 
 
-@settings(max_examples=60, deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+@settings(max_examples=examples(60), deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
 @given(st.data())
 def test_any_polyline_through_sculpt_gives_a_result_or_one_line(layer, data):
     """Random polylines placed over the layer (some on the band's edge, some off the layer):

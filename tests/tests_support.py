@@ -1,5 +1,17 @@
 """Shared test data."""
 
+import os
+
+#: Set by `make mutate`: every surviving mutant runs every test that reaches its function, so
+#: property tests run fewer (and fixed) examples there; the normal suite is unchanged.
+IN_MUTATION_RUN = bool(os.environ.get("SKETCHFORGE_MUTATION"))
+
+
+def examples(n: int) -> int:
+    """Hypothesis example count: ``n``, or n // 8 (at least 4) in a mutation run."""
+    return max(4, n // 8) if IN_MUTATION_RUN else n
+
+
 SPEC_DOC = {
     "format": "sketchforge",
     "version": 1,

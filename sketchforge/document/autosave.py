@@ -53,6 +53,8 @@ DEFAULT_INTERVAL_S = 60.0
 #: The app's timer polls at least this often (every interval of 1 s or more is kept to within
 #: a second; shorter ones, used by tests, are polled at this rate).
 MIN_INTERVAL_S = 1.0
+#: The ``format`` of that side file (other files ending in the suffix are left alone).
+PENDING_FORMAT = "sketchforge-pending"
 #: Suffix of the side file that names the solve running when the autosave was flushed.
 PENDING_SUFFIX = ".pending"
 
@@ -267,7 +269,7 @@ class Autosaver:
     def _write_pending(self) -> None:
         _ensure_folder(self.folder)
         data = {
-            "format": "sketchforge-pending",
+            "format": PENDING_FORMAT,
             "original": self.original_path,
             "autosave": self.path.name,  # the autosave these solves started from
             "saved_at": time.time(),
@@ -348,8 +350,8 @@ def find_recoverable(folder: Path | None = None) -> list[Recoverable]:
             data = _read_json_dict(q)
         except (OSError, ValueError):
             continue
-        if writer_alive(data):
-            continue
+        if data.get("format") != PENDING_FORMAT or writer_alive(data):
+            continue  # not our record (any file may end in .pending), or its writer still runs
         name = data.get("autosave")
         if not (isinstance(name, str) and name.endswith(".json") and Path(name).name == name):
             name = q.with_suffix(".json").name

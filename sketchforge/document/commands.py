@@ -110,8 +110,12 @@ MAX_INDEX = 10**9
 
 
 def _digits(v: int) -> str:
-    n = len(str(abs(v))) if abs(v) < 10**1000 else 1000
-    return f"{v}" if n <= 20 else f"an integer of {'over ' if n >= 1000 else ''}{n} digits"
+    """An integer for an error line: itself up to 20 digits, else its length (str() of an
+    integer over 4300 digits raises, so beyond 1000 digits the length is not counted)."""
+    if abs(v) >= 10**1000:
+        return "an integer of over 1000 digits"
+    n = len(str(abs(v)))
+    return f"{v}" if n <= 20 else f"an integer of {n} digits"
 
 
 def _to_float(v, cmd: str, key: str) -> float:

@@ -1,0 +1,212 @@
+"""Mutation run over one scope of sketchforge (``make mutate SCOPE=document``).
+
+mutmut names a mutant by the file's path relative to where it runs and matches that name against
+``function.__module__`` at run time.  The plugins live in ``plugins/<name>/sketchforge_<name>``,
+so run from the repository root their mutants would be called ``plugins.assemble....`` while the
+code calls itself ``sketchforge_assemble....``: every plugin mutant would look "not covered".
+So each scope runs in its own workspace under ``build/mutation/<scope>/`` where the package sits
+at the top, exactly as it is imported; the tests and the files they read (examples, README,
+Makefile, docs) are copied beside it. The workspace's ``mutants/`` folder comes first on
+``sys.path`` inside mutmut, so the mutated copy shadows the editable install.
+
+Usage::
+
+    python mutation/run.py SCOPE [--jobs N] [--fresh]
+    python mutation/run.py SCOPE --report      # score + survivors of the last run
+
+Scopes: see ``SCOPES``.  The score and the survivors are written to
+``mutation/results/<scope>.txt`` (kept in the repository; the README quotes the scores).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+BUILD = ROOT / "build" / "mutation"
+RESULTS = ROOT / "mutation" / "results"
+
+# scope -> (package folder in the repository, package name, what to mutate inside the package,
+# the test files that exercise it). Test files are the ones that import the scope directly or
+# through the document; Qt and OpenGL tests are left out: they cannot run in mutmut's forked
+# workers (a QApplication per fork) and their properties are covered headlessly too.
+SCOPES: dict[str, tuple[str, str, list[str], list[str]]] = {
+    "document": ("sketchforge", "sketchforge", ["sketchforge/document/*"], [
+        "tests/test_undo.py", "tests/test_document_stateful.py", "tests/test_stateful_real.py",
+        "tests/test_fileformat.py", "tests/test_autosave.py", "tests/test_crash_recovery.py",
+        "tests/test_command_roundtrip.py", "tests/test_regressions_planted.py",
+        "tests/test_transform.py", "tests/test_limits.py", "tests/test_document_contracts.py",
+        "tests/test_holes.py", "tests/test_contour.py", "tests/test_parts.py",
+        "tests/test_tools.py", "tests/test_fuzz_loader.py", "tests/attack",
+        "tests/test_plugin_platform.py",
+    ]),
+    "geometry": ("sketchforge", "sketchforge", ["sketchforge/geometry/*"], [
+        "tests/test_contour.py", "tests/test_inflate.py", "tests/test_laplacian.py",
+        "tests/test_locate.py", "tests/test_mesh_quality.py", "tests/test_normals.py",
+        "tests/test_raster.py", "tests/test_gbuffer.py", "tests/test_reflectance.py",
+        "tests/test_shading.py", "tests/test_isophotes.py", "tests/test_band.py",
+        "tests/test_strokes.py", "tests/test_holes.py", "tests/test_transform.py",
+        "tests/test_regressions_planted.py", "tests/test_limits.py", "tests/test_exporters.py",
+        "tests/test_guard.py",
+    ]),
+    "inflate": ("plugins/inflate/sketchforge_inflate", "sketchforge_inflate",
+                ["sketchforge_inflate/*"], ["tests/test_inflate.py", "tests/test_holes.py",
+                                            "tests/test_plugins.py"]),
+    "isophote_tool": ("plugins/isophote_tool/sketchforge_isophote_tool", "sketchforge_isophote_tool",
+                      ["sketchforge_isophote_tool/*"], [
+                          "tests/test_sculpt.py", "tests/test_sculpt_tool.py",
+                          "tests/test_sculpt_fidelity.py", "tests/test_sculpt_holes.py",
+                          "tests/test_sculpt_corpus.py", "tests/test_band.py",
+                          "tests/test_regressions_planted.py"]),
+    "assemble": ("plugins/assemble/sketchforge_assemble", "sketchforge_assemble",
+                 ["sketchforge_assemble/*"], [
+                     "tests/test_assemble.py", "tests/test_assemble_blend.py",
+                     "tests/test_assemble_holes.py", "tests/test_regressions_planted.py",
+                     "tests/test_transform.py"]),
+    "animate": ("plugins/animate/sketchforge_animate", "sketchforge_animate",
+                ["sketchforge_animate/*"], ["tests/test_animate.py"]),
+}
+
+# Left out of every mutation run: a surviving mutant runs every test that reaches its function,
+# so these (seconds each: subprocesses, whole creatures assembled) would make a run take hours.
+# What they check is also checked in-process by faster tests; a mutant only they would kill
+# counts as a survivor (the score errs low).
+SLOW_TESTS = [
+    "tests/test_crash_recovery.py::test_a_native_crash_in_a_solve_is_recovered_without_the_crashing_step",
+    "tests/test_regressions_planted.py::test_a_part_attaches_to_the_nearest_layer_behind_it",
+    "tests/attack/test_terminal.py",
+    "tests/attack/test_special_files.py",
+    "tests/test_plugin_platform.py::test_pytest_fixtures_are_installed_and_strict",
+]
+
+# Files the tests read through paths relative to the repository root.
+READ_BY_TESTS = ["examples", "README.md", "Makefile", "docs"]
+
+
+def workspace(scope: str) -> Path:
+    """Build (or refresh) the workspace of one scope; returns its folder."""
+    src, package, only, tests = SCOPES[scope]
+    ws = BUILD / scope
+    ws.mkdir(parents=True, exist_ok=True)
+    # Refresh the package and the tests; mutmut's own state (mutants/) is kept unless --fresh.
+    for name in (package.split(".")[0], "tests", *READ_BY_TESTS):
+        target = ws / name
+        if target.is_dir():
+            shutil.rmtree(target)
+        elif target.exists():
+            target.unlink()
+    shutil.copytree(ROOT / src, ws / package, ignore=shutil.ignore_patterns("__pycache__"))
+    shutil.copytree(ROOT / "tests", ws / "tests", ignore=shutil.ignore_patterns("__pycache__"))
+    for name in READ_BY_TESTS:
+        path = ROOT / name
+        target = ws / name
+        if path.is_dir():
+            shutil.copytree(path, target, ignore=shutil.ignore_patterns("__pycache__", "*.egg-info"))
+        else:
+            shutil.copy2(path, target)
+    also = READ_BY_TESTS
+    selection = ", ".join(f'"{t}"' for t in tests)
+    deselect = ", ".join(f'"--deselect={t}"' for t in SLOW_TESTS)
+    (ws / "pyproject.toml").write_text(f"""# written by mutation/run.py for scope {scope!r}; do not edit
+[tool.mutmut]
+source_paths = ["{package}"]
+only_mutate = {only!r}
+also_copy = {also!r}
+pytest_add_cli_args = ["-p", "no:randomly", "-p", "no:cacheprovider", "-p", "no:xvfb", "-m", "not gl and not slow", "-q"]
+pytest_add_cli_args_test_selection = [{selection}, "--ignore=tests/qt", {deselect}]
+timeout_multiplier = 10.0
+timeout_constant = 5.0
+use_git_change_detection = false
+# Forking the process that ran the tests (mutmut's default) copies JAX's and BLAS's thread
+# pools mid-lock: a worker then waits on a futex forever and the mutant is reported as a
+# "timeout" that no test caused. A fork server that only collected the tests has no such threads.
+process_isolation = "forkserver"
+
+[tool.pytest.ini_options]
+markers = ["gl: needs OpenGL", "slow: slower than a few seconds"]
+""".replace("'", '"'))
+    return ws
+
+
+def equivalents(scope: str) -> dict[str, str]:
+    """Mutants judged equivalent (no test can tell them apart from the code), with the reason:
+    ``mutation/equivalent/<scope>.txt``, one ``name  reason`` per line. Mutant names are
+    numbered per function, so a change of the function can shift them: the report names any
+    listed mutant that no longer survives, so the list is re-checked after each run."""
+    path = ROOT / "mutation" / "equivalent" / f"{scope}.txt"
+    out = {}
+    if path.exists():
+        for line in path.read_text().splitlines():
+            if line.strip() and not line.startswith("#"):
+                name, _, reason = line.strip().partition(" ")
+                out[name] = reason.strip()
+    return out
+
+
+def report(scope: str) -> str:
+    """Score of the last run of ``scope`` and the surviving mutants, as text."""
+    ws = BUILD / scope
+    out = subprocess.run([sys.executable, "-m", "mutmut", "results", "--all", "true"], cwd=ws,
+                         capture_output=True, text=True, check=False).stdout
+    equivalent = equivalents(scope)
+    counts: dict[str, int] = {}
+    survivors, stale = [], []
+    for line in out.splitlines():
+        name, _, status = line.strip().rpartition(": ")
+        if not name:
+            continue
+        if name in equivalent:
+            if status != "survived":
+                stale.append(f"{name} is listed as equivalent but is {status}")
+            status = "equivalent"
+        counts[status] = counts.get(status, 0) + 1
+        if status in ("survived", "no tests"):
+            survivors.append(f"{status:9s} {name}")
+    killed = counts.get("killed", 0) + counts.get("timeout", 0) + counts.get("segfault", 0)
+    total = sum(counts.values()) - sum(counts.get(k, 0) for k in ("skipped", "not checked", "equivalent"))
+    score = killed / total if total else 0.0
+    lines = [f"scope {scope}: {killed}/{total} mutants killed ({100 * score:.1f}%), "
+             f"{counts.get('equivalent', 0)} equivalent left out",
+             "counts: " + ", ".join(f"{k} {v}" for k, v in sorted(counts.items())), ""]
+    return "\n".join(lines + stale + survivors) + "\n"
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("scope", choices=sorted(SCOPES) + ["all"])
+    ap.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
+    ap.add_argument("--fresh", action="store_true", help="forget the previous run's results")
+    ap.add_argument("--report", action="store_true", help="only print the last run's score")
+    ap.add_argument("--only", nargs="*", default=[], metavar="PATTERN",
+                    help="mutant name patterns (fnmatch), e.g. 'sketchforge.document.undo.*'")
+    args = ap.parse_args(argv)
+    scopes = sorted(SCOPES) if args.scope == "all" else [args.scope]
+    RESULTS.mkdir(parents=True, exist_ok=True)
+    for scope in scopes:
+        if not args.report:
+            ws = workspace(scope)
+            if args.fresh and (ws / "mutants").exists():
+                shutil.rmtree(ws / "mutants")
+            # Fewer, fixed property-test examples (tests/tests_support.examples): a survivor runs
+            # every test that reaches its function, the stateful machines included.
+            env = dict(os.environ, CI="true", QT_QPA_PLATFORM="offscreen", SKETCHFORGE_MUTATION="1",
+                       FUZZ_EXAMPLES="10", OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1",
+                       MKL_NUM_THREADS="1")
+            rc = subprocess.run([sys.executable, "-m", "mutmut", "run", "--max-children", str(args.jobs),
+                                 *args.only], cwd=ws, env=env).returncode
+            if rc != 0:
+                print(f"mutmut failed on scope {scope} (exit {rc})", file=sys.stderr)
+                return rc
+        text = report(scope)
+        (RESULTS / f"{scope}.txt").write_text(text)
+        print(text.splitlines()[0])
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
