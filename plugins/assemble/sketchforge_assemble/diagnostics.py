@@ -109,17 +109,17 @@ def box_pairs(lo: np.ndarray, hi: np.ndarray, among: np.ndarray | None = None, b
         c = a[idx] + np.c_[j % rx, (j // rx) % ry, j // (rx * ry)]
         dims = b.max(axis=0) + 1
         key = (c[:, 0] * dims[1] + c[:, 1]) * dims[2] + c[:, 2]
-        order = np.argsort(key, kind="stable")  # idx ascending within a cell
+        # Within a cell the boxes of ``among`` come first and each pairs with every box after
+        # it; the others pair with nothing (a pair of two of them is not asked for).
+        order = np.lexsort((~mask[idx], key))
         key, idx, c = key[order], idx[order], c[order]
         start = np.flatnonzero(np.r_[True, key[1:] != key[:-1]])
         end = np.r_[start[1:], len(key)]
         run_end = np.repeat(end, end - start)
-        n_after = run_end - np.arange(len(key)) - 1  # partners later in the same cell
+        n_after = (run_end - np.arange(len(key)) - 1) * mask[idx]  # partners later in the same cell
         first = np.repeat(np.arange(len(key)), n_after)
         second = first + 1 + np.arange(len(first)) - np.repeat(np.cumsum(n_after) - n_after, n_after)
         i, k = idx[first], idx[second]
-        sel = mask[i] | mask[k]
-        first, i, k = first[sel], i[sel], k[sel]
         # Two boxes share every cell their overlap touches: the pair is kept only in the cell
         # of the overlap's low corner (floor is monotonic: the larger of the two low cells),
         # so it comes out once, with no de-duplication sort.
