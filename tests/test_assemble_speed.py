@@ -86,6 +86,7 @@ def test_reassembly_after_one_layer_changed_is_bit_identical_to_scratch(changed)
     cache.counts.clear()
     _same(assemble_detailed(meshes, closed, cache=cache), first)
     assert not any(k[1] == "miss" for k in cache.counts)
+    assert cache.counts["fair", "hit"] == 1  # the fairing's solve and check too
 
 
 def test_cache_keys_ignore_order_and_names_but_not_content():
