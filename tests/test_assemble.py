@@ -387,6 +387,23 @@ def test_intersection_counter_on_hand_made_triangles():
     assert len(dg.intersecting_pairs(V, F2)) == 0
 
 
+@pytest.mark.parametrize("big", [64, 4, 1])
+def test_box_pairs_are_exactly_the_overlapping_boxes(big):
+    # the broad phase of the intersection counter (and of the fairing's safety check) must
+    # miss no overlapping pair and report each once, big boxes (tested directly) included
+    rng = np.random.default_rng(7)
+    lo = rng.random((300, 3))
+    hi = lo + rng.random((300, 3)) ** 3 * 0.5
+    hi[:3] = lo[:3] + 0.9  # a few big ones
+    among = rng.random(300) < 0.3
+    for sel in (None, among, np.flatnonzero(among)):
+        got = dg.box_pairs(lo, hi, sel, big=big)
+        mark = np.ones(300, bool) if sel is None else among
+        i, j = np.triu_indices(300, 1)
+        hit = np.all((lo[i] <= hi[j]) & (lo[j] <= hi[i]), axis=1) & (mark[i] | mark[j])
+        assert got.tolist() == np.c_[i[hit], j[hit]].tolist()
+
+
 def test_a_loop_of_attachments_is_a_clear_error_or_a_free_part():
     # two parts, each with its junction (the closing chord) inside the other: A glued behind
     # B, B glued in front of A, which would glue a sleeve onto itself

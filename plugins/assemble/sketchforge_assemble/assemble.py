@@ -3,8 +3,8 @@
 Pipeline: planar sheets (:mod:`.sheet`) -> attachments (:mod:`.attach`) -> junctions cut into
 the faces below (:mod:`.remesh`) -> fillets at the junctions (:mod:`.blend`) -> depth QP
 (:mod:`.depth`) -> faces, slits and rim bridges (:mod:`.stitch`) -> the junctions faired
-(:mod:`.fair`). With an :class:`~.cache.AssemblyCache`, the per-layer and per-pair steps
-and each group's solve are reused when their inputs are bit-identical (:mod:`.cache`).
+(:mod:`.fair`). With an :class:`~.cache.AssemblyCache`, the per-layer and per-pair steps,
+each group's solve and the fairing are reused when their inputs are bit-identical (:mod:`.cache`).
 """
 
 from __future__ import annotations
@@ -221,11 +221,23 @@ def assemble_detailed(meshes: Sequence[Mesh | None], closed: Sequence[bool] | No
         moved = zone.copy()
         for k in sorted(set(range(len(sheets))) - in_att):
             moved &= ~supports(V, F, face_layer, face_kind, k, sheets[k].polygon().buffer(sheets[k].h), zone)
-        V = fair_seams(V, F, moved, A)
-        timings["fair"] = time.perf_counter() - t
-        t = time.perf_counter()
-        safe = fairing_is_safe(V, F, moved, float(np.median([s.h for s in sheets])))
-        timings["fair_check"] = time.perf_counter() - t
+        h_med = float(np.median([s.h for s in sheets]))
+
+        def faired(V=V, A=A, moved=moved):
+            t1 = time.perf_counter()
+            V2 = fair_seams(V, F, moved, A)
+            t2 = time.perf_counter()
+            ok = fairing_is_safe(V2, F, moved, h_med)
+            timings["fair_check"] = time.perf_counter() - t2
+            timings["fair"] = t2 - t1
+            return V2, ok
+
+        # Through the cache by the stitched mesh itself: an undo, or an edit that leaves every
+        # junction's rings as they were, skips the fairing's solve and its check.
+        V, safe = memo(cache, "fair", (V, F, moved, h_med), faired)
+        V = V.copy()  # the cached array stays as it was, whatever the caller does to the mesh
+        timings.setdefault("fair", time.perf_counter() - t)
+        timings.setdefault("fair_check", 0.0)
         if not safe:
             # The blended junction would cross itself (or flatten a triangle): the plain
             # sleeve never does, so the model is still handed out, with its folds, and why.

@@ -6,7 +6,6 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
-from scipy.spatial import cKDTree
 
 from .sheet import directed_edges, unique_edges
 
@@ -74,52 +73,69 @@ def _edge_crosses_triangle(p, q, a, b, c):
     return straddle & inside
 
 
-def candidate_pairs(V: np.ndarray, F: np.ndarray, among: np.ndarray | None = None) -> np.ndarray:
-    """(k, 2) int64 triangle pairs ``i < j`` whose bounding boxes overlap (broad phase).
+def box_pairs(lo: np.ndarray, hi: np.ndarray, among: np.ndarray | None = None, big: int = 64) -> np.ndarray:
+    """(k, 2) int64 sorted, unique index pairs ``i < j`` of boxes ``lo``/``hi`` (m, 3) that
+    overlap (closed boxes), at least one of the two in ``among`` (indices or (m,) bool) if given.
 
-    Centroids go in KD-trees, one per size class (corner radius within a power of two), each
-    class queried with the largest radii of the two classes: one long triangle (a rim bridge,
-    a coarse layer) then widens only the queries of its own class, not every query. Pairs are
-    kept if their centroids lie within the sum of their radii and their axis-aligned boxes
-    overlap. With ``among`` (indices or (m,) bool), only pairs with at least one triangle in
-    it.
+    A uniform grid, all in numpy: cells twice the median box extent, every box entered in each
+    cell it touches, pairs taken within each cell (each pair in one cell only: that of its
+    overlap's low corner). A box touching more than ``big`` cells (a long rim bridge) is
+    tested against every box directly. Why not KD-trees on the centroids, one per size class
+    (as before): the faired zone of a blended model holds half of its triangles (creature:
+    17k of 32k), and the trees' queries cost 0.28 s CPU there, the grid ~0.14 s.
     """
-    T = V[F]
-    cen = T.mean(axis=1)
-    rad = np.linalg.norm(T - cen[:, None, :], axis=2).max(axis=1)
-    if len(F) < 2:
+    m = len(lo)
+    if m < 2:
         return np.zeros((0, 2), np.int64)
-    scale = max(float(np.median(rad)), 1e-300)
-    size = np.ceil(np.log2(np.maximum(rad / scale, 1.0))).astype(np.int64)
-    classes = [np.flatnonzero(size == k) for k in np.unique(size)]
-    trees = [cKDTree(cen[c]) for c in classes]
-    if among is None:
-        query = classes
-    else:
-        mask = np.zeros(len(F), bool)
+    mask = np.ones(m, bool)
+    if among is not None:
+        mask = np.zeros(m, bool)
         mask[among] = True
-        query = [c[mask[c]] for c in classes]
+    ext = (hi - lo).max(axis=1)
+    cell = 2.0 * float(np.median(ext))
+    if not np.isfinite(cell) or cell <= 0.0:
+        cell = max(float(ext.max(initial=0.0)), 1e-300)
+    origin = lo.min(axis=0)
+    a = np.floor((lo - origin) / cell).astype(np.int64)
+    b = np.floor((hi - origin) / cell).astype(np.int64)
+    r = b - a + 1
+    count = r.prod(axis=1)
+    small = np.flatnonzero(count <= big)
     found = []
-    for a, qa in enumerate(query):
-        if len(qa) == 0:
-            continue
-        qtree = cKDTree(cen[qa]) if among is not None else trees[a]
-        for b, cb in enumerate(classes):
-            if among is None and b < a:
-                continue
-            m = qtree.sparse_distance_matrix(trees[b], float(rad[qa].max() + rad[cb].max()), output_type="ndarray")
-            found.append(np.c_[qa[m["i"]], cb[m["j"]]])
-    if not found:
-        return np.zeros((0, 2), np.int64)
-    pairs = np.vstack(found)
-    # the exact tests before the de-duplication: far fewer pairs are left to sort
-    d = np.linalg.norm(cen[pairs[:, 0]] - cen[pairs[:, 1]], axis=1)
-    pairs = pairs[(d <= rad[pairs[:, 0]] + rad[pairs[:, 1]]) & (pairs[:, 0] != pairs[:, 1])]
-    lo, hi = T.min(axis=1), T.max(axis=1)
+    if len(small):
+        idx = np.repeat(small, count[small])
+        j = np.arange(len(idx)) - np.repeat(np.cumsum(count[small]) - count[small], count[small])
+        rx, ry = r[idx, 0], r[idx, 1]
+        c = a[idx] + np.c_[j % rx, (j // rx) % ry, j // (rx * ry)]
+        dims = b.max(axis=0) + 1
+        key = (c[:, 0] * dims[1] + c[:, 1]) * dims[2] + c[:, 2]
+        # Within a cell the boxes of ``among`` come first and each pairs with every box after
+        # it; the others pair with nothing (a pair of two of them is not asked for).
+        order = np.lexsort((~mask[idx], key))
+        key, idx, c = key[order], idx[order], c[order]
+        start = np.flatnonzero(np.r_[True, key[1:] != key[:-1]])
+        end = np.r_[start[1:], len(key)]
+        run_end = np.repeat(end, end - start)
+        n_after = (run_end - np.arange(len(key)) - 1) * mask[idx]  # partners later in the same cell
+        first = np.repeat(np.arange(len(key)), n_after)
+        second = first + 1 + np.arange(len(first)) - np.repeat(np.cumsum(n_after) - n_after, n_after)
+        i, k = idx[first], idx[second]
+        # Two boxes share every cell their overlap touches: the pair is kept only in the cell
+        # of the overlap's low corner (floor is monotonic: the larger of the two low cells),
+        # so it comes out once, with no de-duplication sort.
+        keep = np.all(np.maximum(a[i], a[k]) == c[first], axis=1)
+        found.append(np.c_[i[keep], k[keep]])
+    bigs = np.flatnonzero(count > big)
+    is_big = np.zeros(m, bool)
+    is_big[bigs] = True
+    for i in bigs:  # few: each against every box, a pair of two big ones once
+        others = np.flatnonzero(np.all((lo <= hi[i]) & (lo[i] <= hi), axis=1))
+        others = others[(others != i) & (~is_big[others] | (others > i)) & (mask[i] | mask[others])]
+        found.append(np.c_[np.full(len(others), i), others])
+    pairs = np.vstack(found) if found else np.zeros((0, 2), np.int64)
     ok = np.all((lo[pairs[:, 0]] <= hi[pairs[:, 1]]) & (lo[pairs[:, 1]] <= hi[pairs[:, 0]]), axis=1)
     pairs = np.sort(pairs[ok], axis=1).astype(np.int64)
-    key = np.unique(pairs[:, 0] * len(F) + pairs[:, 1])  # 1-D: far faster than unique rows
-    return np.c_[key // len(F), key % len(F)]
+    return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
 
 
 def intersecting_pairs(V: np.ndarray, F: np.ndarray, face_group: np.ndarray | None = None,
@@ -129,13 +145,14 @@ def intersecting_pairs(V: np.ndarray, F: np.ndarray, face_group: np.ndarray | No
     Pairs that share a vertex are skipped (neighbours always touch there); coplanar overlaps
     are not counted. With ``face_group`` (m,), only pairs from different groups (e.g. layers)
     are tested; with ``among`` (indices or (m,) bool), only pairs with at least one triangle in
-    it (e.g. the triangles an operation moved).
+    it (e.g. the triangles an operation moved). Broad phase: :func:`box_pairs`.
 
     Returns
     -------
     (k, 2) int64 triangle index pairs.
     """
-    pairs = candidate_pairs(V, F, among)
+    T = V[F]
+    pairs = box_pairs(T.min(axis=1), T.max(axis=1), among)
     if face_group is not None and len(pairs):
         pairs = pairs[face_group[pairs[:, 0]] != face_group[pairs[:, 1]]]
     if len(pairs):

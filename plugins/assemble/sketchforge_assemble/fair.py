@@ -141,8 +141,8 @@ def fair_seams(V: np.ndarray, F: np.ndarray, moved: np.ndarray, A: sp.csr_matrix
         every vertex of a component that ``moved`` covers whole).
 
     Solves  min Σ_i |(L x)_i|² / d_i  over the moved vertices (L the graph Laplacian, d_i the
-    vertex degree, the usual lumped mass), the others fixed: one sparse LU of the moved
-    block, three right-hand sides.
+    vertex degree, the usual lumped mass), the others fixed: one sparse LDLᵀ of the moved
+    block (:func:`_spd_solve`), three right-hand sides.
     """
     A = adjacency(F, len(V)) if A is None else A
     # A component with no fixed vertex (a small model inside the rings) has no boundary to
@@ -163,10 +163,31 @@ def fair_seams(V: np.ndarray, F: np.ndarray, moved: np.ndarray, A: sp.csr_matrix
     fixed = np.flatnonzero(~moved)
     Qf = Q[free]
     rhs = -(Qf[:, fixed] @ V[fixed])
-    X = splu(Qf[:, free].tocsc(), permc_spec="COLAMD").solve(rhs)
+    X = _spd_solve(Qf[:, free].tocsc(), rhs)
     V2 = V.copy()
     V2[free] = X
     return V2
+
+
+def _spd_solve(K: sp.csc_matrix, rhs: np.ndarray) -> np.ndarray:
+    """(k, 3) solution of K X = rhs for the symmetric positive definite K (k, k), rhs (k, 3).
+
+    libigl's sparse LDLᵀ (Eigen's, AMD ordering): on the creature's 8.4k moved vertices
+    ~60 ms against ~85-130 ms for SuperLU's LU, same answer to 2e-12; SuperLU if the binding
+    fails. K is a graph bi-Laplacian block with finite entries (degrees >= 1), so libigl only
+    ever sees validated input.
+    """
+    import igl
+
+    try:
+        X = np.asarray(igl.min_quad_with_fixed(K, -rhs, np.zeros(0, np.int64), np.zeros((0, rhs.shape[1])),
+                                               sp.csc_matrix((0, K.shape[0])), np.zeros((0, rhs.shape[1])),
+                                               True))
+    except (RuntimeError, ValueError, TypeError):  # failed factorisation, other binding: SuperLU
+        X = None
+    if X is not None and X.shape == rhs.shape and np.all(np.isfinite(X)):
+        return X
+    return splu(K, permc_spec="COLAMD").solve(rhs)
 
 
 def fairing_is_safe(V: np.ndarray, F: np.ndarray, moved: np.ndarray, h: float) -> bool:
