@@ -148,6 +148,33 @@ def equivalents(scope: str) -> dict[str, str]:
     return out
 
 
+def forget_survivors(ws: Path, patterns: list[str]) -> int:
+    """Clear the verdict of every surviving (or untested) mutant matching ``patterns`` (all if
+    empty), so the next run tests it again; mutmut keeps verdicts until the code changes, and
+    picks up new tests by itself. Returns how many were cleared."""
+    import fnmatch
+    import json
+
+    out = subprocess.run([sys.executable, "-m", "mutmut", "results"], cwd=ws, capture_output=True,
+                         text=True, check=False).stdout
+    names = set()
+    for line in out.splitlines():
+        name, _, status = line.strip().rpartition(": ")
+        if status in ("survived", "no tests") and (not patterns or any(fnmatch.fnmatch(name, p) for p in patterns)):
+            names.add(name)
+    cleared = 0
+    for meta in (ws / "mutants").rglob("*.py.meta"):
+        data = json.loads(meta.read_text())
+        hit = [k for k in data.get("exit_code_by_key", {}) if k in names]
+        for k in hit:
+            data["exit_code_by_key"][k] = None
+        if hit:
+            meta.write_text(json.dumps(data, indent=4))
+            cleared += len(hit)
+    print(f"{cleared} survivors will be tested again")
+    return cleared
+
+
 def report(scope: str) -> str:
     """Score of the last run of ``scope`` and the surviving mutants, as text."""
     ws = BUILD / scope
@@ -182,6 +209,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--jobs", type=int, default=os.cpu_count() or 1)
     ap.add_argument("--fresh", action="store_true", help="forget the previous run's results")
     ap.add_argument("--report", action="store_true", help="only print the last run's score")
+    ap.add_argument("--retest", action="store_true",
+                    help="test the last run's survivors again (after adding tests)")
     ap.add_argument("--only", nargs="*", default=[], metavar="PATTERN",
                     help="mutant name patterns (fnmatch), e.g. 'sketchforge.document.undo.*'")
     args = ap.parse_args(argv)
@@ -192,6 +221,8 @@ def main(argv: list[str] | None = None) -> int:
             ws = workspace(scope)
             if args.fresh and (ws / "mutants").exists():
                 shutil.rmtree(ws / "mutants")
+            if args.retest:
+                forget_survivors(ws, args.only)
             # Fewer, fixed property-test examples (tests/tests_support.examples): a survivor runs
             # every test that reaches its function, the stateful machines included.
             env = dict(os.environ, CI="true", QT_QPA_PLATFORM="offscreen", SKETCHFORGE_MUTATION="1",

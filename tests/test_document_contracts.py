@@ -614,3 +614,83 @@ def test_differences_name_what_differs(fan_host):
     three = _two_layer_doc(fan_host)
     three.push(AddLayer(id="d"))
     assert one.differences(three) == ["layers differ: ['a', 'b', 'c'] vs ['a', 'b', 'c', 'd']"]
+
+
+def test_undo_and_redo_texts_name_the_step_they_would_undo_or_redo(fan_host):
+    doc = Document(host=fan_host)
+    stack = doc.undo_stack
+    assert stack.undo_text() == "" and stack.redo_text() == ""
+    doc.push(AddLayer(id="a"))
+    doc.push(RenameLayer(layer="a", new_name="A"))
+    assert stack.undo_text() == "Rename layer" and stack.redo_text() == ""
+    stack.undo()
+    assert stack.undo_text() == "Add layer" and stack.redo_text() == "Rename layer"
+    stack.undo()
+    assert stack.undo_text() == "" and stack.redo_text() == "Add layer"
+
+
+def test_history_changes_are_announced_only_when_something_changed(fan_host):
+    doc = Document(host=fan_host)
+    seen = []
+    doc.history_changed.connect(lambda: seen.append(doc.undo_stack.index))
+    doc.push(AddLayer(id="a"))
+    assert seen == [1]
+    doc.undo_stack.redo()  # nothing to redo: no announcement
+    assert seen == [1]
+    doc.undo_stack.undo()
+    assert seen == [1, 0]
+
+
+def test_mesh_changed_is_announced_only_when_the_mesh_changes(fan_host):
+    from sketchforge.document.commands import SetContour
+
+    doc = Document(host=fan_host)
+    doc.push(AddLayer(id="a"))
+    seen = []
+    doc.mesh_changed.connect(seen.append)
+    doc.push(SetContour(layer="a", points=[[0, 0], [1, 0], [1, 1], [0, 1]], closed=True))
+    assert seen == ["a"]
+    doc.push(RenameLayer(layer="a", new_name="A"))
+    assert seen == ["a"]
+
+
+def test_clearing_the_history_inside_a_macro_is_refused(fan_host):
+    doc = Document(host=fan_host)
+    doc.undo_stack.begin_macro("Draw")
+    with pytest.raises(RuntimeError, match=exactly("cannot clear the undo stack inside a macro")):
+        doc.undo_stack.clear()
+    doc.undo_stack.abort_macro()
+
+
+def test_an_unknown_layer_error_lists_the_known_ones(fan_host):
+    from sketchforge.errors import LayerNotFoundError
+
+    doc = Document(host=fan_host)
+    with pytest.raises(LayerNotFoundError, match=exactly("there is no layer with id 'zz' (layers: none)")):
+        doc.index_of("zz")
+    doc.push(AddLayer(id="a"))
+    doc.push(AddLayer(id="b"))
+    with pytest.raises(LayerNotFoundError, match=exactly("there is no layer with id 'zz' (layers: a, b)")):
+        doc.index_of("zz")
+
+
+def test_a_command_mutating_plugin_data_in_place_is_undone_too(fan_host):
+    doc = Document(host=fan_host)
+    doc._set_plugin_data("anim", {"pins": [1, 2]})
+
+    def mutate_in_place(d):
+        d.plugin_data("anim")["pins"].append(3)
+
+    from sketchforge.errors import PluginError
+
+    with pytest.raises(PluginError):
+        doc.push(_Wreck([mutate_in_place]))
+    assert doc.plugin_data("anim") == {"pins": [1, 2]}
+
+
+def test_a_signal_called_with_the_wrong_number_of_arguments_says_so():
+    from sketchforge.document.events import Signal
+
+    sig = Signal(int, str, name="pair")
+    with pytest.raises(TypeError, match=exactly("signal 'pair' takes 2 arguments, got 1")):
+        sig.emit(1)
