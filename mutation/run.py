@@ -21,6 +21,7 @@ Scopes: see ``SCOPES``.  The score and the survivors are written to
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import shutil
 import subprocess
@@ -109,27 +110,27 @@ def workspace(scope: str) -> Path:
             shutil.copytree(path, target, ignore=shutil.ignore_patterns("__pycache__", "*.egg-info"))
         else:
             shutil.copy2(path, target)
-    also = READ_BY_TESTS
-    selection = ", ".join(f'"{t}"' for t in tests)
-    deselect = ", ".join(f'"--deselect={t}"' for t in SLOW_TESTS)
+    pytest_args = ["-p", "no:randomly", "-p", "no:cacheprovider", "-p", "no:xvfb", "-m", "not gl", "-q"]
+    selection = [*tests, "--ignore=tests/qt", *(f"--deselect={t}" for t in SLOW_TESTS)]
+    # Forking the process that ran the tests (mutmut's default) copies JAX's and BLAS's thread
+    # pools mid-lock: a worker then waits on a futex forever and the mutant is reported as a
+    # "timeout" that no test caused. A fork server that only collected the tests has no such
+    # threads (process_isolation below).
     (ws / "pyproject.toml").write_text(f"""# written by mutation/run.py for scope {scope!r}; do not edit
 [tool.mutmut]
-source_paths = ["{package}"]
-only_mutate = {only!r}
-also_copy = {also!r}
-pytest_add_cli_args = ["-p", "no:randomly", "-p", "no:cacheprovider", "-p", "no:xvfb", "-m", "not gl and not slow", "-q"]
-pytest_add_cli_args_test_selection = [{selection}, "--ignore=tests/qt", {deselect}]
+source_paths = [{json.dumps(package)}]
+only_mutate = {json.dumps(only)}
+also_copy = {json.dumps(READ_BY_TESTS)}
+pytest_add_cli_args = {json.dumps(pytest_args)}
+pytest_add_cli_args_test_selection = {json.dumps(selection)}
 timeout_multiplier = 10.0
 timeout_constant = 5.0
 use_git_change_detection = false
-# Forking the process that ran the tests (mutmut's default) copies JAX's and BLAS's thread
-# pools mid-lock: a worker then waits on a futex forever and the mutant is reported as a
-# "timeout" that no test caused. A fork server that only collected the tests has no such threads.
 process_isolation = "forkserver"
 
 [tool.pytest.ini_options]
-markers = ["gl: needs OpenGL", "slow: slower than a few seconds"]
-""".replace("'", '"'))
+markers = ["gl: needs OpenGL"]
+""")
     return ws
 
 
@@ -153,7 +154,6 @@ def forget_survivors(ws: Path, patterns: list[str]) -> int:
     empty), so the next run tests it again; mutmut keeps verdicts until the code changes, and
     picks up new tests by itself. Returns how many were cleared."""
     import fnmatch
-    import json
 
     out = subprocess.run([sys.executable, "-m", "mutmut", "results"], cwd=ws, capture_output=True,
                          text=True, check=False).stdout
