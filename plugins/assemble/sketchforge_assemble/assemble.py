@@ -241,7 +241,7 @@ def assemble_detailed(meshes: Sequence[Mesh | None], closed: Sequence[bool] | No
         if not safe:
             # The blended junction would cross itself (or flatten a triangle): the plain
             # sleeve never does, so the model is still handed out, with its folds, and why.
-            plain = assemble_detailed(meshes, closed, {**p, "fillet": 0.0}, names)
+            plain = assemble_detailed(meshes, closed, {**p, "fillet": 0.0}, names, cache=cache)
             plain.warnings.append("a junction could not be blended without the surface crossing itself; "
                                   "its parts are glued with a plain fold (assembly parameter 'fillet')")
             return plain

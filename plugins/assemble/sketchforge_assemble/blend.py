@@ -129,8 +129,11 @@ def blend_junctions(sheets: list[Sheet], attachments: list[Attachment], front_of
         # its faces leave the fillet no steeper than about 60 degrees.
         thick = float(np.max(up.z[d <= 2.0 * W], initial=0.0))
         grow = 1.0 - profile(d / max(W, 1.2 * thick))
-        front_off[at.upper] = margin + up.z * grow
-        back_off[at.upper] = margin + up.z * grow
+        # Added onto what is there: a part that also hosts another (a hand on an arm) may have
+        # had its host fillet added already, earlier in this loop.
+        faded = margin + up.z * grow
+        front_off[at.upper] = front_off[at.upper] - base_front[at.upper] + faded
+        back_off[at.upper] = back_off[at.upper] - base_back[at.upper] + faded
 
         # springs: mid-depth = host face under the vertex + the part's back clearance
         # (rising from the strip's top) + its half thickness
