@@ -343,6 +343,7 @@ def _layer_fragments(mesh, view: View, antialias: bool, normals=None):
         _mesh_cache[mesh] = cached
     kept = cached.setdefault("fragments", {})
     if (view, antialias) in kept:
+        kept[(view, antialias)] = kept.pop((view, antialias))  # most recently used goes last
         return kept[(view, antialias)]
     N, outline = cached["N"], cached["outline"]
     W, H = int(view.width), int(view.height)
@@ -390,7 +391,7 @@ def _layer_fragments(mesh, view: View, antialias: bool, normals=None):
         a.flags.writeable = False  # shared between buffers
     kept[(view, antialias)] = result
     while len(kept) > VIEWS_KEPT:
-        del kept[next(iter(kept))]  # the oldest view
+        del kept[next(iter(kept))]  # the least recently used view
     return result
 
 

@@ -148,7 +148,7 @@ def line_wobble(surface: InflatedEllipse, mesh, view, light, K: int = 8, normals
     d = dist[centre]
     exact_g = replace(g, normal=np.asfortranarray(surface.normal(_fragment_points(g)), dtype=np.float32))
     exact_cov = gb.isophote_coverage(exact_g, l, K, width)
-    shown = np.rint(np.clip(_dot(g.normal[g.front_frag], l) * (K + 1), 1, K))
+    shown = np.rint(np.clip(gb._dot(g.normal[g.front_frag], l) * (K + 1), 1, K))
 
     def image(values):
         img = np.zeros(W * H, dtype=np.float64)
@@ -163,10 +163,6 @@ def line_wobble(surface: InflatedEllipse, mesh, view, light, K: int = 8, normals
         exact_pieces=_pieces(image(exact_cov), image(level), K),
         centre_pixels=int(centre.sum()),
     )
-
-
-def _dot(N, l):
-    return N[:, 0] * l[0] + N[:, 1] * l[1] + N[:, 2] * l[2]
 
 
 def _fragment_points(g) -> np.ndarray:

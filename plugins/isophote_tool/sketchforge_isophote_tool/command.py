@@ -16,6 +16,7 @@ import numpy as np
 from sketchforge.document.commands import ReplaceLayerCommand, parse_field, parse_points, parse_vector
 from sketchforge.document.layer import Layer
 from sketchforge.errors import DocumentFormatError, NothingToDoError, SculptError
+from sketchforge.geometry.contour import MAX_COORDINATE
 
 
 def _model(doc, name: str):
@@ -78,8 +79,9 @@ class SculptIsophote(ReplaceLayerCommand):
         if len(pick) != 2:
             raise DocumentFormatError(f"command {cls.name!r}: 'pick' must be 2 numbers [x, y]")
         band = parse_field(d, "band", float, cls.name)
-        if band > 1e9:  # the pipeline's MAX_BAND (not imported here: it pulls in jax)
-            raise DocumentFormatError(f"command {cls.name!r}: 'band' is {band:.3g}; it must be at most 1e+09 drawing units")
+        if band > MAX_COORDINATE:  # the pipeline's MAX_BAND, checked before any work
+            raise DocumentFormatError(f"command {cls.name!r}: 'band' is {band:.3g}; it must be at most "
+                                      f"{MAX_COORDINATE:.0e} drawing units")
         return cls(
             layer=parse_field(d, "layer", str, cls.name),
             pick=pick,

@@ -29,6 +29,7 @@ import shapely
 from scipy.spatial import cKDTree
 
 from sketchforge.errors import NothingToDoError, SculptError, SolverError
+from sketchforge.geometry.contour import MAX_COORDINATE
 from sketchforge.geometry.mesh import Mesh
 from sketchforge.geometry.reflectance import LAMBERTIAN
 from sketchforge.plugins.registry import ReflectanceModel
@@ -183,8 +184,8 @@ def _band_radius(band) -> float:
     return r
 
 
-#: Largest band radius: the drawing's coordinate range (sketchforge.geometry.contour.MAX_COORDINATE).
-MAX_BAND = 1e9
+#: Largest band radius: the drawing's coordinate range.
+MAX_BAND = MAX_COORDINATE
 
 
 _PICKS: "OrderedDict[tuple, tuple]" = OrderedDict()
