@@ -404,6 +404,24 @@ def test_box_pairs_are_exactly_the_overlapping_boxes(big):
         assert got.tolist() == np.c_[i[hit], j[hit]].tolist()
 
 
+def test_intersections_checked_in_two_threads_are_the_same_pairs(monkeypatch):
+    # a soup of small random triangles, many crossing: the two-thread split of a large
+    # ``among`` (its halves left and right of the median x) gives exactly the one-thread answer
+    rng = np.random.default_rng(11)
+    c = rng.random((3000, 3))
+    V = (c[:, None, :] + 0.04 * rng.standard_normal((3000, 3, 3))).reshape(-1, 3)
+    F = np.arange(9000).reshape(-1, 3)
+    among = rng.random(3000) < 0.7
+    one = dg._intersecting_pairs(V, F, None, 200_000, among)
+    assert len(one) > 100
+    monkeypatch.setattr(dg, "SPLIT_FROM", 10)
+    monkeypatch.setattr(dg.os, "cpu_count", lambda: 2)
+    for sel in (among, np.flatnonzero(among)):
+        two = dg.intersecting_pairs(V, F, among=sel)
+        assert two.dtype == np.int64 and two.tolist() == one.tolist()
+    assert dg.intersecting_pairs(V, F, among=np.zeros(0, np.int64)).shape == (0, 2)  # nothing asked for
+
+
 def test_a_loop_of_attachments_is_a_clear_error_or_a_free_part():
     # two parts, each with its junction (the closing chord) inside the other: A glued behind
     # B, B glued in front of A, which would glue a sleeve onto itself
