@@ -176,18 +176,60 @@ def test_free_parts_out_of_the_qp_keep_the_optimum_of_the_whole_qp():
     assert np.abs(xe[~glued] - rest[f]).max() < 1e-9
 
 
-def test_a_free_part_squeezed_by_a_glued_part_goes_back_into_the_qp():
+def test_a_free_part_sunk_into_a_glued_part_is_lifted_out_whole():
     # the eye's rest depth pushed far below the head it lies on: at rest it would cross the
-    # head, so the whole QP is solved with it, and the result still satisfies every row
+    # head, so it is lifted out as a whole, like a sticker: the glued parts are not solved
+    # again and do not move, the eye keeps its shape, and every row holds with the clearance
     (P, q, Aeq, beq, Ain, bin_, offsets, free, rest), kw, _ = _creature_qp()
+    pad = kw["pad"]
+    x0, _ = depth.solve_without_free_parts(P, q, Aeq, beq, Ain, bin_, offsets, free, rest, pad=pad)
     rest = list(rest)
     f = free[0]
     sunk = rest[f] - 5.0
     rest[f] = sunk
-    x, info = depth.solve_without_free_parts(P, q, Aeq, beq, Ain, bin_, offsets, free, rest, pad=kw["pad"])
-    assert info["free_in_solve"] == [f]
-    assert np.min(sp.csr_matrix(Ain) @ x - bin_) >= 0.0
-    assert x[offsets[f]:offsets[f + 1]].min() > sunk + 1.0  # pushed up out of the head
+    x, info = depth.solve_without_free_parts(P, q, Aeq, beq, Ain, bin_, offsets, free, rest, pad=pad)
+    assert info["free_in_solve"] == []
+    eye = slice(offsets[f], offsets[f + 1])
+    lift = info["free_lifted"][f]
+    assert lift > 4.0 and np.all(x[eye] == sunk + lift)  # one shift: its shape is kept
+    glued = np.ones(len(x), bool)
+    glued[eye] = False
+    assert np.array_equal(x[glued], x0[glued])
+    slack = sp.csr_matrix(Ain) @ x - bin_
+    assert slack.min() >= 0.0
+    touching = np.asarray(abs(sp.csr_matrix(Ain)[:, eye]).sum(axis=1)).ravel() > 0
+    assert abs(slack[touching].min() - pad) < 1e-9  # lifted just clear, not further
+
+
+def _toy_qp(rows):
+    """A host (sheet 0) and a part glued half a unit in front of it (sheet 1), two vertices
+    each, and a free part (sheet 2) of two vertices at rest depth 0 with the given depth rows:
+    (free vertex, other vertex, +1 if the free vertex must be 1 in front of it, -1 behind)."""
+    k = 1.0
+    block = np.array([[1 + k, -k], [-k, 1 + k]])
+    P = sp.block_diag([block] * 3, format="csc")
+    q = np.zeros(6)
+    Aeq = sp.csr_matrix(np.array([[-1.0, 0, 1, 0, 0, 0], [0, -1.0, 0, 1, 0, 0]]))
+    beq = np.array([0.5, 0.5])
+    Ain = np.zeros((len(rows), 6))
+    for r, (fv, other, sign) in enumerate(rows):
+        Ain[r, fv], Ain[r, other] = sign, -sign
+    return P, q, Aeq, beq, sp.csr_matrix(Ain), np.ones(len(rows)), np.array([0, 2, 4, 6]), [2], [0.0, 0.0, 0.0]
+
+
+def test_a_free_part_held_from_both_sides_goes_back_into_the_qp():
+    # vertex 4 must be 1 in front of the host (at 0), vertex 5 1 behind the part (at 0.5): no
+    # single shift does both, bending does: the free part joins the QP, and every row holds
+    P, q, Aeq, beq, Ain, bin_, offsets, free, rest = _toy_qp([(4, 0, +1), (5, 3, -1)])
+    x, info = depth.solve_without_free_parts(P, q, Aeq, beq, Ain, bin_, offsets, free, rest, pad=0.01)
+    assert info["free_in_solve"] == [2] and info["free_lifted"] == {}
+    assert np.min(Ain @ x - bin_) >= 0.0
+    assert x[4] - x[5] > 0.9  # bent (the host and the part gave way a little too)
+    # one side only: lifted whole, no QP with it
+    P, q, Aeq, beq, Ain, bin_, offsets, free, rest = _toy_qp([(4, 0, +1), (5, 1, +1)])
+    x, info = depth.solve_without_free_parts(P, q, Aeq, beq, Ain, bin_, offsets, free, rest, pad=0.01)
+    assert info["free_in_solve"] == [] and info["free_lifted"][2] == pytest.approx(1.01 + x[0], abs=1e-9)
+    assert x[4] == x[5] and np.min(Ain @ x - bin_) >= 0.0
 
 
 @pytest.mark.parametrize("screen", [0.0, 6.0, np.inf])
@@ -222,10 +264,12 @@ def test_screened_rows_give_the_answer_of_all_rows(screen, monkeypatch):
 def test_blended_qp_keeps_every_row_and_the_glue_exact():
     # The default (blended) creature: the lifted glue and the springs make OSQP stop with the
     # glue rows ~1e-4 off (issue 12); _polish_glue closes them to round-off without opening a
-    # depth row, and the eye, which the glue pushed the head past, is solved with the head.
+    # depth row, and the eye, which the glue pushed the head past, is lifted out of it whole
+    # (one QP, not two).
     _, meshes, closed = _creature()
     res = assemble_detailed(meshes, closed)
-    assert res.solver["free_in_solve"] == [7] and not res.warnings
+    assert res.solver["free_in_solve"] == [] and res.solver["free_lifted"][7] > 0 and not res.warnings
+    assert res.solver["groups"] == 1
     assert res.glue_error < 1e-12
     assert res.max_violation <= 0.0
 

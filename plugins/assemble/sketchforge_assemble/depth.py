@@ -114,7 +114,8 @@ class _Rows:
 
 
 def build_problem(sheets, offsets, front_off, back_off, attachments: list[Attachment], gap: float, reg: float,
-                  stiffness: float = 20.0, glue_lift=None, springs=None, cache: AssemblyCache | None = None):
+                  stiffness: float = 20.0, glue_lift=None, springs=None, cache: AssemblyCache | None = None,
+                  locators: dict | None = None):
     """Assemble the QP of the module docstring.
 
     Parameters
@@ -149,6 +150,9 @@ def build_problem(sheets, offsets, front_off, back_off, attachments: list[Attach
         Memo of each sheet's Laplacian, mass, edges, outline and locator and of each
         overlapping pair's depth rows (see :mod:`.cache`); the problem is bit-identical with
         or without it.
+    locators : dict of int -> TriangleLocator, optional
+        Point location per sheet index, filled as needed; pass the one
+        :func:`.blend.blend_junctions` filled to build each sheet's locator once.
 
     Returns
     -------
@@ -209,7 +213,8 @@ def build_problem(sheets, offsets, front_off, back_off, attachments: list[Attach
     polys = [memo(cache, "polygon", (s.xy, s.boundary, s.holes), s.polygon) for s in sheets]
     # once per sheet, not once per overlapping pair
     edges = [memo(cache, "edges", (s.F,), lambda s=s: _unique_edges(s.F)) for s in sheets]
-    locators: dict[int, TriangleLocator] = {}  # point location, once per sheet that overlaps another
+    # point location, once per sheet that overlaps another (shared with the fillets' springs)
+    locators: dict[int, TriangleLocator] = {} if locators is None else locators
 
     def loc(i):
         if i not in locators:
@@ -885,6 +890,7 @@ def solve_without_free_parts(P, q, Aeq, beq, Ain, bin_, offsets, free, rest, met
     local: dict[tuple, tuple] = {}
     out = np.zeros(k, bool)  # free parts left out of the QP
     out[free] = True
+    lifted: dict[int, float] = {}
     while True:
         x = np.zeros(N)
         info = {"method": method, "osqp_iterations": 0, "iterations": 0, "groups": 0}
@@ -920,16 +926,60 @@ def solve_without_free_parts(P, q, Aeq, beq, Ain, bin_, offsets, free, rest, met
             x[offsets[f]:offsets[f + 1]] = rest[f]
         if not touch.any():
             break
+        lifted = _lift_free_parts(x, Ain, bin_, offsets, out, in_lo, in_hi, touch, pad)
         bad = np.flatnonzero(touch)[Ain[touch] @ x - bin_[touch] < 0.0]
         if len(bad) == 0:
             break
-        # a free part at rest would cross a layer the glue moved: it joins the QP of what it
-        # touches (the other groups' solves come back from the cache)
+        # a free part at rest would cross a layer the glue moved, and no shift of it as a whole
+        # clears every row (squeezed between two layers, or crossing another free part): it
+        # joins the QP of what it touches (the other groups' solves come back from the cache)
         out[np.r_[in_lo[bad], in_hi[bad]]] = False
+    info["free_lifted"] = {int(f): v for f, v in lifted.items() if out[f]}
     info["free_in_solve"] = [int(f) for f in free if not out[f]]
     if free and len(bin_) and info.get("iterations", 0) == 0:  # OSQP's count, as in solve_depth
         info["active"] = int(np.sum(Ain @ x - bin_ <= pad + 1e-6))
     return x, info
+
+
+def _lift_free_parts(x, Ain, bin_, offsets, out, in_lo, in_hi, touch, pad):
+    """Shift each free part left out of the QP (``out`` (k,) bool) as a whole, in place in x
+    (N,), by the smallest amount that gives every depth row it has with a solved layer a slack
+    of at least ``pad``, if one exists and a row is violated; returns {part: shift}.
+
+    Why. The glue can move a layer past a free part's rest depth (the blended creature: the
+    head, glued to the body, ends up in front of the eye drawn on it). Solving the whole group
+    again with the part in it cost a second QP, as long as the first, to come out with the part
+    nearly where a rigid shift puts it: the layers it is drawn on are stiffer than it and its
+    own energy is shift-free. So a free part is placed like a sticker, as
+    :func:`settle_free_parts` places it afterwards, and no glued layer moves for it. Only a part
+    that no single shift can clear (held from both sides) joins the QP.
+
+    A shift t of the part's block changes the slack of a row by t·d, d the row's sum of
+    coefficients over the part's columns (+1 where the part is the nearer layer, -1 where it is
+    the farther; see :func:`settle_free_parts`).
+    """
+    lifted: dict[int, float] = {}
+    rows_all = np.flatnonzero(touch)
+    for f in np.flatnonzero(out):
+        mine = rows_all[((in_lo[rows_all] == f) & ~out[in_hi[rows_all]])
+                        | ((in_hi[rows_all] == f) & ~out[in_lo[rows_all]])]
+        if len(mine) == 0:
+            continue
+        a, b = int(offsets[f]), int(offsets[f + 1])
+        A = Ain[mine]
+        slack = A @ x - bin_[mine]
+        if slack.min() >= 0.0:
+            continue
+        d = np.asarray(A[:, a:b].sum(axis=1)).ravel()
+        up, down = d > 0.5, d < -0.5
+        lo = float(np.max((pad - slack[up]) / d[up], initial=-np.inf))
+        hi = float(np.min((slack[down] - pad) / -d[down], initial=np.inf))
+        if lo > hi:
+            continue  # held from both sides: the QP decides
+        t = min(max(0.0, lo), hi)
+        x[a:b] += t
+        lifted[int(f)] = t
+    return lifted
 
 
 def _row_layers(A, layer_of):
