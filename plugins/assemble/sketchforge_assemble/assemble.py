@@ -22,7 +22,7 @@ from .attach import Attachment, find_attachments
 from .blend import blend_junctions
 from .cache import AssemblyCache, memo
 from .depth import build_problem, settle_free_parts, solve_without_free_parts
-from .fair import fair_seams, fairing_is_safe, seam_zone, supports
+from .fair import fair_seams, fairing_is_safe, hold_weights, largest_bend, seam_zone, supports, wide_zone
 from .remesh import insert_chains
 from .sheet import sheet_from_mesh, taper
 from .stitch import build_mesh
@@ -36,8 +36,14 @@ from .stitch import build_mesh
 #: :func:`.depth.solve_depth`); ``on_bad_junction``: "raise" or "free"; ``fillet``: width, in edge
 #: lengths of the part, of the blended junction of :mod:`.blend` (0 keeps the plain sleeve, which
 #: folds by up to 180 degrees where a part meets its host); ``fair``: how many rings of edges
-#: around every blended junction :mod:`.fair` smooths (0: none; only with ``fillet`` > 0). A
-#: blended junction that would cross itself falls back to the plain sleeve, with a warning.
+#: around the ends of every blended junction :mod:`.fair` smooths (60% of that along the rest
+#: of it; 0: none; only with ``fillet`` > 0). Where that leaves a fold or a crossing, 1.4 ×
+#: ``fair`` rings around the whole junction are smoothed instead; a blended junction that would
+#: still cross itself falls back to the plain sleeve, with a warning.
+#: The narrow fairing may leave a bend of at most this many degrees over one edge (issue 12: a
+#: bend over 90 degrees is a fold); more, and the wide zone is faired instead (see above).
+MAX_BEND = 90.0
+
 DEFAULT_PARAMS: Mapping[str, object] = {
     "margin": 0.1,
     "gap": 0.1,
@@ -46,7 +52,7 @@ DEFAULT_PARAMS: Mapping[str, object] = {
     "solver": "osqp",
     "on_bad_junction": "raise",
     "fillet": 4.0,
-    "fair": 14,
+    "fair": 10,
 }
 
 
@@ -179,12 +185,15 @@ def assemble_detailed(meshes: Sequence[Mesh | None], closed: Sequence[bool] | No
         offs.append(s.z + p["margin"] * s.h * taper(s))
     front_off, back_off = list(offs), list(offs)
     lips = glue = springs = None
+    locators: dict = {}  # per sheet, for the fillets' springs and the depth rows alike
     if p["fillet"] > 0 and attachments:
-        lips, glue, springs = blend_junctions(sheets, attachments, front_off, back_off, p["fillet"])
+        lips, glue, springs = blend_junctions(sheets, attachments, front_off, back_off, p["fillet"],
+                                              locators=locators)
     offsets = np.r_[0, np.cumsum([s.n for s in sheets])]
     gap = p["gap"] * float(np.median([s.h for s in sheets]))
     P, q, Aeq, beq, Ain, bin_, pinfo = build_problem(sheets, offsets, front_off, back_off, attachments, gap,
-                                                    p["reg"], p["stiffness"], glue, springs, cache=cache)
+                                                    p["reg"], p["stiffness"], glue, springs, cache=cache,
+                                                    locators=locators)
     timings["constraints"] = time.perf_counter() - t
 
     t = time.perf_counter()
@@ -211,30 +220,47 @@ def assemble_detailed(meshes: Sequence[Mesh | None], closed: Sequence[bool] | No
 
     t = time.perf_counter()
     delta = [x[offsets[k]:offsets[k + 1]] for k in range(len(sheets))]
-    V, F, face_layer, face_kind, seam = build_mesh(sheets, attachments, delta, front_off, back_off, lips)
+    V, F, face_layer, face_kind, seam, ends = build_mesh(sheets, attachments, delta, front_off, back_off, lips)
     timings["stitch"] = time.perf_counter() - t
+    fair_zone = None
     if lips is not None and p["fair"] > 0:
         t = time.perf_counter()
-        A, zone = seam_zone(F, len(V), seam, int(p["fair"]))
+        rings = int(p["fair"])
+        A, reach = seam_zone(F, len(V), seam, ends, rings)
+        wide = wide_zone(A, seam, rings)
         # A free part resting on a face near a junction keeps the face under it as it was
         # solved (fairing it away would leave the part floating, or sunk into it).
-        moved = zone.copy()
+        held = np.zeros(len(V), bool)
         for k in sorted(set(range(len(sheets))) - in_att):
-            moved &= ~supports(V, F, face_layer, face_kind, k, sheets[k].polygon().buffer(sheets[k].h), zone)
+            held |= supports(V, F, face_layer, face_kind, k, sheets[k].polygon().buffer(sheets[k].h), wide)
         h_med = float(np.median([s.h for s in sheets]))
 
-        def faired(V=V, A=A, moved=moved):
-            t1 = time.perf_counter()
-            V2 = fair_seams(V, F, moved, A)
-            t2 = time.perf_counter()
-            ok = fairing_is_safe(V2, F, moved, h_med)
-            timings["fair_check"] = time.perf_counter() - t2
-            timings["fair"] = t2 - t1
-            return V2, ok
+        def faired(V=V, A=A, reach=reach, wide=wide, held=held):
+            spent = {"fair": 0.0, "fair_check": 0.0}
+
+            def attempt(moved, hold, bend_limit):
+                t1 = time.perf_counter()
+                V2 = fair_seams(V, F, moved, A, hold=hold)
+                t2 = time.perf_counter()
+                ok = largest_bend(V2, F, moved, A) <= bend_limit and fairing_is_safe(V2, F, moved, h_med)
+                spent["fair"] += t2 - t1
+                spent["fair_check"] += time.perf_counter() - t2
+                return V2, ok
+
+            # The narrow zone, held softly; where it leaves a fold or a crossing, the wide one
+            # (a bend it leaves is still far below the plain sleeve's, so only a crossing or a
+            # flat triangle there falls back to the plain sleeve).
+            V2, ok = attempt((reach < 1.0) & ~held, hold_weights(reach), MAX_BEND)
+            zone = "narrow"
+            if not ok:
+                V2, ok = attempt(wide & ~held, None, 180.0)
+                zone = "wide"
+            timings.update(spent)
+            return V2, ok, zone
 
         # Through the cache by the stitched mesh itself: an undo, or an edit that leaves every
-        # junction's rings as they were, skips the fairing's solve and its check.
-        V, safe = memo(cache, "fair", (V, F, moved, h_med), faired)
+        # junction's rings as they were, skips the fairing's solves and checks.
+        V, safe, fair_zone = memo(cache, "fair", (V, F, seam, ends, held, rings, h_med), faired)
         V = V.copy()  # the cached array stays as it was, whatever the caller does to the mesh
         timings.setdefault("fair", time.perf_counter() - t)
         timings.setdefault("fair_check", 0.0)
@@ -245,6 +271,7 @@ def assemble_detailed(meshes: Sequence[Mesh | None], closed: Sequence[bool] | No
             plain.warnings.append("a junction could not be blended without the surface crossing itself; "
                                   "its parts are glued with a plain fold (assembly parameter 'fillet')")
             return plain
+    sinfo["fair_zone"] = fair_zone
     timings["total"] = time.perf_counter() - t0
 
     # components: one per group of attached parts

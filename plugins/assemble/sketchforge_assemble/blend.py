@@ -55,8 +55,16 @@ def profile(t: np.ndarray) -> np.ndarray:
     return (1.0 - t) ** 2
 
 
-def distance_to(xy: np.ndarray, line_xy: np.ndarray) -> np.ndarray:
-    """(n,) float64 distance of the points xy (n, 2) to the polyline line_xy (c, 2)."""
+def distance_to(xy: np.ndarray, line_xy: np.ndarray, reach: float = np.inf) -> np.ndarray:
+    """(n,) float64 distance of the points xy (n, 2) to the polyline line_xy (c, 2); with
+    ``reach``, inf for every point farther than that from the polyline's bounding box (the
+    host of a short junction is mostly far from it: only its few nearby vertices are measured)."""
+    if np.isfinite(reach):
+        lo, hi = line_xy.min(axis=0) - reach, line_xy.max(axis=0) + reach
+        near = np.flatnonzero(np.all((xy >= lo) & (xy <= hi), axis=1))
+        out = np.full(len(xy), np.inf)
+        out[near] = distance_to(xy[near], line_xy)
+        return out
     a, b = line_xy[:-1], line_xy[1:]
     ab = b - a
     L2 = np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300)
@@ -71,7 +79,7 @@ def distance_to(xy: np.ndarray, line_xy: np.ndarray) -> np.ndarray:
 
 
 def blend_junctions(sheets: list[Sheet], attachments: list[Attachment], front_off: list[np.ndarray],
-                    back_off: list[np.ndarray], width: float = 4.0, pull: float = 50.0):
+                    back_off: list[np.ndarray], width: float = 4.0, pull: float = 50.0, locators=None):
     """Shape the faces near every junction into a fillet (module docstring); in place.
 
     Parameters
@@ -87,6 +95,9 @@ def blend_junctions(sheets: list[Sheet], attachments: list[Attachment], front_of
     pull : float
         Weight of the springs that hold the part near its junction on the host (see
         ``springs``), relative to the part's Dirichlet energy.
+    locators : dict of int -> TriangleLocator, optional
+        Point location per sheet index, shared with :func:`.depth.build_problem` (a host
+        with several parts, the body, is located in once); filled as needed.
 
     Returns
     -------
@@ -105,6 +116,7 @@ def blend_junctions(sheets: list[Sheet], attachments: list[Attachment], front_of
     """
     from sketchforge.geometry.locate import TriangleLocator
 
+    locators = {} if locators is None else locators
     lips, glues, springs = [], [], []
     base_front = [f.copy() for f in front_off]  # before any fillet: the faces as drawn
     base_back = [b.copy() for b in back_off]
@@ -138,7 +150,9 @@ def blend_junctions(sheets: list[Sheet], attachments: list[Attachment], front_of
         # springs: mid-depth = host face under the vertex + the part's back clearance
         # (rising from the strip's top) + its half thickness
         zone = np.flatnonzero(phi > 0)
-        face, bary = TriangleLocator(lo.xy, lo.F).locate(up.xy[zone])
+        if at.lower not in locators:
+            locators[at.lower] = TriangleLocator(lo.xy, lo.F)
+        face, bary = locators[at.lower].locate(up.xy[zone])
         ok = face >= 0
         zone, tri, bary = zone[ok], lo.F[face[ok]], np.clip(bary[ok], 0.0, 1.0)
         bary /= bary.sum(axis=1, keepdims=True)
@@ -154,9 +168,11 @@ def blend_junctions(sheets: list[Sheet], attachments: list[Attachment], front_of
         springs.append((zone, near_c[:, None], np.ones((len(zone), 1)), pull * phi[zone], sgn * (host + clear)))
 
         # the host: a fillet on each side of the slit, rising to the lips
-        dl = distance_to(lo.xy, lo.xy[c])
+        dl = distance_to(lo.xy, lo.xy[c], reach=W)  # the fillet ends at W
         el = end_taper(lo.xy, ends, taper_r)
-        inside = shapely.contains_xy(up.polygon(), lo.xy[:, 0], lo.xy[:, 1])
+        inside = np.zeros(lo.n, bool)
+        fil = np.flatnonzero(dl < W)  # only these get a fillet
+        inside[fil] = shapely.contains_xy(up.polygon(), lo.xy[fil, 0], lo.xy[fil, 1])
         amount = np.where(inside, plus, rise) * profile(dl / W) * el
         amount[c] = 0.0  # the chain's own vertices are replaced by the lips (see stitch)
         if at.side == FRONT:

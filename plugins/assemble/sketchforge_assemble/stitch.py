@@ -86,6 +86,9 @@ def build_mesh(sheets: list[Sheet], attachments: list[Attachment], delta: list[n
     seam : (k,) int64
         The vertices along the glued junctions (every part's front and back junction chains
         and the lips' own vertices), for :func:`.fair.fair_seams`.
+    ends : (e,) int64
+        The two ends of every glued junction, where the part's front and back faces meet the
+        slit's end (:func:`.fair.seam_zone` fairs more rings around them).
     """
     sizes = np.array([s.n for s in sheets])
     base = np.r_[0, np.cumsum(2 * sizes)]
@@ -199,4 +202,6 @@ def build_mesh(sheets: list[Sheet], attachments: list[Attachment], delta: list[n
     used[F] = True
     new = np.cumsum(used) - 1
     seam = np.unique(remap[np.concatenate(seam)]) if seam else np.zeros(0, np.int64)
-    return V[used], new[F].astype(np.int64), face_layer.astype(np.int64), face_kind, new[seam].astype(np.int64)
+    ends = np.unique([front[i][sheets[i].junction[e]] for i in sorted(attached) for e in (0, -1)]).astype(np.int64)
+    return (V[used], new[F].astype(np.int64), face_layer.astype(np.int64), face_kind, new[seam].astype(np.int64),
+            new[ends].astype(np.int64))
