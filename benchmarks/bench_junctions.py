@@ -4,7 +4,7 @@ and fairing), on the examples and on seeded random creatures. Prints figures, as
 Targets: no dihedral angle above 90 degrees, 99.9% of them at most 45, with the mesh closed,
 oriented, Euler characteristic 2 per group, no intersection.
 
-    .venv/bin/python benchmarks/bench_junctions.py [--seeds 30] [--pictures docs/screenshots]
+    .venv/bin/python benchmarks/bench_junctions.py [--seeds 30] [--first 0] [--pictures docs/screenshots]
 """
 
 from __future__ import annotations

@@ -22,7 +22,7 @@ from .attach import Attachment, find_attachments
 from .blend import blend_junctions
 from .cache import AssemblyCache, memo
 from .depth import build_problem, settle_free_parts, solve_without_free_parts
-from .fair import fair_seams, fairing_is_safe, hold_weights, largest_bend, seam_zone, supports, wide_zone
+from .fair import fair_seams, fairing_is_fit, hold_weights, seam_zone, supports, wide_zone
 from .remesh import insert_chains
 from .sheet import sheet_from_mesh, taper
 from .stitch import build_mesh
@@ -52,7 +52,7 @@ DEFAULT_PARAMS: Mapping[str, object] = {
     "solver": "osqp",
     "on_bad_junction": "raise",
     "fillet": 4.0,
-    "fair": 10,
+    "fair": 12,
 }
 
 
@@ -242,7 +242,7 @@ def assemble_detailed(meshes: Sequence[Mesh | None], closed: Sequence[bool] | No
                 t1 = time.perf_counter()
                 V2 = fair_seams(V, F, moved, A, hold=hold)
                 t2 = time.perf_counter()
-                ok = largest_bend(V2, F, moved, A) <= bend_limit and fairing_is_safe(V2, F, moved, h_med)
+                ok = fairing_is_fit(V2, F, moved, A, h_med, bend_limit)
                 spent["fair"] += t2 - t1
                 spent["fair_check"] += time.perf_counter() - t2
                 return V2, ok
