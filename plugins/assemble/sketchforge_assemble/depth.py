@@ -851,8 +851,10 @@ def solve_without_free_parts(P, q, Aeq, beq, Ain, bin_, offsets, free, rest, met
     is least, a constant offset) and every row touching it satisfied, the glued parts'
     solution and the free parts' rest depths together meet the optimality conditions of the
     whole QP (the free parts' rows are inactive, their multipliers 0). When some free part
-    at rest would cross a layer that the glue moved, that is not so: that part joins the QP
-    of the group it touches, which is solved again (the other groups are not).
+    at rest would cross a layer that the glue moved, that is not so: the part is then lifted
+    out as a whole (:func:`_lift_free_parts`; a sticker on what it was drawn on, which does
+    not move for it), and only if no single shift clears it does it join the QP of the group
+    it touches, which is solved again (the other groups are not).
 
     Parameters
     ----------
@@ -874,8 +876,9 @@ def solve_without_free_parts(P, q, Aeq, beq, Ain, bin_, offsets, free, rest, met
     x : (N,) float64
     info : dict
         :func:`solve_depth`'s (iterations and rows summed over the groups), with ``groups``
-        (independent QPs solved) and ``free_in_solve`` (the free parts that had to join the
-        QP); OSQP's ``active`` is counted over every depth row.
+        (independent QPs solved), ``free_lifted`` ({part: shift} of the free parts lifted out
+        of a layer whole) and ``free_in_solve`` (the free parts that had to join the QP);
+        OSQP's ``active`` is counted over every depth row.
     """
     N = P.shape[0]
     free = sorted(free)
