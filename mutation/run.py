@@ -44,7 +44,7 @@ SCOPES: dict[str, tuple[str, str, list[str], list[str]]] = {
         "tests/test_transform.py", "tests/test_limits.py", "tests/test_document_contracts.py",
         "tests/test_holes.py", "tests/test_contour.py", "tests/test_parts.py",
         "tests/test_tools.py", "tests/test_fuzz_loader.py", "tests/attack",
-        "tests/test_plugin_platform.py",
+        "tests/test_plugin_platform.py", "tests/test_document_survivors.py",
     ]),
     "geometry": ("sketchforge", "sketchforge", ["sketchforge/geometry/*"], [
         "tests/test_contour.py", "tests/test_inflate.py", "tests/test_laplacian.py",
@@ -90,6 +90,37 @@ SLOW_TESTS = [
 READ_BY_TESTS = ["examples", "README.md", "Makefile", "docs"]
 
 
+# Appended to the workspace's copy of tests/conftest.py (see workspace()).
+SCOPE_FILTER = """
+
+# --- appended by mutation/run.py: only this scope's test files, no SLOW_TESTS ----------------
+import json as _mjson
+from pathlib import Path as _MPath
+
+_MSCOPE = _mjson.loads((_MPath(__file__).resolve().parents[1] / "mutation_tests.json").read_text())
+_MROOT = _MPath(__file__).resolve().parents[1]
+
+
+def pytest_ignore_collect(collection_path, config):
+    path = _MPath(collection_path).resolve()
+    if path.is_dir() or path.suffix != ".py" or not path.name.startswith("test_"):
+        return None
+    for entry in _MSCOPE["tests"]:
+        target = (_MROOT / entry).resolve()
+        if path == target or target in path.parents:
+            return None
+    return True
+
+
+def pytest_collection_modifyitems(config, items):
+    slow = tuple(_MSCOPE["slow"])
+    keep = [item for item in items if not item.nodeid.startswith(slow)]
+    if len(keep) != len(items):
+        config.hook.pytest_deselected(items=[item for item in items if item.nodeid.startswith(slow)])
+        items[:] = keep
+"""
+
+
 def workspace(scope: str) -> Path:
     """Build (or refresh) the workspace of one scope; returns its folder."""
     src, package, only, tests = SCOPES[scope]
@@ -112,7 +143,15 @@ def workspace(scope: str) -> Path:
         else:
             shutil.copy2(path, target)
     pytest_args = ["-p", "no:randomly", "-p", "no:cacheprovider", "-p", "no:xvfb", "-m", "not gl", "-q"]
-    selection = [*tests, "--ignore=tests/qt", *(f"--deselect={t}" for t in SLOW_TESTS)]
+    # mutmut keys every verdict to its test selection: changing it (a new test file in the
+    # scope's list) would throw away every result of a run that takes hours. So the selection
+    # mutmut sees never changes ("tests", less the Qt tests), and the workspace's conftest
+    # collects only the scope's test files and leaves out SLOW_TESTS (read from a JSON file
+    # written here). After adding tests, `--retest` re-tests the survivors with them.
+    selection = ["tests", "--ignore=tests/qt"]
+    (ws / "mutation_tests.json").write_text(json.dumps({"tests": tests, "slow": SLOW_TESTS}, indent=1))
+    with open(ws / "tests" / "conftest.py", "a") as f:
+        f.write(SCOPE_FILTER)
     # Forking the process that ran the tests (mutmut's default) copies JAX's and BLAS's thread
     # pools mid-lock: a worker then waits on a futex forever and the mutant is reported as a
     # "timeout" that no test caused. A fork server that only collected the tests has no such
