@@ -97,7 +97,7 @@ SCOPE_FILTER = """
 import json as _mjson
 from pathlib import Path as _MPath
 
-_MSCOPE = _mjson.loads((_MPath(__file__).resolve().parents[1] / "mutation_tests.json").read_text())
+_MSCOPE = _mjson.loads((_MPath(__file__).resolve().parent / "mutation_tests.json").read_text())
 _MROOT = _MPath(__file__).resolve().parents[1]
 
 
@@ -146,10 +146,11 @@ def workspace(scope: str) -> Path:
     # mutmut keys every verdict to its test selection: changing it (a new test file in the
     # scope's list) would throw away every result of a run that takes hours. So the selection
     # mutmut sees never changes ("tests", less the Qt tests), and the workspace's conftest
-    # collects only the scope's test files and leaves out SLOW_TESTS (read from a JSON file
-    # written here). After adding tests, `--retest` re-tests the survivors with them.
+    # collects only the scope's test files and leaves out SLOW_TESTS (read from
+    # tests/mutation_tests.json, written here). After adding tests, `--retest` re-tests the survivors with them.
     selection = ["tests", "--ignore=tests/qt"]
-    (ws / "mutation_tests.json").write_text(json.dumps({"tests": tests, "slow": SLOW_TESTS}, indent=1))
+    # (inside tests/: mutmut copies that folder into its own working copy)
+    (ws / "tests" / "mutation_tests.json").write_text(json.dumps({"tests": tests, "slow": SLOW_TESTS}, indent=1))
     with open(ws / "tests" / "conftest.py", "a") as f:
         f.write(SCOPE_FILTER)
     # Forking the process that ran the tests (mutmut's default) copies JAX's and BLAS's thread
