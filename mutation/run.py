@@ -54,7 +54,7 @@ SCOPES: dict[str, tuple[str, str, list[str], list[str]]] = {
         "tests/test_strokes.py", "tests/test_holes.py", "tests/test_transform.py",
         "tests/test_regressions_planted.py", "tests/test_limits.py", "tests/test_exporters.py",
         "tests/test_guard.py", "tests/test_heightfield.py", "tests/test_isophote_wobble.py",
-        "tests/test_parts.py",
+        "tests/test_parts.py", "tests/test_render_survivors.py",
     ]),
     "inflate": ("plugins/inflate/sketchforge_inflate", "sketchforge_inflate",
                 ["sketchforge_inflate/*"], ["tests/test_inflate.py", "tests/test_holes.py",
