@@ -114,17 +114,22 @@ def test_empty_scene_and_bad_arguments():
 
 
 def _decode_png(data):
+    """A minimal PNG reader: every chunk's CRC, the whole header, an empty IEND."""
     assert data[:8] == b"\x89PNG\r\n\x1a\n"
-    pos, chunks = 8, {}
+    pos, chunks, order = 8, {}, []
     while pos < len(data):
         (n,) = struct.unpack(">I", data[pos : pos + 4])
         kind, body = data[pos + 4 : pos + 8], data[pos + 8 : pos + 8 + n]
         (crc,) = struct.unpack(">I", data[pos + 8 + n : pos + 12 + n])
         assert crc == zlib.crc32(kind + body) & 0xFFFFFFFF
         chunks[kind] = chunks.get(kind, b"") + body
+        order.append(kind)
         pos += 12 + n
-    w, h, depth, ctype = struct.unpack(">IIBB", chunks[b"IHDR"][:10])
-    assert (depth, ctype) == (8, 2) and b"IEND" in chunks
+    assert order[0] == b"IHDR" and order[-1] == b"IEND" and chunks[b"IEND"] == b""
+    assert len(chunks[b"IHDR"]) == 13
+    w, h, depth, ctype, method, filt, interlace = struct.unpack(">IIBBBBB", chunks[b"IHDR"])
+    # 8-bit RGB, deflate, adaptive filtering, no interlace: the only header a reader accepts
+    assert (depth, ctype, method, filt, interlace) == (8, 2, 0, 0, 0)
     raw = np.frombuffer(zlib.decompress(chunks[b"IDAT"]), np.uint8).reshape(h, 1 + 3 * w)
     assert np.all(raw[:, 0] == 0)
     return raw[:, 1:].reshape(h, w, 3)

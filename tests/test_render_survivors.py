@@ -8,8 +8,6 @@ PNG. Shapes are given in pixel coordinates through a view with one pixel per uni
 (:func:`_px_view`), so positions such as "an edge 255/512 px from a pixel centre" are exact.
 """
 
-import struct
-import zlib
 from types import SimpleNamespace
 
 import numpy as np
@@ -21,6 +19,7 @@ from sketchforge.geometry import gbuffer as gb
 from sketchforge.geometry.mesh import Mesh
 from sketchforge.geometry.raster import check_raster_cost, encode_png, render_top
 from sketchforge.geometry.shaders import AMBIENT, CEL_TONES, CLAY, lambert_shade
+from test_raster import _decode_png
 
 BG = np.array([0.2, 0.5, 0.8])  # three different channels: a swapped channel shows
 LIGHT = np.array([0.48, 0.36, 0.8])  # unit, no zero component
@@ -149,26 +148,6 @@ def _lambert255(n, light):
     return 255.0 * (AMBIENT + (1 - AMBIENT) * k)[:, None] * CLAY
 
 
-def _decode_png(data):
-    """A minimal PNG reader: every chunk's CRC, the whole header, an empty IEND."""
-    assert data[:8] == b"\x89PNG\r\n\x1a\n"
-    pos, chunks, order = 8, {}, []
-    while pos < len(data):
-        (n,) = struct.unpack(">I", data[pos : pos + 4])
-        kind, body = data[pos + 4 : pos + 8], data[pos + 8 : pos + 8 + n]
-        (crc,) = struct.unpack(">I", data[pos + 8 + n : pos + 12 + n])
-        assert crc == zlib.crc32(kind + body) & 0xFFFFFFFF
-        chunks[kind] = chunks.get(kind, b"") + body
-        order.append(kind)
-        pos += 12 + n
-    assert order[0] == b"IHDR" and order[-1] == b"IEND" and chunks[b"IEND"] == b""
-    assert len(chunks[b"IHDR"]) == 13
-    w, h, depth, ctype, method, filt, interlace = struct.unpack(">IIBBBBB", chunks[b"IHDR"])
-    # 8-bit RGB, deflate, adaptive filtering, no interlace: the only header a reader accepts
-    assert (depth, ctype, method, filt, interlace) == (8, 2, 0, 0, 0)
-    raw = np.frombuffer(zlib.decompress(chunks[b"IDAT"]), np.uint8).reshape(h, 1 + 3 * w)
-    assert np.all(raw[:, 0] == 0)
-    return raw[:, 1:].reshape(h, w, 3)
 
 
 # --------------------------------------------------------------------------- scan conversion
