@@ -637,16 +637,23 @@ def test_isophote_lines_blend_the_pixel_towards_the_line_colour(explicit):
     assert np.abs(img[pix[ok]] - want[ok]).max() <= ROUND
 
 
+def _tilted_layers(polys, H, seed, tilt, z):
+    """Meshes of the polygons and random unit vertex normals (x, y uniform in ±tilt, z fixed
+    before normalising), drawn in order from one seeded generator."""
+    rng = np.random.default_rng(seed)
+    meshes = [_poly_mesh(P, H) for P in polys]
+    normals = []
+    for m in meshes:
+        N = np.c_[rng.uniform(-tilt, tilt, (m.n_vertices, 2)), np.full(m.n_vertices, z)]
+        normals.append(N / np.linalg.norm(N, axis=1, keepdims=True))
+    return meshes, normals
+
+
 @pytest.mark.parametrize("alpha, width", [(0.7, None), (0.5, 3.0)])
 def test_the_outline_darkens_with_the_true_distance_to_the_silhouette(alpha, width):
     W, H = 40, 32
     polys = _three_layers(W, H)
-    rng = np.random.default_rng(2)
-    meshes = [_poly_mesh(P, H) for P in polys]
-    normals = []
-    for m in meshes:
-        N = np.c_[rng.uniform(-0.5, 0.5, (m.n_vertices, 2)), np.ones(m.n_vertices)]
-        normals.append(N / np.linalg.norm(N, axis=1, keepdims=True))
+    meshes, normals = _tilted_layers(polys, H, seed=2, tilt=0.5, z=1.0)
     g = gb.rasterise(meshes, _px_view(W, H), normals=normals)
     colour = np.array([1.0, 0.3, 0.05])
     base = gb.shade(g, LIGHT, lambert_shade, BG).reshape(-1, 3).astype(float)
@@ -675,12 +682,7 @@ def test_out_of_range_colours_and_backgrounds_are_clamped_everywhere():
     0..255 (the display's rounding offset of half a level included) before it blends."""
     W, H = 40, 32
     polys = _three_layers(W, H)
-    rng = np.random.default_rng(4)
-    meshes = [_poly_mesh(P, H) for P in polys]
-    normals = []
-    for m in meshes:
-        N = np.c_[rng.uniform(-1, 1, (m.n_vertices, 2)), np.full(m.n_vertices, 0.3)]
-        normals.append(N / np.linalg.norm(N, axis=1, keepdims=True))
+    meshes, normals = _tilted_layers(polys, H, seed=4, tilt=1.0, z=0.3)
     g = gb.rasterise(meshes, _px_view(W, H), normals=normals)
 
     def wild(N, l):
