@@ -586,3 +586,37 @@ def test_the_stop_sentence_names_the_last_step_and_every_earlier_one_still_runni
         "sketchforge stopped while computing 'Rename layer' on layer 'Beta' "
         "(and 'Draw contour' on layer 'Alpha', 'Assemble', cancelled but still running)."
     )
+
+
+def test_mirroring_and_duplicating_a_layer_are_named_in_the_undo_menu(fan_host):
+    doc = Document(host=fan_host)
+    stack = doc.undo_stack
+    doc.push(AddLayer(id="a"))
+    doc.push(contour("a", ((0, 0), (2, 0), (1, 1))))
+    doc.execute({"command": "mirror_layer", "layer": "a", "axis": "own"})
+    assert stack.undo_text() == "Mirror layer"
+    doc.execute({"command": "duplicate_layer", "layer": "a", "id": "b"})
+    assert stack.undo_text() == "Duplicate layer"
+    stack.undo()
+    assert stack.redo_text() == "Duplicate layer" and stack.undo_text() == "Mirror layer"
+
+
+def test_a_duplicate_offset_given_as_a_one_by_two_row_is_journalled_as_two_numbers(fan_host):
+    # numpy code often holds a 2D offset as a (1, 2) row; the command takes it (it flattens the
+    # offset before checking it), so its journal entry must be two plain numbers that replay.
+    from sketchforge.document.commands import DuplicateLayer
+
+    doc = Document(host=fan_host)
+    doc.push(AddLayer(id="a"))
+    doc.push(contour("a", ((0, 0), (2, 0), (1, 1))))
+    cmd = DuplicateLayer(layer="a", new_id="b", offset=np.array([[0.5, -0.25]]))
+    doc.push(cmd)
+    entry = json.loads(json.dumps(cmd.to_dict()))
+    assert entry["offset"] == [0.5, -0.25]
+    moved = np.asarray(doc.layer("b").points) - np.asarray(doc.layer("a").points)
+    assert np.allclose(moved, [0.5, -0.25], atol=0)
+    replay = Document(host=fan_host)
+    replay.push(AddLayer(id="a"))
+    replay.push(contour("a", ((0, 0), (2, 0), (1, 1))))
+    replay.execute(entry)
+    assert np.array_equal(replay.layer("b").points, doc.layer("b").points)
