@@ -6,6 +6,7 @@ import pytest
 from meshes import hemisphere, hemisphere_normals
 from sketchforge.geometry.normals import (
     NZ_MIN,
+    corner_normals,
     face_normals,
     normals_from_slopes,
     slopes,
@@ -121,3 +122,20 @@ def test_posed_corner_normals_turn_with_the_pose_and_keep_the_rest_creases():
     R = np.array([[c, -s, 0.0], [s, c, 0.0], [0.0, 0.0, 1.0]])
     posed = corner_normals_grouped(V @ R.T + [0.3, -1.0, 2.0], F, groups)
     assert np.abs(posed - rest @ R.T).max() < 1e-12
+
+
+def test_a_zero_crease_angle_gives_each_corner_its_own_face_s_normal():
+    # crease_deg = 0 is flat shading. n·n of a computed unit normal can round to just below 1 =
+    # cos(0); a face must still smooth with itself, not fall back to "up" (40 of 200 random
+    # tilted triangles did before the fix).
+    rng = np.random.default_rng(7)
+    V = np.c_[rng.uniform(-1, 1, (600, 2)), rng.uniform(-1, 1, 600)]
+    F = np.arange(600).reshape(200, 3)
+    Nf, _ = face_normals(V, F)
+    C = corner_normals(V, F, 0.0)
+    assert np.abs(C - Nf[:, None, :]).max() < 1e-12
+    # the triangle, by hand: normal of (1, 0, 0.3) x (0, 1, 0.7), normalised
+    n = np.cross([1.0, 0.0, 0.3], [0.0, 1.0, 0.7])
+    n /= np.linalg.norm(n)
+    C1 = corner_normals(np.array([[0, 0, 0], [1, 0, 0.3], [0, 1, 0.7]], float), np.array([[0, 1, 2]]), 0.0)
+    assert np.allclose(C1, n, atol=1e-12) and n[2] < 0.8

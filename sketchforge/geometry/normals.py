@@ -179,7 +179,12 @@ def crease_groups(V: np.ndarray, F: np.ndarray, crease_deg: float = 50.0):
     c = np.repeat(np.arange(3 * m), reps)
     k = np.arange(len(c)) - np.repeat(np.cumsum(reps) - reps, reps)
     nb = sf[start[corner_v[c]] + k]
-    same = np.einsum("ij,ij->i", Nf[corner_f[c]], Nf[nb]) >= np.cos(np.radians(crease_deg))
+    # A face always smooths with itself: n·n of a unit normal rounds to just below 1, so with
+    # crease_deg = 0 (flat shading) the test alone dropped the face from its own group and the
+    # corner fell back to (0, 0, 1).
+    same = (np.einsum("ij,ij->i", Nf[corner_f[c]], Nf[nb]) >= np.cos(np.radians(crease_deg))) | (
+        nb == corner_f[c]
+    )
     return sp.csr_matrix((np.ones(int(same.sum())), (c[same], nb[same])), shape=(3 * m, m))
 
 
