@@ -57,6 +57,7 @@ SCOPES: dict[str, tuple[str, str, list[str], list[str]]] = {
         "tests/test_parts.py", "tests/test_render_survivors.py", "tests/test_strokes_survivors.py",
         "tests/test_locate_band_survivors.py", "tests/test_isophote_normal_survivors.py",
         "tests/test_parts_merge_survivors.py", "tests/test_geometry_misc_survivors.py",
+        "tests/test_locator_survivors.py", "tests/test_contour_guard_survivors.py",
     ]),
     "inflate": ("plugins/inflate/sketchforge_inflate", "sketchforge_inflate",
                 ["sketchforge_inflate/*"], ["tests/test_inflate.py", "tests/test_holes.py",
