@@ -192,7 +192,9 @@ def segment_crossings(P, closed: bool) -> np.ndarray:
 
 
 def intersection_point(a, b, c, d) -> np.ndarray:
-    """Where segment ab meets segment cd (the midpoint of the overlap if they are parallel)."""
+    """Where segment ab meets segment cd. If they are parallel (collinear and overlapping): the
+    midpoint of a and d, which lies in the overlap when the segments run end to end and
+    otherwise near it, not the overlap's midpoint."""
     r, s = b - a, d - c
     den = r[0] * s[1] - r[1] * s[0]
     if abs(den) < 1e-300:
