@@ -267,3 +267,26 @@ def test_pslg_error_location_is_float64_or_none():
     assert e.segments == (1, 3) and e.points == ()
     assert e.at.dtype == np.float64 and e.at.tolist() == [2.0, 5.0]
     assert guard.PslgError("the outline is refused").at is None
+
+
+def test_disjoint_segments_on_one_line_are_never_called_crossing():
+    # The orientation signs of nearly collinear segments are round-off noise: before they were
+    # read with a tolerance, 1 in 10^4 disjoint collinear pairs got distance 0 (this one did).
+    a = np.array([[1.2522676343404942, -6.591828446920562]])
+    b = np.array([[5.5751778734472515, -4.2090648830639275]])
+    c = np.array([[5.649393156458938, -4.168157840710419]])
+    d = np.array([[8.408149429654678, -2.6475470563676016]])
+    exact = shapely.LineString([a[0], b[0]]).distance(shapely.LineString([c[0], d[0]]))
+    assert exact > 0.08
+    assert _segment_distances(a, b, c, d)[0] == pytest.approx(exact, rel=1e-9)
+    rng = np.random.default_rng(11)
+    for scale in (1e-3, 1.0, 250.0):
+        n = 5000
+        p0 = rng.uniform(-5, 5, (n, 2)) * scale
+        u = rng.normal(size=(n, 2))
+        u /= np.linalg.norm(u, axis=1)[:, None]
+        t = np.sort(rng.uniform(0, 10, (n, 4)), axis=1) * scale  # a-b then c-d along the line
+        A, B, C, D = (p0 + t[:, k : k + 1] * u for k in range(4))
+        ref = shapely.distance(shapely.linestrings(np.stack([A, B], 1)), shapely.linestrings(np.stack([C, D], 1)))
+        got = _segment_distances(A, B, C, D)
+        assert np.abs(got - ref).max() <= 1e-12 * scale * 10
