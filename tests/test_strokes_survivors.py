@@ -21,6 +21,7 @@ import shapely
 from sketchforge.errors import SculptError
 from sketchforge.geometry.contour import segment_crossings
 from sketchforge.geometry.strokes import HOOK_LENGTH, clean_open_stroke
+from test_strokes import _wave
 
 H = 0.03
 
@@ -37,11 +38,6 @@ def _path(vertices, step):
         n = max(int(round(np.linalg.norm(b - a) / step)), 1)
         out.append(a + np.arange(1, n + 1)[:, None] / n * (b - a))
     return np.vstack(out)
-
-
-def _wave(n=120):
-    t = np.linspace(0.0, 1.0, n)
-    return np.column_stack([t, 0.15 * np.sin(4 * t)])
 
 
 def _simple(P, closed):
