@@ -290,3 +290,49 @@ def test_disjoint_segments_on_one_line_are_never_called_crossing():
         ref = shapely.distance(shapely.linestrings(np.stack([A, B], 1)), shapely.linestrings(np.stack([C, D], 1)))
         got = _segment_distances(A, B, C, D)
         assert np.abs(got - ref).max() <= 1e-12 * scale * 10
+
+
+# --- guard.geometry / guard.polygon ------------------------------------------------------------
+
+
+def test_geometry_names_the_shape_and_what_it_got_instead_of_a_geometry():
+    with pytest.raises(GeometryError) as info:
+        guard.geometry([[0.0, 0.0], [1.0, 0.0], [0.0, 1.0]])
+    assert _one_sentence(info.value) == "the shape must be a shapely geometry, got list"
+    with pytest.raises(GeometryError) as info:
+        guard.geometry(np.zeros((3, 2)), "the hole")
+    assert _one_sentence(info.value) == "the hole must be a shapely geometry, got ndarray"
+
+
+def test_an_overlapping_multipolygon_is_repaired_not_refused():
+    # Two parts that overlap, handed over as one MultiPolygon, are invalid for GEOS. Like a
+    # self-crossing outline they are repaired (shapely.make_valid, which reads the twice-covered
+    # overlap as outside, as it does for a loop drawn over itself): the result is a valid area
+    # inside what was drawn that keeps every once-covered point.
+    a = shapely.box(0.0, 0.0, 2.0, 2.0)
+    b = shapely.box(1.0, 1.0, 3.0, 3.0)
+    g = shapely.MultiPolygon([a, b])
+    assert not g.is_valid
+    fixed = guard.geometry(g, "the parts")
+    assert fixed.is_valid and fixed.geom_type in ("Polygon", "MultiPolygon")
+    assert fixed.difference(shapely.union(a, b)).area < 1e-12
+    once = shapely.symmetric_difference(a, b)
+    assert once.difference(fixed).area < 1e-12 and fixed.area >= once.area - 1e-12
+
+
+def test_an_invalid_ring_is_refused_with_the_reason_geos_gives():
+    ring = shapely.LinearRing([(0.0, 0.0), (2.0, 2.0), (2.0, 0.0), (0.0, 2.0)])  # a bow tie
+    assert not ring.is_valid
+    with pytest.raises(GeometryError) as info:
+        guard.geometry(ring, "the rim")
+    msg = _one_sentence(info.value)
+    assert msg.startswith("the rim is not a valid LinearRing (") and "Self-intersection" in msg
+
+
+def test_polygon_names_the_outline_by_default_and_the_caller_s_name_otherwise():
+    with pytest.raises(GeometryError) as info:
+        guard.polygon([[0.0, 0.0], [1.0, 1.0], [0.0, 0.0]])
+    assert _one_sentence(info.value).startswith("the outline has fewer than 3 distinct points")
+    with pytest.raises(GeometryError) as info:
+        guard.polygon([[0.0, 0.0], [np.nan, 1.0], [1.0, 0.0]], "the wing")
+    assert _one_sentence(info.value).startswith("the wing has a point that is not a finite number")

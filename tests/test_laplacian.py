@@ -111,3 +111,67 @@ def test_squared_laplacian_is_psd_and_kills_constants_only_through_rows():
     assert np.abs(K @ np.ones(len(V2))).max() < 1e-10
     w = np.linalg.eigvalsh(K.toarray())
     assert w.min() > -1e-8 * w.max()
+
+
+def test_fairing_measures_lengths_in_drawing_units_by_default():
+    # The inflate plugin always passes its unit; a script calling the helpers without one gets
+    # the documented default of 1 drawing unit, β = α/(1-α).
+    V2, F, b = disk(1.0, 0.12)
+    L, M = laplacian_and_mass(V2, F)
+    z0 = np.sqrt(np.maximum(1 - (V2**2).sum(1), 0))
+    assert fairing_weight(0.5) == 1.0
+    assert FairingSolver(L, M, b, 0.5).beta == 1.0
+    assert np.array_equal(fair_heights(L, M, b, z0, 0.5), fair_heights(L, M, b, z0, 0.5, 1.0))
+
+
+def test_fairing_weight_says_which_alpha_it_refuses():
+    for alpha in (1.0, -0.25, 2.5):
+        with pytest.raises(ValueError) as info:
+            fairing_weight(alpha)
+        assert "alpha" in str(info.value) and str(alpha) in str(info.value)
+
+
+def test_fairing_keeps_nonzero_boundary_heights_and_is_stationary_inside():
+    # A sculpted layer re-fairs heights whose rim is not at 0 (a raised base): the rim must
+    # stay where it was, not drop to 0, and the interior must minimise the energy for that rim.
+    V2, F, b = disk(1.0, 0.1)
+    L, M = laplacian_and_mass(V2, F)
+    z0 = 0.7 + 0.3 * V2[:, 0] + np.sqrt(np.maximum(1 - (V2**2).sum(1), 0))
+    alpha = 0.4
+    z = FairingSolver(L, M, b, alpha).solve(z0)
+    assert np.array_equal(z[b], z0[b]) and np.abs(z0[b]).min() > 0.3
+    K = squared_laplacian_matrix(L, M)
+    grad = alpha * 2 * (K @ z) + (1 - alpha) * 2 * (M @ (z - z0))
+    free = np.setdiff1d(np.arange(len(V2)), b)
+    assert np.abs(grad[free]).max() < 1e-9 * max(1.0, np.abs(z).max())
+
+
+def test_squared_laplacian_ignores_a_vertex_no_face_uses_without_warnings():
+    # Vertices used by no face have zero mass: they must drop out of M⁻¹ quietly instead of
+    # producing inf (a divide-by-zero warning on every fairing of such a mesh).
+    import warnings
+
+    V2, F, _ = disk(1.0, 0.2)
+    Vx = np.vstack([V2, [[5.0, 5.0]]])  # one vertex outside every face
+    L, M = laplacian_and_mass(V2, F)
+    Lx, Mx = laplacian_and_mass(Vx, F)
+    # libigl's own mass matrix leaves a trailing unused vertex out: L and M must still fit.
+    assert Lx.shape == Mx.shape == (len(Vx), len(Vx))
+    assert Mx.diagonal()[-1] == 0.0 and np.array_equal(Mx.diagonal()[:-1], M.diagonal())
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        Kx = squared_laplacian_matrix(Lx, Mx).toarray()
+    K = squared_laplacian_matrix(L, M).toarray()
+    assert np.isfinite(Kx).all()
+    assert np.array_equal(Kx[:-1, :-1], K) and not Kx[-1].any() and not Kx[:, -1].any()
+
+
+def test_fairing_returns_float64_heights_even_from_integer_input():
+    # Heights read from a hand-written file can arrive as integers; the result is float64
+    # whatever α is, α = 0 (a plain copy) included.
+    V2, F, b = disk(1.0, 0.2)
+    L, M = laplacian_and_mass(V2, F)
+    z0 = np.arange(len(V2)) % 3
+    for alpha in (0.0, 0.3):
+        z = FairingSolver(L, M, b, alpha).solve(z0)
+        assert z.dtype == np.float64 and np.array_equal(z[b], z0[b].astype(np.float64))

@@ -44,11 +44,18 @@ def laplacian_and_mass(V, F, what: str = "the mesh", *, checked: bool = False) -
         diagonal, rows sum to 0). Not divided by the mass: the stiffness matrix of
         piecewise-linear finite elements.
     M : (n, n) scipy.sparse.csc_matrix float64
-        Diagonal, positive for every vertex used by a face; the diagonal sums to the mesh area.
+        Diagonal, positive for every vertex used by a face and 0 for one no face uses; the
+        diagonal sums to the mesh area.
 
     ``checked=True``: V and F are exactly the arrays :func:`guard.mesh` returned for this
     mesh (float64 and int64, C-contiguous, F in range, no zero-area triangle where V lives),
     so they are not checked again; anything else must go through the check.
     """
     V3, F = _xyz(V, F) if checked else _checked(V, F, what)
-    return sp.csc_matrix(igl.cotmatrix(V3, F)), sp.csc_matrix(igl.massmatrix(V3, F, igl.MASSMATRIX_TYPE_VORONOI))
+    L = sp.csc_matrix(igl.cotmatrix(V3, F))
+    M = sp.csc_matrix(igl.massmatrix(V3, F, igl.MASSMATRIX_TYPE_VORONOI))
+    # libigl sizes the mass matrix by the largest index in F, not by V: vertices after the last
+    # one a face uses would be missing, and L and M would not fit together. They have no mass.
+    if M.shape != L.shape:
+        M.resize(L.shape)
+    return L, M
