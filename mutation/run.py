@@ -67,7 +67,8 @@ SCOPES: dict[str, tuple[str, str, list[str], list[str]]] = {
                           "tests/test_sculpt.py", "tests/test_sculpt_tool.py",
                           "tests/test_sculpt_fidelity.py", "tests/test_sculpt_holes.py",
                           "tests/test_sculpt_corpus.py", "tests/test_band.py",
-                          "tests/test_regressions_planted.py"]),
+                          "tests/test_regressions_planted.py", "tests/test_fidelity_measures.py",
+                          "tests/test_sculpt_tool_preview.py"]),
     "assemble": ("plugins/assemble/sketchforge_assemble", "sketchforge_assemble",
                  ["sketchforge_assemble/*"], [
                      "tests/test_assemble.py", "tests/test_assemble_blend.py",
@@ -75,6 +76,16 @@ SCOPES: dict[str, tuple[str, str, list[str], list[str]]] = {
                      "tests/test_transform.py"]),
     "animate": ("plugins/animate/sketchforge_animate", "sketchforge_animate",
                 ["sketchforge_animate/*"], ["tests/test_animate.py"]),
+}
+
+# Test inputs, not product: modules (and, in corpus.py, functions marked ``# pragma: no mutate
+# block``) that only build the shapes, documents and random edits the tests run on. A mutant there
+# changes what is tested, not what the app does, so it survives whenever the tests still pass on
+# the other input: it measures nothing about the suite. What measures results (corpus.run_edits,
+# Outcome, refusal_reason, fidelity.py) is mutated: a bug there could hide a failing sculpt.
+DO_NOT_MUTATE: dict[str, list[str]] = {
+    "isophote_tool": ["sketchforge_isophote_tool/testing.py"],
+    "assemble": ["sketchforge_assemble/testing.py"],
 }
 
 # Left out of every mutation run: a surviving mutant runs every test that reaches its function,
@@ -167,6 +178,7 @@ def workspace(scope: str) -> Path:
 [tool.mutmut]
 source_paths = [{json.dumps(package)}]
 only_mutate = {json.dumps(only)}
+do_not_mutate = {json.dumps(DO_NOT_MUTATE.get(scope, []))}
 also_copy = {json.dumps(READ_BY_TESTS)}
 pytest_add_cli_args = {json.dumps(pytest_args)}
 pytest_add_cli_args_test_selection = {json.dumps(selection)}

@@ -34,12 +34,16 @@ import shapely.ops
 SHAPES = ("blob", "star", "thin", "concave")
 KINDS = ("shift", "bump", "loop", "outside")
 
+# "pragma: no mutate block" marks the functions that only generate the corpus' inputs: mutation
+# testing (mutation/run.py) leaves them alone, since a mutant there changes what the tests run on,
+# not what the app does. The functions that measure outcomes are mutated.
 
-def _ring(poly) -> np.ndarray:
+
+def _ring(poly) -> np.ndarray:  # pragma: no mutate block
     return np.asarray(poly.exterior.coords)[:-1]
 
 
-def random_outline(kind: str, rng: np.random.Generator, n: int = 400) -> np.ndarray:
+def random_outline(kind: str, rng: np.random.Generator, n: int = 400) -> np.ndarray:  # pragma: no mutate block
     """A closed outline (k, 2) float64 of a random shape of ``kind`` (see the module docstring)."""
     t = np.linspace(0.0, 2 * np.pi, n, endpoint=False)
     if kind == "blob":
@@ -111,7 +115,7 @@ class Edit:
     intended: np.ndarray
 
 
-def _offset(seg: shapely.LineString, profile: np.ndarray, n: int = 80) -> np.ndarray:
+def _offset(seg: shapely.LineString, profile: np.ndarray, n: int = 80) -> np.ndarray:  # pragma: no mutate block
     """Points of ``seg`` moved along its left normal by ``profile`` (callable of t in [0, 1])."""
     t = np.linspace(0.0, 1.0, n)
     P = np.array([seg.interpolate(s, normalized=True).coords[0] for s in t])
@@ -121,7 +125,7 @@ def _offset(seg: shapely.LineString, profile: np.ndarray, n: int = 80) -> np.nda
     return P + profile(t)[:, None] * left
 
 
-def _with_loop(P: np.ndarray, radius: float, rng: np.random.Generator) -> np.ndarray:
+def _with_loop(P: np.ndarray, radius: float, rng: np.random.Generator) -> np.ndarray:  # pragma: no mutate block
     """Insert a small closed loop (a circle of ``radius`` tangent to the path) at a random point."""
     k = int(rng.integers(len(P) // 4, 3 * len(P) // 4))
     d = P[k + 1] - P[k - 1]
@@ -135,7 +139,7 @@ def _with_loop(P: np.ndarray, radius: float, rng: np.random.Generator) -> np.nda
     return np.concatenate([P[: k + 1], loop, P[k:]])
 
 
-def random_edit(shape: str, ld, light, rng: np.random.Generator, kind: str | None = None, band: float | None = None):
+def random_edit(shape: str, ld, light, rng: np.random.Generator, kind: str | None = None, band: float | None = None):  # pragma: no mutate block
     """A random edit on a layer (see the module docstring), or None when the layer has no
     suitable isophote near the random pick (the caller draws again).
 
@@ -255,7 +259,7 @@ class Outcome:
         return self.lands and self.beside <= max(2.0, 0.3 * self.before)
 
 
-def corpus_layers(shapes=SHAPES, per_shape: int = 4, seed: int = 0, resolution: float = 0.03):
+def corpus_layers(shapes=SHAPES, per_shape: int = 4, seed: int = 0, resolution: float = 0.03):  # pragma: no mutate block
     """Yield (shape, index, mesh, rng) for ``per_shape`` random layers of each shape kind; the rng
     (seeded by (seed, shape, index)) then draws that layer's edits."""
     from sketchforge_inflate.inflate import inflate_stroke

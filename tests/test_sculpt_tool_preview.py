@@ -1,0 +1,133 @@
+"""What the app's sculpt tool does around an edit, driven headlessly: the live preview's job, a
+cancelled stroke, a reset, the result's one-line description and the JAX warm-up.
+
+The Qt controller runs ``preview_job`` on a worker thread while the person draws
+(tests/qt/test_qt_sculpt.py checks that end to end); these are the same calls without a window.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+
+import numpy as np
+import pytest
+
+from sketchforge.errors import SculptError
+from test_sculpt_tool import PICK, STROKE, ellipse_doc, make_tool
+
+
+def test_the_preview_is_the_edit_the_stroke_will_push(real_host):
+    doc = ellipse_doc(real_host)
+    tool = make_tool(doc, band=0.3)
+    assert tool.pick_at(PICK), tool.message
+    job = tool.preview_job(STROKE)
+    before = doc.layer("body").mesh
+    result = job()
+    assert doc.undo_stack.count() == 2 and doc.layer("body").mesh is before  # nothing pushed
+    cmd = tool.command_for(STROKE)
+    doc.undo_stack.push(cmd)
+    after = doc.layer("body").mesh
+    assert np.array_equal(result.mesh.F, after.F) and np.array_equal(result.mesh.V, after.V)
+    assert result.changed.any() and result.after < result.before
+
+
+def test_a_preview_job_keeps_the_pick_band_and_stroke_it_was_made_with(real_host):
+    # The job runs on a worker thread while the person may already re-pick or change the band:
+    # it must compute the edit as it was when the job was made.
+    doc = ellipse_doc(real_host)
+    tool = make_tool(doc, band=0.3)
+    assert tool.pick_at(PICK)
+    stroke = np.array(STROKE, dtype=np.float64)
+    job = tool.preview_job(stroke)
+    reference = tool.preview_job(STROKE)()
+    tool.band = 0.15
+    tool.pick[:] = [-0.4, 0.2]
+    stroke[:] += 0.3
+    result = job()
+    assert np.array_equal(result.mesh.V, reference.mesh.V)
+    assert result.band_radius == reference.band_radius and result.c == reference.c
+
+
+def test_a_preview_job_can_run_on_a_mesh_other_than_the_layer_s(real_host):
+    doc = ellipse_doc(real_host)
+    tool = make_tool(doc, band=0.3)
+    assert tool.pick_at(PICK)
+    edited = tool.preview_job(STROKE)().mesh
+    again = tool.preview_job(STROKE, mesh=edited)()
+    assert again.layer.mesh is edited
+    assert again.before < tool.preview_job(STROKE)().before  # the edited layer starts closer
+
+
+def test_no_preview_without_a_pick_or_once_its_layer_is_gone(real_host):
+    doc = ellipse_doc(real_host)
+    tool = make_tool(doc, band=0.3)
+    with pytest.raises(SculptError, match="pick an isophote first"):
+        tool.preview_job(STROKE)
+    assert tool.pick_at(PICK)
+    doc.execute({"command": "remove_layer", "layer": "body"})
+    with pytest.raises(SculptError, match="pick an isophote first"):
+        tool.preview_job(STROKE)
+
+
+def test_cancel_drops_the_stroke_in_progress_and_keeps_the_pick(real_host):
+    doc = ellipse_doc(real_host)
+    tool = make_tool(doc, band=0.3)
+    assert tool.pick_at(PICK)
+    tool.press(STROKE[0])
+    tool.move(STROKE[1])
+    assert "stroke" in tool.overlay
+    tool.cancel()
+    assert "stroke" not in tool.overlay and "isophote" in tool.overlay
+    assert np.array_equal(tool.pick, PICK)
+    tool.move(STROKE[2])  # the button is no longer held: a move draws nothing
+    assert "stroke" not in tool.overlay
+    assert tool.end_stroke(STROKE[3]).shape == (0, 2) and doc.undo_stack.count() == 2
+
+
+def test_reset_forgets_the_pick_the_stroke_and_the_message(real_host):
+    doc = ellipse_doc(real_host)
+    tool = make_tool(doc, band=0.3)
+    assert not tool.pick_at([5.0, 5.0]) and tool.message  # off the shape: a message
+    assert tool.pick_at(PICK)
+    tool.press(STROKE[0])
+    tool.move(STROKE[1])
+    tool.message = "something to say"
+    tool.reset()
+    assert tool.pick is None and tool.layer_id is None and tool.isovalue is None
+    assert tool.overlay == {} and tool.message == ""
+    tool.move(STROKE[2])
+    assert tool.overlay == {}
+    with pytest.raises(SculptError, match="pick an isophote first"):
+        tool.command_for(STROKE)
+
+
+def test_the_result_describes_the_fidelity_in_edge_lengths(real_host):
+    doc = ellipse_doc(real_host)
+    tool = make_tool(doc, band=0.3)
+    assert tool.pick_at(PICK)
+    r = tool.preview_job(STROKE)()
+    h = r.h
+    full = r.describe()
+    assert full == f"isophote {r.before / h:.1f} → {r.after / h:.1f} edge lengths from the stroke"
+    numbers = [float(x) for x in re.findall(r"\d+\.\d", full)]
+    assert numbers[0] > numbers[1] >= 0.0
+    half = dataclasses.replace(r, fraction=0.5).describe()
+    assert half == full + " (50% of the change: the whole of it overshot)"
+    assert dataclasses.replace(r, fraction=0.25).describe().endswith("(25% of the change: the whole of it overshot)")
+
+
+def test_warm_up_compiles_the_reflectance_evaluation_every_edit_calls():
+    import jax.numpy as jnp
+
+    from sketchforge.geometry.reflectance import LAMBERTIAN, ReflectanceModel, _batched_pq_grad, evaluate_pq
+    from sketchforge_isophote_tool.warmup import warm_up
+
+    assert warm_up() is None
+    assert _batched_pq_grad(LAMBERTIAN)._cache_size() >= 1
+    # A plugin's model is warmed up as given, not replaced by the default.
+    model = ReflectanceModel("test_half_lambert", lambda n, l: 0.5 + 0.5 * jnp.dot(n, l))
+    warm_up(model)
+    assert _batched_pq_grad(model)._cache_size() == 1
+    r, _, _ = evaluate_pq(model, np.zeros(3), np.zeros(3), np.array([1.0, 0.0, 0.0]))
+    assert np.allclose(r, 0.5) and _batched_pq_grad(model)._cache_size() == 1  # no new compile
