@@ -131,3 +131,92 @@ def test_warm_up_compiles_the_reflectance_evaluation_every_edit_calls():
     assert _batched_pq_grad(model)._cache_size() == 1
     r, _, _ = evaluate_pq(model, np.zeros(3), np.zeros(3), np.array([1.0, 0.0, 0.0]))
     assert np.allclose(r, 0.5) and _batched_pq_grad(model)._cache_size() == 1  # no new compile
+
+
+def test_cancel_without_a_stroke_in_progress_is_harmless(real_host):
+    doc = ellipse_doc(real_host)
+    tool = make_tool(doc, band=0.3)
+    tool.cancel()  # nothing picked, nothing drawn (Esc pressed twice)
+    assert tool.pick_at(PICK)
+    tool.cancel()
+    assert np.array_equal(tool.pick, PICK) and "isophote" in tool.overlay
+
+
+def _half_lambert_host():
+    import jax.numpy as jnp
+
+    from sketchforge.plugins.hookspecs import hookimpl
+    from sketchforge.plugins.registry import ReflectanceModel
+    from sketchforge.plugins.testing import make_test_host
+
+    class HalfLambert:
+        @hookimpl
+        def sketchforge_reflectance_models(self):
+            return [ReflectanceModel("half_lambert", lambda n, l: ((jnp.dot(n, l) + 1.0) / 2.0) ** 2)]
+
+    return make_test_host(HalfLambert(), entry_points=True, allowlist=["inflate", "isophote_tool"])
+
+
+def test_choosing_another_model_re_picks_the_isophote_under_it():
+    from sketchforge_isophote_tool.command import _model
+    from sketchforge_isophote_tool.isophote import picked_isophote
+    from sketchforge_isophote_tool.layerdata import layer_data
+
+    doc = ellipse_doc(_half_lambert_host())
+    tool = make_tool(doc, band=0.3)
+    tool.set_options({"model": "half_lambert"})  # before any pick: nothing to re-pick
+    assert tool.pick is None and tool.options == {"model": "half_lambert"}
+    tool.set_options({})
+    assert tool.pick_at(PICK)
+    lambert = tool.isovalue
+    tool.set_options({"model": "half_lambert"})
+    ld = layer_data(doc.layer("body").mesh, doc.light.direction, _model(doc, "half_lambert"))
+    c, iso = picked_isophote(ld, PICK)
+    assert tool.isovalue == c != lambert and np.array_equal(tool.pick, PICK)
+    assert np.array_equal(tool.overlay["isophote"], np.asarray(iso.coords))
+    assert tool.command_dict(STROKE)["model"] == "half_lambert"
+    # Naming the default model stores nothing: the journal entry stays the one of the default.
+    tool.set_options({"model": "lambertian"})
+    assert tool.options == {} and "model" not in tool.command_dict(STROKE)
+    assert tool.isovalue == lambert
+
+
+def test_the_package_exports_its_public_names_lazily():
+    import sketchforge_isophote_tool as pkg
+    from sketchforge_isophote_tool import command, pipeline, tool, warmup
+
+    expected = {
+        "sculpt": pipeline.sculpt, "SculptResult": pipeline.SculptResult,
+        "DEFAULT_OPTIONS": pipeline.DEFAULT_OPTIONS, "warm_up": warmup.warm_up,
+        "SculptIsophote": command.SculptIsophote, "SculptIsophoteTool": tool.SculptIsophoteTool,
+    }
+    assert sorted(pkg.__all__) == sorted(expected)
+    for name, obj in expected.items():
+        assert getattr(pkg, name) is obj, name
+    with pytest.raises(AttributeError) as info:
+        pkg.no_such_name  # noqa: B018
+    assert info.value.args == ("no_such_name",)
+    assert not hasattr(pkg, "sculptresult")
+
+
+def test_the_characteristics_shown_start_evenly_along_the_stroke(real_host):
+    import shapely
+
+    doc = ellipse_doc(real_host)
+    tool = make_tool(doc, band=0.3)
+    assert tool.pick_at(PICK)
+    r = tool.preview_job(STROKE)()
+    n = 7
+    lines = r.characteristics(n=n)
+    assert len(lines) == n
+    pieces = getattr(r.stroke, "geoms", [r.stroke])
+    stroke = shapely.LineString(np.concatenate([np.asarray(g.coords) for g in pieces]))
+    # Each curve passes through its seed, a vertex on the stroke: where along it?
+    at = []
+    for line in lines:
+        d = shapely.distance(shapely.points(line), stroke)
+        k = int(np.argmin(d))
+        assert d[k] < 1e-9
+        at.append(stroke.project(shapely.Point(line[k])))
+    expected = stroke.length * np.arange(1, n + 1) / (n + 1)
+    assert np.allclose(at, expected, atol=1e-9 * stroke.length + 1e-12)
