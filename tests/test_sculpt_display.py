@@ -1,0 +1,163 @@
+"""What the app draws after an edit, and how a parameter change re-applies an edit.
+
+The characteristics (the curves the strips run along, thesis 3.1.2) and the landed isophote are
+drawn over the layer after each edit; a re-inflation re-runs every sculpt edit. These tests check
+the traced curves step by step (their spacing, direction, length and where they stop), the
+landed isophote's pieces, and the re-applied edit against a fresh one.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+import shapely
+
+from sketchforge.errors import SculptError
+from sketchforge_isophote_tool.layerdata import vertex_shading
+from test_sculpt_tool import PICK, RING, STROKE, ellipse_doc, make_tool
+
+
+@pytest.fixture(scope="module")
+def result(real_host):
+    doc = ellipse_doc(real_host)
+    tool = make_tool(doc, band=0.3)
+    assert tool.pick_at(PICK)
+    return tool.preview_job(STROKE)()
+
+
+def _flow(r, P):
+    """-∇R (the strips' base direction) interpolated at points P, as the tracer sees it."""
+    ld = r.layer
+    _, Rp, Rq = vertex_shading(ld.planar, ld.z, ld.light, ld.model)
+    return -ld.planar.locator.interpolate(np.column_stack([Rp, Rq]), P)
+
+
+def _seed_index(line, stroke) -> int:
+    return int(np.argmin(shapely.distance(shapely.points(line), stroke)))
+
+
+def test_the_app_shows_fifteen_characteristics_by_default(result):
+    assert len(result.characteristics()) == 15
+
+
+def test_characteristics_advance_half_an_edge_length_per_step_along_minus_grad_r(result):
+    r = result
+    step = 0.5 * r.layer.planar.h
+    for line in r.characteristics(n=9):
+        seg = np.diff(line, axis=0)
+        length = np.linalg.norm(seg, axis=1)
+        # every step is exactly one step long: no repeated point, no gap, no other step
+        assert np.allclose(length, step, rtol=1e-9), (length.min(), length.max(), step)
+        # from the back end to the front end, along -∇R (the midpoint rule keeps each chord
+        # within a small angle of the direction at its middle)
+        mid = line[:-1] + 0.5 * seg
+        f = _flow(r, mid)
+        cos = np.einsum("ij,ij->i", seg, f) / (length * np.linalg.norm(f, axis=1))
+        assert cos.min() > 0.95, cos.min()
+
+
+def test_characteristics_reach_as_far_as_the_edit_or_stop_at_the_rim(result):
+    r = result
+    pd = r.layer.planar
+    step = 0.5 * pd.h
+    n_steps = int(np.ceil(r.reach / step))
+    rim = pd.outline.exterior
+    stroke = r.stroke
+    full = 0
+    for line in r.characteristics(n=11):
+        assert shapely.contains_xy(pd.outline.buffer(1e-9), line[:, 0], line[:, 1]).all()  # never off the layer
+        k = _seed_index(line, stroke)
+        for count, end in ((len(line) - 1 - k, line[-1]), (k, line[0])):
+            assert count <= n_steps
+            if count < n_steps:  # stopped early: the next step would have left the layer
+                assert rim.distance(shapely.Point(end)) < step * (1 + 1e-9)
+            else:
+                full += 1
+    assert full > 0  # some run their whole length
+
+
+def test_characteristics_of_a_stroke_in_two_pieces_start_on_both(result):
+    r = result
+    P = np.asarray(r.stroke.coords) if r.stroke.geom_type == "LineString" else None
+    assert P is not None and len(P) >= 4
+    # The band clips a stroke into pieces; the seeds are spread over all of them.
+    a, b = P[: len(P) // 2], P[len(P) // 2 :]
+    two = dataclasses.replace(r, stroke=shapely.MultiLineString([a, b]))
+    lines = two.characteristics(n=6)
+    assert len(lines) == 6
+    seeds = np.array([line[_seed_index(line, two.stroke)] for line in lines])
+    on_a = shapely.distance(shapely.points(seeds), shapely.LineString(a)) < 1e-9
+    on_b = shapely.distance(shapely.points(seeds), shapely.LineString(b)) < 1e-9
+    assert (on_a | on_b).all() and on_a.any() and on_b.any()
+
+
+def test_the_landed_isophote_is_shown_in_pieces_and_only_as_lines(result, monkeypatch):
+    r = result
+    lines = r.new_isophotes()
+    assert lines and all(L.ndim == 2 and L.shape[1] == 2 and len(L) >= 2 for L in lines)
+    L = max(lines, key=len)
+    assert len(L) >= 9
+    # Cut the support into two discs over the landed isophote, plus a thin wedge that touches
+    # it at a single vertex: two line pieces come back, and no stray point.
+    i, j, k = len(L) // 5, 4 * len(L) // 5, len(L) // 2
+    t = L[k + 1] - L[k - 1]
+    t /= np.linalg.norm(t)
+    nrm = np.array([-t[1], t[0]])
+    h = r.h
+    wedge = shapely.Polygon([L[k], L[k] + 2 * h * nrm + 0.2 * h * t, L[k] + 2 * h * nrm - 0.2 * h * t])
+    discs = shapely.union(shapely.Point(L[i]).buffer(0.5 * h), shapely.Point(L[j]).buffer(0.5 * h))
+    assert shapely.intersection(shapely.LineString(L), wedge).geom_type == "Point"
+    monkeypatch.setattr(type(r), "support", property(lambda self: shapely.union(discs, wedge)))
+    pieces = r.new_isophotes()
+    assert len(pieces) >= 2 and all(len(p) >= 2 for p in pieces)
+    near = [shapely.LineString(p).distance(shapely.Point(q)) < 1e-9 for p in pieces for q in (L[i], L[j])]
+    assert sum(near) >= 2
+
+
+def test_a_parameter_change_re_applies_an_edit_with_its_own_model():
+    from sketchforge.document.document import Document
+    from test_sculpt_tool_preview import _half_lambert_host
+
+    host = _half_lambert_host()
+    entry = {"command": "sculpt_isophote", "layer": "body", "pick": PICK, "band": 0.3, "stroke": STROKE,
+             "model": "half_lambert"}
+    doc = Document(host=host)
+    doc.execute({"command": "add_layer", "id": "body"})
+    doc.execute({"command": "set_contour", "layer": "body", "points": RING, "closed": True})
+    doc.execute(entry)
+    doc.execute({"command": "set_inflate_params", "layer": "body", "params": {"inflation": 1.3}})
+    ref = Document(host=host)
+    ref.execute({"command": "add_layer", "id": "body"})
+    ref.execute({"command": "set_contour", "layer": "body", "points": RING, "closed": True})
+    ref.execute({"command": "set_inflate_params", "layer": "body", "params": {"inflation": 1.3}})
+    ref.execute(entry)
+    assert doc.layer("body").mesh.identical(ref.layer("body").mesh)
+
+
+def test_an_edit_that_no_longer_applies_refuses_the_change_and_says_which(real_host, monkeypatch):
+    from sketchforge_isophote_tool import command
+
+    doc = ellipse_doc(real_host)
+    for _ in range(2):
+        doc.execute({"command": "sculpt_isophote", "layer": "body", "pick": PICK, "band": 0.3, "stroke": STROKE})
+    before = doc.layer("body")
+    count = doc.undo_stack.count()
+    real_apply = command._apply
+    calls = []
+
+    def second_fails(*a, **k):
+        calls.append(1)
+        if len(calls) == 2:
+            raise SculptError("the stroke lies in the rim margin")
+        return real_apply(*a, **k)
+
+    monkeypatch.setattr(command, "_apply", second_fails)
+    with pytest.raises(SculptError) as info:
+        doc.execute({"command": "set_inflate_params", "layer": "body", "params": {"inflation": 1.3}})
+    assert str(info.value) == (
+        "sculpt edit 2 of layer 'body' no longer applies to the rebuilt surface (the stroke lies in "
+        "the rim margin); the change was not made — undo that edit first to change these parameters"
+    )
+    assert doc.layer("body").same_state(before) and doc.undo_stack.count() == count
