@@ -49,3 +49,30 @@ def test_degenerate_inputs():
         band(np.array([[0.0, 0], [0.0, 0]]), 0.1, square)
     with pytest.raises(SculptError, match="does not overlap"):
         band(np.array([[5.0, 5], [6, 5]]), 0.1, square)
+
+
+@pytest.mark.parametrize("radius", [10.0, 1e9, 1e200, 1e300])
+def test_a_band_wider_than_the_layer_is_the_whole_layer(radius):
+    # A huge radius (typed into the tool, or a script's "whole layer") once made GEOS throw a
+    # TopologyException from inside the buffer. Any band wider than the layer is the layer.
+    t = np.linspace(0, 2 * np.pi, 200, endpoint=False)
+    outline = np.column_stack([np.cos(t), 0.7 * np.sin(t)])
+    layer = Polygon(outline)
+    chord = np.array([[-0.5, 0.1], [0.0, 0.2], [0.5, 0.1]])
+    B = band(chord, radius, outline)
+    assert B.is_valid and B.symmetric_difference(layer).area < 1e-9 * layer.area
+
+
+def test_the_band_grows_continuously_with_its_radius_up_to_the_layer():
+    t = np.linspace(0, 2 * np.pi, 200, endpoint=False)
+    outline = np.column_stack([np.cos(t), 0.7 * np.sin(t)])
+    layer = Polygon(outline)
+    chord = np.array([[-0.5, 0.1], [0.0, 0.2], [0.5, 0.1]])
+    radii = np.geomspace(0.01, 40.0, 60)
+    areas = np.array([band(chord, r, outline).area for r in radii])
+    assert np.all(np.diff(areas) >= -1e-12) and areas[-1] == pytest.approx(layer.area, rel=1e-9)
+    # no jump where the radius starts being capped (twice the drawing's extent, 4.88 here):
+    # the band is the whole layer on both sides of it
+    cap = 2.0 * np.hypot(2.0, 1.4)
+    for r in (0.999 * cap, 1.001 * cap):
+        assert band(chord, r, outline).symmetric_difference(layer).area < 1e-9 * layer.area

@@ -220,3 +220,95 @@ def test_the_characteristics_shown_start_evenly_along_the_stroke(real_host):
         at.append(stroke.project(shapely.Point(line[k])))
     expected = stroke.length * np.arange(1, n + 1) / (n + 1)
     assert np.allclose(at, expected, atol=1e-9 * stroke.length + 1e-12)
+
+
+def test_the_stroke_shows_from_the_press_and_stays_shown_after_it_ends(real_host):
+    doc = ellipse_doc(real_host)
+    tool = make_tool(doc, band=0.3)
+    assert tool.pick_at(PICK)
+    tool.press(STROKE[0])
+    assert np.array_equal(tool.overlay["stroke"], [STROKE[0]])  # the first point at once
+    tool.move(STROKE[1])
+    points = tool.end_stroke(STROKE[2])
+    assert np.array_equal(points, STROKE[:3]) and np.array_equal(tool.overlay["stroke"], STROKE[:3])
+    assert doc.undo_stack.count() == 2  # ending a stroke pushes nothing by itself
+
+
+def test_a_two_point_stroke_is_an_edit_not_a_click(real_host):
+    doc = ellipse_doc(real_host)
+    tool = make_tool(doc, band=0.3)
+    assert tool.pick_at(PICK)
+    tool.message = "left over"
+    tool.press(STROKE[0])
+    cmd = tool.release(STROKE[-1])  # press here, release there: a straight stroke
+    assert cmd is not None and doc.undo_stack.count() == 3
+    assert cmd.to_dict()["stroke"] == [STROKE[0], STROKE[-1]]
+    assert tool.message == "" and tool.pick is None  # back to picking, nothing to say
+
+
+def test_a_release_without_a_press_is_a_click(real_host):
+    # The press went to another tool (or outside the canvas): the release alone picks.
+    doc = ellipse_doc(real_host)
+    tool = make_tool(doc, band=0.3)
+    assert tool.release(PICK) is None
+    assert np.array_equal(tool.pick, PICK) and "stroke" not in tool.overlay
+
+
+def test_a_stroke_without_a_pick_asks_for_one_and_is_not_kept(real_host):
+    doc = ellipse_doc(real_host)
+    tool = make_tool(doc, band=0.3)
+    tool.press(STROKE[0])
+    tool.move(STROKE[1])
+    assert tool.release(STROKE[2]) is None
+    assert tool.message == "pick an isophote first (click on the shape), then redraw it"
+    assert "stroke" not in tool.overlay and doc.undo_stack.count() == 2
+
+
+def test_the_journal_entry_names_the_command_and_needs_a_live_pick(real_host):
+    doc = ellipse_doc(real_host)
+    tool = make_tool(doc, band=0.3)
+    assert tool.pick_at(PICK)
+    entry = tool.command_dict(STROKE)
+    assert entry["command"] == "sculpt_isophote" and entry["layer"] == "body"
+    doc.execute({"command": "remove_layer", "layer": "body"})
+    with pytest.raises(SculptError, match="pick an isophote first"):
+        tool.command_dict(STROKE)
+
+
+def test_a_band_beyond_the_drawing_s_range_is_refused_up_front(real_host):
+    # The command refuses a band over 1e9 drawing units; the tool says so when it is set,
+    # not at the end of the next stroke (1e300 also made GEOS throw from the band overlay).
+    doc = ellipse_doc(real_host)
+    tool = make_tool(doc, band=0.2)
+    assert tool.pick_at(PICK)
+    band = tool.overlay["band"]
+    for radius in (1e300, 2e9, "1e12"):
+        assert not tool.set_band(radius)
+        assert "too large" in tool.message and "1e+09" in tool.message
+        assert tool.band == 0.2 and tool.overlay["band"] is band
+    assert tool.set_band(1e9)  # the largest allowed: the band is the whole layer
+    import shapely
+
+    covered = shapely.union_all([shapely.Polygon(r) for r in tool.overlay["band"][:1]])
+    assert covered.area == pytest.approx(shapely.Polygon(doc.layer("body").mesh.V[doc.layer("body").mesh.boundary, :2]).area, rel=1e-6)
+
+
+def test_a_band_that_is_not_a_number_is_refused_with_a_message(real_host):
+    doc = ellipse_doc(real_host)
+    tool = make_tool(doc, band=0.2)
+    assert tool.pick_at(PICK)
+    for radius in ("wide", None, [1, 2]):
+        assert not tool.set_band(radius)
+        assert tool.message == f"the band radius must be a positive number, got {radius}"
+        assert tool.band == 0.2
+
+
+def test_the_preview_uses_the_chosen_model():
+    doc = ellipse_doc(_half_lambert_host())
+    tool = make_tool(doc, band=0.3)
+    tool.set_options({"model": "half_lambert"})
+    assert tool.pick_at(PICK)
+    preview = tool.preview_job(STROKE)()
+    doc.undo_stack.push(tool.command_for(STROKE))
+    assert np.array_equal(preview.mesh.V, doc.layer("body").mesh.V)
+    assert preview.layer.model.name == "half_lambert"

@@ -59,8 +59,15 @@ def band(polyline: np.ndarray, radius: float, outline: np.ndarray):
             raise SculptError("the layer has no outline to clip the band to") from None
         raise
     # Round joins and caps make the buffer the exact Minkowski sum with a disk (up to the
-    # polygonal approximation of the arcs, 16 segments per quarter circle). A radius near
-    # MAX_COORDINATE would put the disk's arcs beyond what GEOS computes reliably.
+    # polygonal approximation of the arcs, 16 segments per quarter circle). A huge radius (a
+    # band of 1e300 typed into the tool) made GEOS throw a TopologyException from inside the
+    # buffer, before any check could see the result. A band wider than twice the extent of the
+    # isophote and the outline together already covers the whole layer (the polygonal arcs
+    # reach cos(π/64) > 0.99 of the radius), so the radius is capped there: the same band,
+    # continuous in the radius, and GEOS only sees coordinates of the drawing's size.
+    lo = np.minimum(line.min(axis=0), region.bounds[:2])
+    hi = np.maximum(line.max(axis=0), region.bounds[2:])
+    r = min(r, 2.0 * float(np.hypot(*(hi - lo))))
     swept = guard.geometry(LineString(line).buffer(r, quad_segs=16), "the band")
     result = swept.intersection(region)
     result = shapely.make_valid(result)

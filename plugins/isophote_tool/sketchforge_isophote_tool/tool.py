@@ -14,7 +14,8 @@ API (what a front end calls)
     isophote, sets :attr:`message`, clears the pick and returns False.
 ``set_band(radius) -> bool``
     The band radius (drawing units); recomputes the band overlay. A radius that is not a
-    positive number keeps the old one, sets :attr:`message` and returns False.
+    positive number, or beyond the drawing's range (1e9, what the command accepts), keeps the
+    old one, sets :attr:`message` and returns False.
 ``set_options(options)``
     Extra command fields, e.g. ``{"model": "oren_nayar"}`` (a registered reflectance model;
     ``{}`` is Lambertian). The pick uses this model too, so a current pick is recomputed.
@@ -52,6 +53,7 @@ from __future__ import annotations
 import numpy as np
 
 from sketchforge.errors import SculptError, SketchforgeError
+from sketchforge.geometry.guard import MAX_COORDINATE
 from sketchforge.tools.base import Tool
 
 from .command import SculptIsophote
@@ -186,6 +188,9 @@ class SculptIsophoteTool(Tool):
             r = float("nan")
         if not (np.isfinite(r) and r > 0):
             self.message = f"the band radius must be a positive number, got {radius}"
+            return False
+        if r > MAX_COORDINATE:  # the command and the pipeline refuse it too: say so now
+            self.message = f"the band radius {r:.3g} is too large; it must be at most {MAX_COORDINATE:.0e} drawing units"
             return False
         old = self.band
         self.band = r
