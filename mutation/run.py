@@ -127,6 +127,30 @@ def pytest_ignore_collect(collection_path, config):
     return True
 
 
+# mutmut's own test times leave out the setup, which is where a module fixture (a whole corpus
+# of edits) spends its time; the stats run records the whole time of each test here instead.
+_MDURATIONS = "mutation_durations.json"
+_MTIMES: dict = {}
+
+
+def pytest_runtest_logreport(report):
+    import os
+    if os.environ.get("MUTANT_UNDER_TEST") == "stats":
+        _MTIMES[report.nodeid] = _MTIMES.get(report.nodeid, 0.0) + report.duration
+
+
+def pytest_sessionfinish(session):
+    if not _MTIMES:
+        return
+    path = _MPath(_MDURATIONS)
+    try:
+        old = _mjson.loads(path.read_text())
+    except (OSError, ValueError):
+        old = {}
+    old.update(_MTIMES)
+    path.write_text(_mjson.dumps(old))
+
+
 def pytest_collection_finish(session):
     # mutmut maps each function to the tests that reach it by tracing the tests one at a time
     # (its "stats" run). A module- or session-scoped fixture is built inside the first test that
@@ -152,6 +176,23 @@ def pytest_collection_modifyitems(config, items):
     if len(keep) != len(items):
         config.hook.pytest_deselected(items=[item for item in items if item.nodeid.startswith(slow)])
         items[:] = keep
+    # mutmut runs a mutant's tests with -x in whatever order it lists them (a set). Test files
+    # whose selected tests take least time in all go first, so a mutant that a quick file kills
+    # does not wait for the slow ones. Files stay whole and in their own order: no test sees
+    # another order of its neighbours, and module fixtures are built once.
+    import os
+    if "__mutmut_" not in os.environ.get("MUTANT_UNDER_TEST", ""):
+        return
+    try:  # whole test times (setup included) recorded in the stats run, see below
+        duration = _mjson.loads(_MPath(_MDURATIONS).read_text())
+    except (OSError, ValueError):
+        return
+    cost, first = {}, {}
+    for i, item in enumerate(items):
+        f = item.nodeid.split("::")[0]
+        cost[f] = cost.get(f, 0.0) + duration.get(item.nodeid, 1.0)
+        first.setdefault(f, i)
+    items.sort(key=lambda item: (cost[item.nodeid.split("::")[0]], first[item.nodeid.split("::")[0]]))
 """
 
 

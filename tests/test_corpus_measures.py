@@ -74,7 +74,10 @@ def test_a_crash_is_counted_as_a_crash_and_a_refusal_as_a_refusal(blob, monkeypa
     monkeypatch.setattr(pipeline, "sculpt", crash)
     out = run_edits(shape, mesh, _rng(state), LIGHT, edits=2)
     assert [(o.status, o.reason) for o in out] == [("crash", "RuntimeError('boom')")] * 2
-    assert all(math.isnan(o.after) and o.vertices == mesh.n_vertices and o.seconds >= 0.0 for o in out)
+    for o in out:
+        assert o.shape == shape and o.vertices == mesh.n_vertices and isinstance(o.move, float)
+        assert all(math.isnan(x) for x in (o.before, o.after, o.fraction, o.max_dz, o.beside))
+        assert isinstance(o.seconds, float) and 0.0 <= o.seconds < 60.0
 
     def refuse(*a, **k):
         raise SculptError("draw the stroke inside the band")
@@ -82,6 +85,16 @@ def test_a_crash_is_counted_as_a_crash_and_a_refusal_as_a_refusal(blob, monkeypa
     monkeypatch.setattr(pipeline, "sculpt", refuse)
     out = run_edits(shape, mesh, _rng(state), LIGHT, edits=3, kinds=("bump",))
     assert [(o.status, o.reason, o.kind) for o in out] == [("refused", "draw the stroke inside the band", "bump")] * 3
+    # Every other field of a refusal: the requested move, no distances, its time and size.
+    ld = layer_data(mesh, LIGHT, LAMBERTIAN)
+    rng = _rng(state)
+    for o in out:
+        e = None
+        while e is None:
+            e = random_edit(shape, ld, LIGHT, rng, kind="bump")
+        assert o.shape == shape and o.move == e.move and o.vertices == mesh.n_vertices
+        assert all(math.isnan(x) for x in (o.before, o.after, o.fraction, o.max_dz, o.beside))
+        assert isinstance(o.seconds, float) and 0.0 <= o.seconds < 60.0
 
 
 def test_a_layer_that_yields_no_edits_stops_after_a_bounded_number_of_tries(blob, monkeypatch):
