@@ -161,3 +161,81 @@ def test_an_edit_that_no_longer_applies_refuses_the_change_and_says_which(real_h
         "the rim margin); the change was not made — undo that edit first to change these parameters"
     )
     assert doc.layer("body").same_state(before) and doc.undo_stack.count() == count
+
+
+def _unit_flow(r):
+    def f(x):
+        v = _flow(r, np.asarray(x, dtype=np.float64).reshape(1, 2))[0]
+        return v / np.linalg.norm(v)
+    return f
+
+
+def test_characteristics_follow_the_flow_to_second_order(result):
+    # The tracer takes midpoint steps of half an edge length along -∇R (unit speed). Against a
+    # fine RK4 integration of the same interpolated field, 20 steps stay within 1e-4 (~h/250);
+    # a first-order step (a midpoint taken backwards, or too far) drifts ~2e-3.
+    r = result
+    step = 0.5 * r.layer.planar.h
+
+    def f(X):
+        v = _flow(r, X)
+        return v / np.linalg.norm(v, axis=1, keepdims=True)
+
+    lines = r.characteristics(n=5)
+    seeds = [_seed_index(line, r.stroke) for line in lines]
+    ref = np.array([line[k] for line, k in zip(lines, seeds)])
+    worst = 0.0
+    sub = 5
+    for i in range(1, 21):
+        for _ in range(sub):
+            h = step / sub
+            k1 = f(ref)
+            k2 = f(ref + 0.5 * h * k1)
+            k3 = f(ref + 0.5 * h * k2)
+            k4 = f(ref + h * k3)
+            ref = ref + h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        for j, (line, k) in enumerate(zip(lines, seeds)):
+            if k + i < len(line):
+                worst = max(worst, float(np.linalg.norm(line[k + i] - ref[j])))
+    assert 0.0 < worst < 1e-4, worst
+
+
+def test_characteristics_traced_far_stop_on_the_rim_inside_the_layer(result):
+    from sketchforge_isophote_tool.characteristics import base_characteristics
+
+    r = result
+    pd = r.layer.planar
+    step = 0.5 * pd.h
+    pieces = [np.asarray(g.coords) for g in getattr(r.stroke, "geoms", [r.stroke])]
+    lines = base_characteristics(r.layer, pieces, reach=10.0, n=9)  # far beyond the layer
+    assert len(lines) == 9
+    rim = pd.outline.exterior
+    for line in lines:
+        assert np.allclose(np.linalg.norm(np.diff(line, axis=0), axis=1), step, rtol=1e-9)
+        assert shapely.contains_xy(pd.outline.buffer(1e-9), line[:, 0], line[:, 1]).all()
+        assert len(line) < 2 * 10.0 / step  # both halves stopped
+        for end in (line[0], line[-1]):
+            assert rim.distance(shapely.Point(end)) < step * (1 + 1e-9)
+
+
+def test_a_characteristic_runs_through_triangle_zero_like_any_other(result):
+    # Triangle 0 is a triangle like the others: a curve stepping into it goes on (or stops at
+    # the rim just past it), rather than ending there as if it had left the layer.
+    from sketchforge.geometry.locate import locate
+    from sketchforge_isophote_tool.characteristics import base_characteristics
+
+    r = result
+    pd = r.layer.planar
+    step = 0.5 * pd.h
+    c0 = pd.V2[pd.F[0]].mean(axis=0)
+    d = _unit_flow(r)(c0)
+    perp = np.array([-d[1], d[0]])
+    for sign in (1.0, -1.0):  # start one step before triangle 0, on whichever side is inside
+        x0 = c0 - sign * step * d
+        if locate(pd.V2, pd.F, x0[None])[0][0] >= 0:
+            break
+    stroke = np.array([x0 - 0.01 * step * perp, x0 + 0.01 * step * perp])
+    (line,) = base_characteristics(r.layer, [stroke], reach=r.reach, n=1)
+    face, _ = locate(pd.V2, pd.F, line)
+    k = _seed_index(line, shapely.LineString(stroke))
+    assert face[k] != 0 and (face == 0).any()
