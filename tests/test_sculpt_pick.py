@@ -1,0 +1,109 @@
+"""Picking an isophote with the sculpt tool, headlessly: through stacked and empty layers, on a
+tool bound to one layer, with bad input, and the band outline the canvas draws.
+
+The Qt tests click through the same calls (tests/qt/test_qt_sculpt.py); these pin down which
+layer a pick lands on and what the person is told when it lands on none.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import shapely
+
+from sketchforge_isophote_tool.tool import NOT_ON_A_SHAPE, _rings
+from test_sculpt_tool import PICK, RING, ellipse_doc, make_tool
+
+SMALL = [[0.5 + 0.2 * x, 0.2 * y] for x, y in RING]  # a small ellipse inside the body, at x = 0.5
+
+
+def _two_layers(host):
+    """The body (1 x 0.7) with a small "patch" layer drawn in front of it around (0.5, 0)."""
+    doc = ellipse_doc(host)
+    doc.execute({"command": "add_layer", "id": "patch"})
+    doc.execute({"command": "set_contour", "layer": "patch", "points": SMALL, "closed": True})
+    return doc
+
+
+def test_a_pick_lands_on_the_front_most_layer_under_it_and_falls_through_elsewhere(real_host):
+    doc = _two_layers(real_host)
+    tool = make_tool(doc)
+    assert tool.pick_at([0.5, 0.0]) and tool.layer_id == "patch"
+    assert tool.pick_at(PICK) and tool.layer_id == "body"  # outside the patch: the body
+    # A front layer without a surface yet (added, nothing drawn) is passed over.
+    doc.execute({"command": "add_layer", "id": "empty"})
+    assert tool.pick_at([0.5, 0.0]) and tool.layer_id == "patch"
+    doc.execute({"command": "set_layer_visible", "layer": "patch", "visible": False})
+    assert tool.pick_at([0.5, 0.0]) and tool.layer_id == "body"
+
+
+def test_a_tool_bound_to_one_layer_picks_only_there(real_host):
+    doc = _two_layers(real_host)
+    tool = make_tool(doc, layer="body")
+    assert tool.pick_at([0.5, 0.0]) and tool.layer_id == "body"  # under the patch, but bound
+    patch_only = make_tool(doc, layer="patch")
+    assert not patch_only.pick_at(PICK) and patch_only.message == NOT_ON_A_SHAPE
+    gone = make_tool(doc, layer="no_such_layer")
+    assert not gone.pick_at(PICK) and gone.pick is None and gone.message == NOT_ON_A_SHAPE
+
+
+def test_every_triangle_can_be_picked_on(real_host):
+    doc = ellipse_doc(real_host)
+    mesh = doc.layer("body").mesh
+    tool = make_tool(doc)
+    interior = np.setdiff1d(np.arange(mesh.n_faces), np.flatnonzero(np.isin(mesh.F, mesh.boundary).any(axis=1)))
+    for f in (0, int(interior[0]), int(interior[len(interior) // 2])):
+        c = mesh.V[mesh.F[f], :2].mean(axis=0)
+        ok = tool.pick_at(c)
+        assert ok or tool.message != NOT_ON_A_SHAPE, (f, tool.message)  # never "not on a shape"
+        if ok:
+            assert tool.layer_id == "body"
+
+
+@pytest.mark.parametrize("point, shown", [
+    ([np.nan, 0.0], "[nan, 0.0]"),
+    ([0.1, np.inf], "[0.1, inf]"),
+    ([1.0, 2.0, 3.0], "[1.0, 2.0, 3.0]"),
+    ("here", "['here']"),
+])
+def test_a_pick_that_is_not_a_finite_point_is_refused_with_a_message(real_host, point, shown):
+    doc = ellipse_doc(real_host)
+    tool = make_tool(doc)
+    assert tool.pick_at(PICK)
+    assert tool.pick_at(point) is False
+    assert tool.message == f"the pick must be one finite point [x, y], got {shown}"
+    assert tool.pick is None and tool.overlay == {}
+
+
+def test_after_a_reset_the_band_can_be_set_before_the_next_pick(real_host):
+    doc = ellipse_doc(real_host)
+    tool = make_tool(doc, band=0.2)
+    assert tool.pick_at(PICK)
+    tool.reset()
+    assert tool.set_band(0.35) and tool.band == 0.35 and tool.overlay == {}
+    assert tool.pick_at(PICK)
+    assert shapely.Polygon(tool.overlay["band"][0]).area > 0
+
+
+# --- the band outline the canvas draws ------------------------------------------------------
+
+
+def test_band_rings_are_every_outer_and_inner_ring_as_closed_2d_polylines():
+    outer = shapely.box(0, 0, 4, 4)
+    holed = outer.difference(shapely.box(1, 1, 2, 2))
+    far = shapely.box(10, 0, 11, 1)
+    cases = {
+        "polygon with a hole": (holed, [holed.exterior, holed.interiors[0]]),
+        "two parts": (shapely.MultiPolygon([holed, far]), [holed.exterior, holed.interiors[0], far.exterior]),
+        "nested collection": (shapely.GeometryCollection([shapely.MultiPolygon([far]), shapely.Point(0, 0)]),
+                              [far.exterior]),
+    }
+    for name, (geom, rings) in cases.items():
+        got = _rings(geom)
+        assert len(got) == len(rings), name
+        for a, ring in zip(got, rings):
+            assert a.dtype == np.float64 and a.shape[1] == 2, name
+            assert np.array_equal(a[0], a[-1]) and np.allclose(a, np.asarray(ring.coords)[:, :2]), name
+    z = shapely.Polygon([(0, 0, 5), (1, 0, 5), (0, 1, 5)], holes=[[(0.1, 0.1, 5), (0.3, 0.1, 5), (0.1, 0.3, 5)]])
+    assert all(a.shape[1] == 2 for a in _rings(z))  # drawn in the plane: z dropped
+    assert _rings(None) == [] and _rings(shapely.Polygon()) == []
