@@ -1,0 +1,55 @@
+"""The ``sculpt_isophote`` journal entry as a file holds it: what a broken entry is told, the
+largest band a file may ask for, the undo menu's label, and an edit on a layer with no surface.
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from sketchforge.errors import DocumentFormatError, SculptError
+from sketchforge_isophote_tool.command import SculptIsophote
+from test_sculpt_tool import PICK, STROKE, ellipse_doc
+
+GOOD = {"command": "sculpt_isophote", "layer": "body", "pick": PICK, "band": 0.3, "stroke": STROKE}
+
+
+@pytest.mark.parametrize("change, message", [
+    ({"layer": 7}, "command 'sculpt_isophote': field 'layer' has the wrong type (int)"),
+    ({"pick": [0.1, 0.2, 0.3]}, "command 'sculpt_isophote': 'pick' must be 2 numbers [x, y]"),
+    ({"pick": "here"}, "command 'sculpt_isophote': field 'pick' has the wrong type (str)"),
+    ({"pick": [0.1]}, "command 'sculpt_isophote': 'pick' must be 2 or 3 numbers"),
+    ({"band": "wide"}, "command 'sculpt_isophote': field 'band' has the wrong type (str)"),
+    ({"band": 2e9}, "command 'sculpt_isophote': 'band' is 2e+09; it must be at most 1e+09 drawing units"),
+    ({"stroke": [[0.0, 0.0], [1.0]]}, "command 'sculpt_isophote': 'stroke' must be a list of [x, y] number pairs"),
+    ({"model": 3}, "command 'sculpt_isophote': field 'model' has the wrong type (int)"),
+])
+def test_a_broken_entry_is_refused_naming_the_command_and_the_field(change, message):
+    with pytest.raises(DocumentFormatError) as info:
+        SculptIsophote.from_dict({**GOOD, **change})
+    assert str(info.value) == message
+
+
+def test_the_largest_band_a_file_may_ask_for_is_accepted():
+    # 1e9 drawing units, the tool's own limit: what the tool writes, the file reads back.
+    cmd = SculptIsophote.from_dict({**GOOD, "band": 1e9})
+    assert cmd.band == 1e9 and cmd.to_dict()["band"] == 1e9
+
+
+def test_the_entry_round_trips_and_names_itself_in_the_undo_menu(real_host):
+    cmd = SculptIsophote.from_dict(GOOD)
+    assert cmd.to_dict() == GOOD
+    assert SculptIsophote.from_dict({**GOOD, "model": "half_lambert"}).to_dict()["model"] == "half_lambert"
+    doc = ellipse_doc(real_host)
+    doc.execute(GOOD)
+    assert cmd.text() == "Sculpt isophote"
+    assert doc.undo_stack.undo_text() == "Sculpt isophote"
+
+
+def test_sculpting_a_layer_that_has_no_surface_yet_says_to_draw_first(real_host):
+    doc = ellipse_doc(real_host)
+    doc.execute({"command": "add_layer", "id": "blank"})
+    count = doc.undo_stack.count()
+    with pytest.raises(SculptError) as info:
+        doc.execute({**GOOD, "layer": "blank"})
+    assert str(info.value) == "layer 'blank' has no surface to sculpt yet (draw its contour first)"
+    assert doc.undo_stack.count() == count
