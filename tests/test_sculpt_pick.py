@@ -107,3 +107,40 @@ def test_band_rings_are_every_outer_and_inner_ring_as_closed_2d_polylines():
     z = shapely.Polygon([(0, 0, 5), (1, 0, 5), (0, 1, 5)], holes=[[(0.1, 0.1, 5), (0.3, 0.1, 5), (0.1, 0.3, 5)]])
     assert all(a.shape[1] == 2 for a in _rings(z))  # drawn in the plane: z dropped
     assert _rings(None) == [] and _rings(shapely.Polygon()) == []
+
+
+# --- the local half-width behind the rim margin ------------------------------------------------
+
+
+def _half_width(outline, h, reach, P):
+    from sketchforge_isophote_tool.layerdata import RIM_WIDTH_FRACTION, _width_grid, local_margin
+
+    grid = _width_grid(outline, h, reach)
+    return local_margin(grid, np.inf, np.asarray(P, np.float64)) / RIM_WIDTH_FRACTION, grid
+
+
+def test_a_thin_limb_reads_its_own_half_width_along_it_and_next_to_its_rim():
+    # A limb 0.2 wide and 3 long, off the origin and much longer than wide (so a grid read
+    # with x and y swapped, or shifted, reads the wrong place).
+    limb = shapely.box(1.0, 5.0, 4.0, 5.2)
+    h = 0.02
+    xs = np.linspace(1.05, 3.95, 30)
+    P = np.concatenate([np.column_stack([xs, np.full_like(xs, y)]) for y in (5.1, 5.01, 5.19)])
+    rho, (origin, spacing, W) = _half_width(limb, h, 0.5, P)
+    assert spacing == pytest.approx(0.5 * h)
+    assert np.allclose(rho, 0.1, atol=spacing), (rho.min(), rho.max())
+    # The grid holds the whole layer with room around it: its outer nodes lie outside.
+    assert origin[0] < 1.0 - h and origin[1] < 5.0 - h
+    far = origin + spacing * (np.array(W.shape) - 1)
+    assert far[0] > 4.0 + h and far[1] > 5.2 + h
+    assert W.shape[0] > 10 * W.shape[1] // 2  # long in x, as the limb
+
+
+def test_a_wide_body_reads_at_least_the_reach_even_next_to_its_rim():
+    t = np.linspace(0, 2 * np.pi, 400, endpoint=False)
+    disk = shapely.Polygon(np.column_stack([np.cos(t), np.sin(t)]))
+    h, reach = 0.03, 0.4
+    P = np.array([[0.0, 0.0], [0.9, 0.0], [0.0, -0.95], [0.6, 0.6]])
+    rho, (_, spacing, _) = _half_width(disk, h, reach, P)
+    assert rho[0] == pytest.approx(1.0, abs=2 * spacing)  # the centre: the radius
+    assert (rho[1:] >= reach - spacing).all()  # within reach of a deep interior
