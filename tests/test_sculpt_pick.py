@@ -144,3 +144,27 @@ def test_a_wide_body_reads_at_least_the_reach_even_next_to_its_rim():
     rho, (_, spacing, _) = _half_width(disk, h, reach, P)
     assert rho[0] == pytest.approx(1.0, abs=2 * spacing)  # the centre: the radius
     assert (rho[1:] >= reach - spacing).all()  # within reach of a deep interior
+
+
+# --- the layer's planar data: edge length and rim margin -----------------------------------
+
+
+def test_the_layer_s_edge_length_and_rim_margin_are_what_the_docs_say():
+    from sketchforge_isophote_tool.layerdata import planar_data
+    from sketchforge_isophote_tool.testing import inflated
+
+    branches = set()
+    for shape, resolution in (("ellipse", 0.04), ("ellipse", 0.015), ("m", 0.04)):
+        mesh = inflated(shape, resolution)
+        pd = planar_data(mesh)
+        V, F = mesh.V[:, :2], mesh.F
+        # h: the mean length over every face's three edges (interior edges counted twice)
+        e = np.linalg.norm(V[F] - V[np.roll(F, -1, axis=1)], axis=2)
+        assert pd.h == pytest.approx(e.mean(), rel=1e-12)
+        # margin: max(3h, 0.12 size), size = 2·area/perimeter of the outline
+        ring = shapely.Polygon(V[mesh.boundary])
+        size = 2.0 * ring.area / ring.length
+        assert pd.margin == pytest.approx(max(3.0 * pd.h, 0.12 * size), rel=1e-9)
+        branches.add(3.0 * pd.h > 0.12 * size)
+        assert pd.mass.dtype == np.float64 and pd.mass.sum() == pytest.approx(ring.area, rel=1e-9)
+    assert branches == {True, False}  # both terms of the max were the margin somewhere
