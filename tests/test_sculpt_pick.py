@@ -168,3 +168,63 @@ def test_the_layer_s_edge_length_and_rim_margin_are_what_the_docs_say():
         branches.add(3.0 * pd.h > 0.12 * size)
         assert pd.mass.dtype == np.float64 and pd.mass.sum() == pytest.approx(ring.area, rel=1e-9)
     assert branches == {True, False}  # both terms of the max were the margin somewhere
+
+
+def _outline_of(ring, holes=()):
+    from types import SimpleNamespace
+
+    from sketchforge_isophote_tool.layerdata import outline_polygon
+
+    pts = [np.asarray(ring, np.float64)] + [np.asarray(h, np.float64) for h in holes]
+    V = np.column_stack([np.concatenate(pts), np.zeros(sum(len(p) for p in pts))])
+    start = np.cumsum([0] + [len(p) for p in pts])
+    idx = [np.arange(start[i], start[i + 1]) for i in range(len(pts))]
+    return outline_polygon(SimpleNamespace(V=V, boundary=idx[0], holes=tuple(idx[1:])))
+
+
+def test_the_outline_is_a_counter_clockwise_polygon_whatever_the_drawing_order():
+    square = [(0.0, 0.0), (0.0, 2.0), (2.0, 2.0), (2.0, 0.0)]  # clockwise
+    for ring in (square, square[::-1]):
+        poly = _outline_of(ring)
+        assert poly.geom_type == "Polygon" and poly.exterior.is_ccw and poly.area == pytest.approx(4.0)
+    holed = _outline_of(square, holes=[[(0.5, 0.5), (1.0, 0.5), (1.0, 1.0)]])
+    assert holed.exterior.is_ccw and len(holed.interiors) == 1
+    assert holed.area == pytest.approx(4.0 - 0.125)
+
+
+def test_a_self_crossing_outline_keeps_its_largest_part():
+    # Lobes of area 0.5 and 4.5 meeting where the outline crosses itself at (1, 0.75).
+    poly = _outline_of([(0.0, 0.0), (4.0, 3.0), (4.0, 0.0), (0.0, 1.0)])
+    assert poly.geom_type == "Polygon" and poly.is_valid and poly.exterior.is_ccw
+    assert poly.area == pytest.approx(4.5) and poly.contains(shapely.Point(3.5, 1.0))
+    # a hole across the shell's edge: the shell less the hole, its largest part
+    cut = _outline_of([(0.0, 0.0), (4.0, 0.0), (4.0, 1.0), (0.0, 1.0)],
+                      holes=[[(1.4, -1.0), (1.6, -1.0), (1.6, 2.0), (1.4, 2.0)]])
+    assert cut.geom_type == "Polygon" and cut.is_valid and cut.area == pytest.approx(2.4)
+
+
+def test_an_outline_with_a_point_that_is_not_finite_is_named_in_the_error():
+    from sketchforge.errors import GeometryError
+
+    with pytest.raises(GeometryError, match=r"^the layer's outline has a point that is not a finite number"):
+        _outline_of([(0.0, 0.0), (np.nan, 1.0), (1.0, 0.0)])
+
+
+def test_the_planar_data_is_shared_by_height_changes_only():
+    from sketchforge.geometry.mesh import Mesh
+    from sketchforge_isophote_tool.layerdata import planar_data
+    from sketchforge_isophote_tool.testing import inflated
+
+    mesh = inflated("ellipse")
+    V2 = mesh.V.copy()
+    V2[:, 2] *= 1.5
+    raised = Mesh(V2, mesh.F, boundary=mesh.boundary)
+    assert planar_data(raised) is planar_data(mesh)  # the same drawing: computed once
+    # The same triangles listed in another order: per-face data follows the new order.
+    F = mesh.F[::-1].copy()
+    reordered = Mesh(mesh.V, F, boundary=mesh.boundary)
+    assert planar_data(reordered) is not planar_data(mesh)
+    assert np.array_equal(planar_data(reordered).F, F)
+    # The same surface with another outline listed (a rotated start): its own outline data.
+    rolled = Mesh(mesh.V, mesh.F, boundary=np.roll(mesh.boundary, 5))
+    assert planar_data(rolled) is not planar_data(mesh)
