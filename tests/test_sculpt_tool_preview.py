@@ -298,7 +298,7 @@ def test_a_band_that_is_not_a_number_is_refused_with_a_message(real_host):
     assert tool.pick_at(PICK)
     for radius in ("wide", None, [1, 2]):
         assert not tool.set_band(radius)
-        assert tool.message == f"the band radius must be a positive number, got {radius}"
+        assert tool.message == f"the band radius must be a number, got {radius!r}"
         assert tool.band == 0.2
 
 

@@ -12,6 +12,28 @@ from sketchforge.errors import GeometryError, SculptError
 from sketchforge.geometry import guard
 
 
+def band_radius(radius) -> float:
+    """A band radius as a float: a positive number of at most the drawing's coordinate range.
+
+    The one check of the sculpt tool, the pipeline and :func:`band`, so a radius is refused with
+    the same sentence wherever it is given.
+
+    Raises
+    ------
+    SculptError
+        Not a number, not positive (NaN included), or above ``guard.MAX_COORDINATE`` (1e9).
+    """
+    try:
+        r = float(radius)
+    except (TypeError, ValueError, OverflowError):
+        raise SculptError(f"the band radius must be a number, got {radius!r}") from None
+    if not (math.isfinite(r) and r > 0.0):
+        raise SculptError(f"the band radius must be a positive number, got {radius}")
+    if r > guard.MAX_COORDINATE:
+        raise SculptError(f"the band radius {r:.3g} is too large; it must be at most {guard.MAX_COORDINATE:.0e} drawing units")
+    return r
+
+
 def band(polyline: np.ndarray, radius: float, outline: np.ndarray):
     """Minkowski sum of the isophote with a disk, clipped to the layer's outline.
 
@@ -34,18 +56,13 @@ def band(polyline: np.ndarray, radius: float, outline: np.ndarray):
     Raises
     ------
     SculptError
-        For a radius that is not a positive number, an isophote with fewer than two distinct
+        For a radius :func:`band_radius` refuses, an isophote with fewer than two distinct
         points, or a band that misses the outline.
     GeometryError
         Non-finite or huge coordinates in the isophote, the outline or the band (checked by
         :mod:`guard` before GEOS sees them).
     """
-    try:
-        r = float(radius)
-    except (TypeError, ValueError):
-        raise SculptError(f"the band radius must be a number, got {radius!r}") from None
-    if not math.isfinite(r) or r <= 0.0:
-        raise SculptError(f"the band radius must be positive, got {radius!r}")
+    r = band_radius(radius)
     line = guard.points(np.asarray(polyline, dtype=np.float64)[:, :2], "the selected isophote")
     if len(line) < 2 or not np.any(line != line[0]):
         raise SculptError("the selected isophote is a single point; pick another isophote")
@@ -59,12 +76,12 @@ def band(polyline: np.ndarray, radius: float, outline: np.ndarray):
             raise SculptError("the layer has no outline to clip the band to") from None
         raise
     # Round joins and caps make the buffer the exact Minkowski sum with a disk (up to the
-    # polygonal approximation of the arcs, 16 segments per quarter circle). A huge radius (a
-    # band of 1e300 typed into the tool) made GEOS throw a TopologyException from inside the
-    # buffer, before any check could see the result. A band wider than twice the extent of the
-    # isophote and the outline together already covers the whole layer (the polygonal arcs
-    # reach cos(π/64) > 0.99 of the radius), so the radius is capped there: the same band,
-    # continuous in the radius, and GEOS only sees coordinates of the drawing's size.
+    # polygonal approximation of the arcs, 16 segments per quarter circle). band_radius() keeps
+    # the radius within the drawing's range (at 1e300 GEOS threw a TopologyException from inside
+    # the buffer), but a disk of radius 1e9 around a point at x = 0.5 still reaches past it. A
+    # band wider than twice the extent of the isophote and the outline together already covers
+    # the whole layer (the polygonal arcs reach cos(π/64) > 0.99 of the radius), so the radius is
+    # capped there: the same band, continuous in the radius, of the drawing's size.
     lo = np.minimum(line.min(axis=0), region.bounds[:2])
     hi = np.maximum(line.max(axis=0), region.bounds[2:])
     r = min(r, 2.0 * float(np.hypot(*(hi - lo))))

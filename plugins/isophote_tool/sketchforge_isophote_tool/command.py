@@ -79,7 +79,7 @@ class SculptIsophote(ReplaceLayerCommand):
         if len(pick) != 2:
             raise DocumentFormatError(f"command {cls.name!r}: 'pick' must be 2 numbers [x, y]")
         band = parse_field(d, "band", float, cls.name)
-        if band > MAX_COORDINATE:  # the pipeline's MAX_BAND, checked before any work
+        if band > MAX_COORDINATE:  # band_radius() refuses it too; a file says so at load
             raise DocumentFormatError(f"command {cls.name!r}: 'band' is {band:.3g}; it must be at most "
                                       f"{MAX_COORDINATE:.0e} drawing units")
         return cls(

@@ -29,7 +29,7 @@ import shapely
 from scipy.spatial import cKDTree
 
 from sketchforge.errors import NothingToDoError, SculptError, SolverError
-from sketchforge.geometry.contour import MAX_COORDINATE
+from sketchforge.geometry.band import band_radius
 from sketchforge.geometry.mesh import Mesh
 from sketchforge.geometry.reflectance import LAMBERTIAN
 from sketchforge.plugins.registry import ReflectanceModel
@@ -171,21 +171,6 @@ def _options(options: dict | None) -> dict:
     return opts
 
 
-def _band_radius(band) -> float:
-    try:
-        r = float(band)
-    except (TypeError, ValueError, OverflowError):
-        raise SculptError(f"the band radius must be a number, got {band!r}") from None
-    if not (np.isfinite(r) and r > 0):
-        raise SculptError(f"the band radius must be a positive number, got {band}")
-    if r > MAX_BAND:
-        # GEOS buffers with NaN beyond ~1e300; no layer is anywhere near this wide.
-        raise SculptError(f"the band radius {r:.3g} is too large; it must be at most {MAX_BAND:.0e} drawing units")
-    return r
-
-
-#: Largest band radius: the drawing's coordinate range.
-MAX_BAND = MAX_COORDINATE
 
 
 _PICKS: "OrderedDict[tuple, tuple]" = OrderedDict()
@@ -266,7 +251,7 @@ def sculpt(
         A solver produced non-finite values.
     """
     opts = _options(options)
-    r = _band_radius(band)
+    r = band_radius(band)
     light = np.asarray(light, np.float64).reshape(3)
     T: dict = {}
     t0 = time.perf_counter()

@@ -53,7 +53,6 @@ from __future__ import annotations
 import numpy as np
 
 from sketchforge.errors import SculptError, SketchforgeError
-from sketchforge.geometry.guard import MAX_COORDINATE
 from sketchforge.tools.base import Tool
 
 from .command import SculptIsophote
@@ -182,15 +181,12 @@ class SculptIsophoteTool(Tool):
 
     # --- band ---------------------------------------------------------------------------------
     def set_band(self, radius) -> bool:
-        try:
-            r = float(radius)
-        except (TypeError, ValueError):
-            r = float("nan")
-        if not (np.isfinite(r) and r > 0):
-            self.message = f"the band radius must be a positive number, got {radius}"
-            return False
-        if r > MAX_COORDINATE:  # the command and the pipeline refuse it too: say so now
-            self.message = f"the band radius {r:.3g} is too large; it must be at most {MAX_COORDINATE:.0e} drawing units"
+        from sketchforge.geometry.band import band_radius
+
+        try:  # the pipeline's own check: a radius it would refuse at the stroke is refused now
+            r = band_radius(radius)
+        except SculptError as exc:
+            self.message = str(exc)
             return False
         old = self.band
         self.band = r
