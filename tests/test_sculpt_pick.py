@@ -54,10 +54,10 @@ def test_every_triangle_can_be_picked_on(real_host):
     interior = np.setdiff1d(np.arange(mesh.n_faces), np.flatnonzero(np.isin(mesh.F, mesh.boundary).any(axis=1)))
     for f in (0, int(interior[0]), int(interior[len(interior) // 2])):
         c = mesh.V[mesh.F[f], :2].mean(axis=0)
+        # triangle 0 may lie on the rim, in shadow (no isophote there): never "not on a shape"
         ok = tool.pick_at(c)
-        assert ok or tool.message != NOT_ON_A_SHAPE, (f, tool.message)  # never "not on a shape"
-        if ok:
-            assert tool.layer_id == "body"
+        assert ok or (f == 0 and tool.message != NOT_ON_A_SHAPE), (f, tool.message)
+        assert not ok or (tool.layer_id == "body" and np.array_equal(tool.pick, c))
 
 
 @pytest.mark.parametrize("point, shown", [
