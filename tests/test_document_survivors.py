@@ -36,6 +36,7 @@ from sketchforge.document.commands import (
     RemoveLayer,
     RenameLayer,
     SetLayerVisible,
+    TransformLayer,
     compose_affine,
     rotate_about,
     scale_about,
@@ -620,3 +621,33 @@ def test_a_duplicate_offset_given_as_a_one_by_two_row_is_journalled_as_two_numbe
     replay.push(contour("a", ((0, 0), (2, 0), (1, 1))))
     replay.execute(entry)
     assert np.array_equal(replay.layer("b").points, doc.layer("b").points)
+
+
+@pytest.mark.parametrize("L, text", [
+    (((1, 0), (0, 1)), "Move layer"),
+    (((2.5, 0), (0, 2.5)), "Scale layer"),
+    (((math.cos(0.3), -math.sin(0.3)), (math.sin(0.3), math.cos(0.3))), "Rotate layer"),
+    (((-1, 0), (0, -1)), "Rotate layer"),          # a half turn
+    (((1, 1), (0, 1)), "Transform layer"),          # a shear: det 1, but no rotation
+    (((2, 0), (0, 0.5)), "Transform layer"),        # det 1, stretched
+    (((0, -2), (2, 0)), "Transform layer"),         # a rotation and a scale
+    (((-2, 0), (0, -2)), "Transform layer"),
+    (((1, 0.1), (0.1, 1)), "Transform layer"),
+])
+def test_a_transform_is_named_in_the_undo_menu_by_what_it_does(fan_host, L, text):
+    doc = Document(host=fan_host)
+    doc.push(AddLayer(id="a"))
+    doc.push(contour("a", ((0, 0), (2, 0), (1, 1))))
+    matrix = [[*map(float, L[0]), 0.25], [*map(float, L[1]), -0.5]]
+    doc.push(TransformLayer(layer="a", matrix=matrix))
+    assert doc.undo_stack.undo_text() == text
+    # the journal's copy names the same step
+    assert doc.undo_stack.undo_text() == TransformLayer.from_dict(TransformLayer(layer="a", matrix=matrix).to_dict()).text()
+
+
+def test_a_rotation_from_a_drag_is_named_a_rotation(fan_host):
+    doc = Document(host=fan_host)
+    doc.push(AddLayer(id="a"))
+    doc.push(contour("a", ((0, 0), (2, 0), (1, 1))))
+    doc.push(TransformLayer(layer="a", matrix=rotate_about((1.0, 0.3), 2.0)))
+    assert doc.undo_stack.undo_text() == "Rotate layer"

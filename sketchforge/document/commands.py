@@ -734,9 +734,13 @@ class TransformLayer(ReplaceLayerCommand):
         L = np.asarray(self.matrix)[:, :2]
         if np.array_equal(L, np.eye(2)):
             return "Move layer"
-        if np.allclose(L, L[0, 0] * np.eye(2)):
+        if np.allclose(L, L[0, 0] * np.eye(2)) and L[0, 0] > 0:
             return "Scale layer"
-        return "Rotate layer" if np.isclose(L[0, 0] * L[1, 1] - L[0, 1] * L[1, 0], 1.0) else "Transform layer"
+        # A rotation keeps lengths (L L^T = I) and orientation (det 1); det 1 alone would also
+        # name a shear "Rotate layer", and a uniform negative scale is a half turn, not a scale.
+        if np.allclose(L @ L.T, np.eye(2)) and np.linalg.det(L) > 0:
+            return "Rotate layer"
+        return "Transform layer"
 
     def compute(self, doc, old: Layer) -> Layer:
         return _transformed(old, np.asarray(self.matrix, dtype=np.float64))
