@@ -296,18 +296,108 @@ def forget_survivors(ws: Path, patterns: list[str]) -> int:
     return cleared
 
 
+def statuses(ws: Path) -> dict[str, str]:
+    """Every mutant of a workspace and its status ("killed", "survived", "not checked", ...)."""
+    out = subprocess.run([sys.executable, "-m", "mutmut", "results", "--all", "true"], cwd=ws,
+                         capture_output=True, text=True, check=False).stdout
+    found = {}
+    for line in out.splitlines():
+        name, _, status = line.strip().rpartition(": ")
+        if name:
+            found[name] = status
+    return found
+
+
+def module_of(name: str) -> str:
+    """``pkg.mod.xǁClassǁmeth__mutmut_3`` or ``pkg.mod.x_func__mutmut_3`` -> ``pkg.mod``."""
+    return name.rsplit(".", 1)[0]
+
+
+def draw_sample(scope: str, size: int, seed: int) -> list[str]:
+    """A seeded uniform sample of ``size`` of the scope's unchecked mutants, drawn per module in
+    proportion to its unchecked count (at least one from each). The pool it was drawn from is
+    written to ``mutation/results/<scope>.sample.json``: the report estimates the mutants left
+    unchecked in each module from the sample's kill rate there."""
+    import random
+
+    ws = BUILD / scope
+    pool: dict[str, list[str]] = {}
+    for name, status in sorted(statuses(ws).items()):
+        if status == "not checked":
+            pool.setdefault(module_of(name), []).append(name)
+    total = sum(len(v) for v in pool.values())
+    rng = random.Random(seed)
+    chosen: list[str] = []
+    for module in sorted(pool):
+        names = pool[module]
+        k = min(len(names), max(1, round(size * len(names) / total))) if total else 0
+        chosen += rng.sample(names, k)
+    (RESULTS / f"{scope}.sample.json").write_text(json.dumps(
+        {"seed": seed, "size": size, "pool": pool, "sample": sorted(chosen)}, indent=0))
+    return sorted(chosen)
+
+
+def estimate(found: dict[str, str], equivalent: dict[str, str], sample_file: Path) -> list[str]:
+    """Lines of the report that estimate the whole scope's score: mutants checked one by one
+    count as they are; in each module, the ones still unchecked from the sampled pool count at
+    the kill rate of that module's checked sample (listed equivalents left out of the rate).
+    The interval is the normal approximation of each module's binomial, with the finite-pool
+    correction, summed over modules (95%)."""
+    if not sample_file.exists():
+        return []
+    data = json.loads(sample_file.read_text())
+    sample = set(data["sample"])
+    killed_exact = total_exact = 0.0
+    est_killed = variance = 0.0
+    unchecked = 0
+    sampled_checked = 0
+    in_pool = {n for names in data["pool"].values() for n in names}
+    for name, status in found.items():
+        if name in equivalent or status in ("skipped", "not checked"):
+            continue
+        if name in in_pool and name not in sample:
+            continue  # checked later by a full run: counted below with its module's pool
+        total_exact += 1
+        killed_exact += status in ("killed", "timeout", "segfault")
+    for module, names in sorted(data["pool"].items()):
+        drawn = [n for n in names if n in sample and found.get(n, "not checked") != "not checked"
+                 and n not in equivalent]
+        eq = sum(1 for n in names if n in sample and n in equivalent)
+        rest = [n for n in names if n not in sample and n in found]
+        left = [n for n in rest if found[n] == "not checked"]
+        for n in rest:  # pool members a full run checked after the sample was drawn
+            if found[n] not in ("not checked", "skipped") and n not in equivalent:
+                total_exact += 1
+                killed_exact += found[n] in ("killed", "timeout", "segfault")
+        sampled_checked += len(drawn)
+        if not left:
+            continue
+        if not drawn:
+            return [f"estimate: module {module} has {len(left)} unchecked mutants and no checked sample"]
+        p = sum(found[n] in ("killed", "timeout", "segfault") for n in drawn) / len(drawn)
+        share = len(drawn) / (len(drawn) + eq)  # the sample's share of non-equivalent mutants
+        n_left = len(left) * share
+        unchecked += len(left)
+        est_killed += n_left * p
+        total_exact += n_left
+        pool_size = len(left) + len(drawn)  # what the sample stands for, itself included
+        fpc = (pool_size - len(drawn)) / max(1, pool_size - 1)
+        variance += n_left ** 2 * p * (1 - p) / len(drawn) * fpc
+    score = (killed_exact + est_killed) / total_exact if total_exact else 0.0
+    half = 1.96 * variance ** 0.5 / total_exact if total_exact else 0.0
+    return [f"estimated score of the whole scope: {100 * score:.1f}% ± {100 * half:.1f}% (95%): "
+            f"{unchecked} mutants left unchecked are estimated from a seeded sample of "
+            f"{sampled_checked} (seed {data['seed']})"]
+
+
 def report(scope: str) -> str:
     """Score of the last run of ``scope`` and the surviving mutants, as text."""
     ws = BUILD / scope
-    out = subprocess.run([sys.executable, "-m", "mutmut", "results", "--all", "true"], cwd=ws,
-                         capture_output=True, text=True, check=False).stdout
+    found = statuses(ws)
     equivalent = equivalents(scope)
     counts: dict[str, int] = {}
     survivors, stale = [], []
-    for line in out.splitlines():
-        name, _, status = line.strip().rpartition(": ")
-        if not name:
-            continue
+    for name, status in found.items():
         if name in equivalent:
             if status != "survived":
                 stale.append(f"{name} is listed as equivalent but is {status}")
@@ -320,7 +410,8 @@ def report(scope: str) -> str:
     score = killed / total if total else 0.0
     lines = [f"scope {scope}: {killed}/{total} mutants killed ({100 * score:.1f}%), "
              f"{counts.get('equivalent', 0)} equivalent left out",
-             "counts: " + ", ".join(f"{k} {v}" for k, v in sorted(counts.items())), ""]
+             "counts: " + ", ".join(f"{k} {v}" for k, v in sorted(counts.items())),
+             *estimate(found, equivalent, RESULTS / f"{scope}.sample.json"), ""]
     return "\n".join(lines + stale + survivors) + "\n"
 
 
@@ -334,6 +425,10 @@ def main(argv: list[str] | None = None) -> int:
                     help="test the last run's survivors again (after adding tests)")
     ap.add_argument("--only", nargs="*", default=[], metavar="PATTERN",
                     help="mutant name patterns (fnmatch), e.g. 'sketchforge.document.undo.*'")
+    ap.add_argument("--sample", type=int, default=0, metavar="N",
+                    help="check only a seeded random sample of N of the unchecked mutants; the "
+                         "report then estimates the whole scope's score from it")
+    ap.add_argument("--seed", type=int, default=20261201)
     args = ap.parse_args(argv)
     scopes = sorted(SCOPES) if args.scope == "all" else [args.scope]
     RESULTS.mkdir(parents=True, exist_ok=True)
@@ -349,8 +444,19 @@ def main(argv: list[str] | None = None) -> int:
             env = dict(os.environ, CI="true", QT_QPA_PLATFORM="offscreen", SKETCHFORGE_MUTATION="1",
                        FUZZ_EXAMPLES="10", OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1",
                        MKL_NUM_THREADS="1")
+            names = list(args.only)
+            if args.sample:
+                if not (ws / "mutants").exists():
+                    # mutmut makes the mutants (and traces the tests) on its first run: one that
+                    # matches no mutant does only that
+                    subprocess.run([sys.executable, "-m", "mutmut", "run", "--max-children", str(args.jobs),
+                                    "no.such.mutant"], cwd=ws, env=env, check=False)
+                names = draw_sample(scope, args.sample, args.seed)
+                print(f"checking a sample of {len(names)} unchecked mutants (seed {args.seed})")
+                if not names:
+                    names = ["no.such.mutant"]
             rc = subprocess.run([sys.executable, "-m", "mutmut", "run", "--max-children", str(args.jobs),
-                                 *args.only], cwd=ws, env=env).returncode
+                                 *names], cwd=ws, env=env).returncode
             if rc != 0:
                 print(f"mutmut failed on scope {scope} (exit {rc})", file=sys.stderr)
                 return rc
