@@ -92,7 +92,7 @@ def _accumulated_drift(shape, mesh, rng, light):
     done = tries = 0
     while done < 10 and tries < 60:
         tries += 1
-        e = random_edit(shape, layer_data(mesh, light, LAMBERTIAN), light, rng, kind="shift")
+        e = random_edit(shape, layer_data(mesh, light, LAMBERTIAN), rng, kind="shift")
         if e is None:
             continue
         try:

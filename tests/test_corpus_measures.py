@@ -43,7 +43,7 @@ def test_each_outcome_is_what_sculpt_returned_for_that_edit(blob):
     for i, o in enumerate(out):
         e = None
         while e is None:
-            e = random_edit(shape, ld, LIGHT, rng, kind=KINDS[i % len(KINDS)])
+            e = random_edit(shape, ld, rng, kind=KINDS[i % len(KINDS)])
         assert (o.shape, o.kind, o.move, o.vertices) == (shape, e.kind, e.move, mesh.n_vertices)
         assert 0.0 < o.seconds < 60.0
         try:
@@ -74,6 +74,7 @@ def test_a_crash_is_counted_as_a_crash_and_a_refusal_as_a_refusal(blob, monkeypa
     monkeypatch.setattr(pipeline, "sculpt", crash)
     out = run_edits(shape, mesh, _rng(state), LIGHT, edits=2)
     assert [(o.status, o.reason) for o in out] == [("crash", "RuntimeError('boom')")] * 2
+    assert [o.kind for o in out] == list(KINDS[:2])  # a crash names the kind of edit that crashed
     for o in out:
         assert o.shape == shape and o.vertices == mesh.n_vertices and isinstance(o.move, float)
         assert all(math.isnan(x) for x in (o.before, o.after, o.fraction, o.max_dz, o.beside))
@@ -91,7 +92,7 @@ def test_a_crash_is_counted_as_a_crash_and_a_refusal_as_a_refusal(blob, monkeypa
     for o in out:
         e = None
         while e is None:
-            e = random_edit(shape, ld, LIGHT, rng, kind="bump")
+            e = random_edit(shape, ld, rng, kind="bump")
         assert o.shape == shape and o.move == e.move and o.vertices == mesh.n_vertices
         assert all(math.isnan(x) for x in (o.before, o.after, o.fraction, o.max_dz, o.beside))
         assert isinstance(o.seconds, float) and 0.0 <= o.seconds < 60.0

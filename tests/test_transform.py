@@ -164,3 +164,39 @@ def test_handle_geometry_hits_and_drag_matrices():
     A = tr.drag_matrix(h, "rotate", h.center + [0.0, 1.0], h.center + [-1.0, 0.0])
     assert np.allclose(A[:, :2], [[0.0, -1.0], [1.0, 0.0]]) and np.allclose(tr.apply(A, [h.center]), h.center)
     assert tr.is_identity(tr.drag_matrix(h, "move", [1.0, 0.5], [1.0, 0.5]))
+
+
+def test_a_layer_drawn_in_front_of_a_part_is_not_taken_for_its_host(real_host):
+    from sketchforge.document.commands import mirror_axis_x
+
+    doc = creature(real_host)
+    # a patch drawn after the leg (in front of it) over the leg's junction, centred elsewhere
+    patch = [[-0.2 + 0.5 * np.cos(t), -0.3 + 0.3 * np.sin(t)] for t in np.linspace(0, 2 * np.pi, 60, endpoint=False)]
+    doc.execute({"command": "add_layer", "id": "patch"})
+    doc.execute({"command": "set_contour", "layer": "patch", "points": patch, "closed": True})
+    assert host_of(doc, doc.layer("leg")).id == "body"
+    assert mirror_axis_x(doc, doc.layer("leg"), "host") == (0.5 * (min(p[0] for p in BODY) + max(p[0] for p in BODY)), "host")
+    # the patch itself is free: no layer behind it holds a junction of it
+    assert host_of(doc, doc.layer("patch")) is None
+    with pytest.raises(ParameterError) as info:
+        mirror_axis_x(doc, doc.layer("leg"), "left")
+    assert str(info.value) == "a mirror axis is 'host', 'own' or a number, got 'left'"
+
+
+def test_mirroring_a_sculpted_layer_drops_its_edits_and_undo_brings_them_back(real_host):
+    doc = Document(host=real_host)
+    doc.execute({"command": "add_layer", "id": "body", "name": "Body"})
+    doc.execute({"command": "set_contour", "layer": "body", "points": BODY, "closed": True})
+    doc.execute({"command": "sculpt_isophote", "layer": "body", "pick": [0.2, 0.1], "band": 0.3,
+                 "stroke": [[0.1, -0.3], [0.15, -0.1], [0.22, 0.1], [0.3, 0.3]]})
+    sculpted = doc.layer("body")
+    doc.push(MirrorLayer(layer="body", axis="own"))
+    # a mirrored outline is re-inflated like a redraw: the edits, drawn on the old surface, go
+    assert doc.layer("body").edits == ()
+    fresh = Document(host=real_host)
+    fresh.execute({"command": "add_layer", "id": "body", "name": "Body"})
+    fresh.execute({"command": "set_contour", "layer": "body", "points": np.asarray(doc.layer("body").points).tolist(), "closed": True})
+    assert np.array_equal(doc.layer("body").mesh.V, fresh.layer("body").mesh.V)
+    doc.undo_stack.undo()
+    assert doc.layer("body").edits == sculpted.edits and len(sculpted.edits) == 1
+    assert np.array_equal(doc.layer("body").mesh.V, sculpted.mesh.V)

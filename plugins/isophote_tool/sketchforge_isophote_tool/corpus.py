@@ -139,7 +139,7 @@ def _with_loop(P: np.ndarray, radius: float, rng: np.random.Generator) -> np.nda
     return np.concatenate([P[: k + 1], loop, P[k:]])
 
 
-def random_edit(shape: str, ld, light, rng: np.random.Generator, kind: str | None = None, band: float | None = None):  # pragma: no mutate block
+def random_edit(shape: str, ld, rng: np.random.Generator, kind: str | None = None, band: float | None = None):  # pragma: no mutate block
     """A random edit on a layer (see the module docstring), or None when the layer has no
     suitable isophote near the random pick (the caller draws again).
 
@@ -148,8 +148,8 @@ def random_edit(shape: str, ld, light, rng: np.random.Generator, kind: str | Non
     shape : str
         The shape's kind (recorded in the Edit).
     ld : LayerData
-        The layer's cached data (``sketchforge_isophote_tool.layerdata.layer_data``).
-    light : (3,) float64
+        The layer's cached data (``sketchforge_isophote_tool.layerdata.layer_data``); the
+        edit is drawn on the isophotes of its shading, under its light.
     rng : numpy Generator
     kind : str or None
         One of :data:`KINDS`; None draws one.
@@ -288,7 +288,7 @@ def run_edits(shape: str, mesh, rng, light, edits: int, kinds=KINDS) -> list[Out
     tries = 0
     while len(out) < edits and tries < 20 * edits:
         tries += 1
-        e = random_edit(shape, ld, light, rng, kind=kinds[len(out) % len(kinds)])
+        e = random_edit(shape, ld, rng, kind=kinds[len(out) % len(kinds)])
         if e is None:
             continue
         t = time.perf_counter()
