@@ -114,6 +114,17 @@ import json as _mjson
 from pathlib import Path as _MPath
 
 _MSCOPE = _mjson.loads((_MPath(__file__).resolve().parent / "mutation_tests.json").read_text())
+
+# A property test that fails shrinks its example: hundreds of document replays, which ran past
+# the mutant's timeout (a mutant that broke every journal write was reported as a "timeout"
+# after minutes). In a mutation run the failure is the verdict; the smallest example is not
+# needed. Loaded here, before any test module makes its @settings from the default profile;
+# no database, so no mutant replays another's failing example.
+from hypothesis import Phase as _MPhase
+from hypothesis import settings as _msettings
+
+_msettings.register_profile("mutation", phases=[_MPhase.explicit, _MPhase.generate], database=None)
+_msettings.load_profile("mutation")
 _MROOT = _MPath(__file__).resolve().parents[1]
 
 

@@ -651,3 +651,103 @@ def test_a_rotation_from_a_drag_is_named_a_rotation(fan_host):
     doc.push(contour("a", ((0, 0), (2, 0), (1, 1))))
     doc.push(TransformLayer(layer="a", matrix=rotate_about((1.0, 0.3), 2.0)))
     assert doc.undo_stack.undo_text() == "Rotate layer"
+
+
+# --- files: what is read back, and what a bad file is told -----------------------------------
+
+
+def _lit_doc(host):
+    """A saved layer under a light that was changed after the file's first step."""
+    doc = Document(host=host)
+    doc.push(AddLayer(id="a"))
+    doc.push(contour("a", ((0, 0), (2, 0), (1, 1))))
+    doc.execute({"command": "set_light", "direction": [0.0, 1.0, 0.0]})
+    return json.loads(ff.dumps(doc))
+
+
+def test_a_reopened_file_keeps_the_light_its_journal_starts_from(fan_host):
+    data = _lit_doc(fan_host)
+    first = data["light"]
+    assert first != [0.0, 1.0, 0.0] and data["snapshot"]["light"] == [0.0, 1.0, 0.0]
+    doc = ff.document_from_dict(data, "t", host=fan_host)
+    assert doc.light.direction.tolist() == [0.0, 1.0, 0.0]
+    again = json.loads(ff.dumps(doc))
+    assert again["light"] == first and again["snapshot"]["light"] == [0.0, 1.0, 0.0]
+    # the journal replayed from that light ends where the snapshot is
+    replayed = ff.document_from_dict(again, "t", host=fan_host, use_snapshot=False)
+    assert ff.compare(doc, replayed) == []
+
+
+def test_a_file_with_no_light_anywhere_is_lit_from_plus_x(fan_host):
+    data = _lit_doc(fan_host)
+    del data["light"], data["snapshot"]["light"]
+    doc = ff.document_from_dict(data, "t", host=fan_host)
+    assert doc.light.direction.tolist() == [1.0, 0.0, 0.0]
+    assert json.loads(ff.dumps(doc))["light"] == [1.0, 0.0, 0.0]
+
+
+def test_a_snapshot_layer_without_closed_is_an_open_stroke(fan_host):
+    data = _lit_doc(fan_host)
+    layer = data["snapshot"]["layers"][0]
+    assert layer.pop("closed") is False
+    assert ff.document_from_dict(data, "t", host=fan_host).layer("a").closed is False
+    layer["closed"] = None
+    with pytest.raises(DocumentFormatError):
+        ff.document_from_dict(data, "t", host=fan_host)
+
+
+@pytest.mark.parametrize("snapshot", [[], "layers", {"light": [1, 0, 0]}, {"layers": {}}])
+def test_a_snapshot_that_is_no_object_with_layers_is_refused_by_name(fan_host, snapshot):
+    data = _lit_doc(fan_host)
+    data["snapshot"] = snapshot
+    with pytest.raises(DocumentFormatError, match=exactly("t: field 'snapshot' must be an object with a 'layers' list")):
+        ff.document_from_dict(data, "t", host=fan_host)
+
+
+@pytest.mark.parametrize("plugin_data", [[], "x", 3])
+def test_plugin_data_that_is_no_object_is_refused_by_name(fan_host, plugin_data):
+    data = _lit_doc(fan_host)
+    data["snapshot"]["plugin_data"] = plugin_data
+    with pytest.raises(DocumentFormatError, match=exactly("t: snapshot.plugin_data must be an object")):
+        ff.document_from_dict(data, "t", host=fan_host)
+
+
+def test_a_file_of_another_format_is_named_by_its_format_field(fan_host):
+    data = _lit_doc(fan_host)
+    data["format"] = "blender"
+    with pytest.raises(DocumentFormatError,
+                       match=exactly("t: not a sketchforge document (field 'format' is 'blender')")):
+        ff.document_from_dict(data, "t", host=fan_host)
+
+
+def test_a_bad_light_in_a_journal_entry_is_named_with_its_command(fan_host):
+    with pytest.raises(DocumentFormatError) as info:
+        fan_host.commands.from_dict({"command": "set_light", "direction": [0.0, 0.0, 0.0]})
+    assert str(info.value).startswith("command 'set_light': 'direction': ")
+
+
+def test_a_journal_may_add_a_layer_without_an_id(fan_host):
+    doc = ff.replay_journal(Light(1.0, 0.0),
+                            [{"command": "add_layer"}, {"command": "add_layer", "name": "Leg"}], "t", fan_host)
+    ids = doc.layer_ids()
+    assert len(ids) == 2 and len(set(ids)) == 2 and all(isinstance(i, str) and i for i in ids)
+    assert doc.layer(ids[1]).name == "Leg"
+
+
+def test_a_saved_file_is_compact_json(fan_host):
+    doc = ff.document_from_dict(_lit_doc(fan_host), "t", host=fan_host)
+    raw = ff.dumps(doc)
+    assert json.loads(raw) == json.loads(ff.dumps(doc))
+    assert b", " not in raw and b": " not in raw and b"\n" not in raw
+
+
+def test_a_file_the_user_may_not_read_is_named_in_the_message(tmp_path, monkeypatch):
+    path = tmp_path / "locked.sketch"
+    path.write_text("{}")
+
+    def denied(*a, **k):
+        raise PermissionError(errno.EACCES, "Permission denied")
+
+    monkeypatch.setattr(ff.os, "open", denied)
+    with pytest.raises(DocumentFormatError, match=exactly(f"cannot open {path}: permission denied")):
+        ff.read_regular_file(path)

@@ -200,3 +200,21 @@ def test_mirroring_a_sculpted_layer_drops_its_edits_and_undo_brings_them_back(re
     doc.undo_stack.undo()
     assert doc.layer("body").edits == sculpted.edits and len(sculpted.edits) == 1
     assert np.array_equal(doc.layer("body").mesh.V, sculpted.mesh.V)
+
+
+def test_a_scaled_or_sheared_part_keeps_a_unit_light_on_its_edits(real_host):
+    doc = Document(host=real_host)
+    doc.execute({"command": "add_layer", "id": "body", "name": "Body"})
+    doc.execute({"command": "set_contour", "layer": "body", "points": BODY, "closed": True})
+    doc.execute({"command": "sculpt_isophote", "layer": "body", "pick": [0.2, 0.1], "band": 0.3,
+                 "stroke": [[0.1, -0.3], [0.15, -0.1], [0.22, 0.1], [0.3, 0.3]]})
+    light0 = np.array(doc.layer("body").edits[0]["light"])
+    doc.push(TransformLayer(layer="body", matrix=scale_about([0.0, 0.0], 2.5)))
+    light = np.array(doc.layer("body").edits[0]["light"])
+    # a uniform scale turns nothing: the same direction, still of unit length
+    assert np.abs(light - light0).max() < 1e-15 and doc.layer("body").edits[0]["band"] == pytest.approx(0.75)
+    doc.push(TransformLayer(layer="body", matrix=[[1.0, 0.5, 0.0], [0.0, 1.0, 0.0]]))  # a shear
+    light = np.array(doc.layer("body").edits[0]["light"])
+    v = np.array([[1.0, 0.5], [0.0, 1.0]]) @ light0[:2]
+    assert np.hypot(light[0], light[1]) == pytest.approx(1.0, abs=1e-15)
+    assert np.abs(light[:2] - v / np.hypot(*v)).max() < 1e-15 and light[2] == light0[2]
