@@ -281,10 +281,11 @@ def equivalents(scope: str) -> dict[str, str]:
     return out
 
 
-def forget_survivors(ws: Path, patterns: list[str]) -> int:
+def forget_survivors(ws: Path, patterns: list[str], keep: set[str] = frozenset()) -> list[str]:
     """Clear the verdict of every surviving (or untested) mutant matching ``patterns`` (all if
-    empty), so the next run tests it again; mutmut keeps verdicts until the code changes, and
-    picks up new tests by itself. Returns how many were cleared."""
+    empty), except the listed equivalents ``keep``, so the next run tests it again; mutmut keeps
+    verdicts until the code changes, and picks up new tests by itself. Returns how many were
+    cleared."""
     import fnmatch
 
     out = subprocess.run([sys.executable, "-m", "mutmut", "results"], cwd=ws, capture_output=True,
@@ -292,9 +293,11 @@ def forget_survivors(ws: Path, patterns: list[str]) -> int:
     names = set()
     for line in out.splitlines():
         name, _, status = line.strip().rpartition(": ")
+        if name in keep:
+            continue  # an equivalent survives every test: re-running it costs all its tests
         if status in ("survived", "no tests") and (not patterns or any(fnmatch.fnmatch(name, p) for p in patterns)):
             names.add(name)
-    cleared = 0
+    cleared: list[str] = []
     for meta in (ws / "mutants").rglob("*.py.meta"):
         data = json.loads(meta.read_text())
         hit = [k for k in data.get("exit_code_by_key", {}) if k in names]
@@ -302,9 +305,9 @@ def forget_survivors(ws: Path, patterns: list[str]) -> int:
             data["exit_code_by_key"][k] = None
         if hit:
             meta.write_text(json.dumps(data, indent=4))
-            cleared += len(hit)
-    print(f"{cleared} survivors will be tested again")
-    return cleared
+            cleared += hit
+    print(f"{len(cleared)} survivors will be tested again")
+    return sorted(cleared)
 
 
 def statuses(ws: Path) -> dict[str, str]:
@@ -324,7 +327,7 @@ def module_of(name: str) -> str:
     return name.rsplit(".", 1)[0]
 
 
-def draw_sample(scope: str, size: int, seed: int) -> list[str]:
+def draw_sample(scope: str, size: int, seed: int, exclude: set[str] = frozenset()) -> list[str]:
     """A seeded uniform sample of ``size`` of the scope's unchecked mutants, drawn per module in
     proportion to its unchecked count (at least one from each). The pool it was drawn from is
     written to ``mutation/results/<scope>.sample.json``: the report estimates the mutants left
@@ -334,7 +337,7 @@ def draw_sample(scope: str, size: int, seed: int) -> list[str]:
     ws = BUILD / scope
     pool: dict[str, list[str]] = {}
     for name, status in sorted(statuses(ws).items()):
-        if status == "not checked":
+        if status == "not checked" and name not in exclude:  # not survivors sent back by --retest
             pool.setdefault(module_of(name), []).append(name)
     total = sum(len(v) for v in pool.values())
     rng = random.Random(seed)
@@ -448,22 +451,25 @@ def main(argv: list[str] | None = None) -> int:
             ws = workspace(scope)
             if args.fresh and (ws / "mutants").exists():
                 shutil.rmtree(ws / "mutants")
-            if args.retest:
-                forget_survivors(ws, args.only)
+            retest = forget_survivors(ws, args.only, set(equivalents(scope))) if args.retest else []
             # Fewer, fixed property-test examples (tests/tests_support.examples): a survivor runs
             # every test that reaches its function, the stateful machines included.
             env = dict(os.environ, CI="true", QT_QPA_PLATFORM="offscreen", SKETCHFORGE_MUTATION="1",
                        FUZZ_EXAMPLES="10", OMP_NUM_THREADS="1", OPENBLAS_NUM_THREADS="1",
                        MKL_NUM_THREADS="1")
             names = list(args.only)
+            if args.retest and not args.only:
+                # only the survivors: a run without names would test every unchecked mutant too
+                names = retest or ["no.such.mutant"]
             if args.sample:
                 if not (ws / "mutants").exists():
                     # mutmut makes the mutants (and traces the tests) on its first run: one that
                     # matches no mutant does only that
                     subprocess.run([sys.executable, "-m", "mutmut", "run", "--max-children", str(args.jobs),
                                     "no.such.mutant"], cwd=ws, env=env, check=False)
-                names = draw_sample(scope, args.sample, args.seed)
-                print(f"checking a sample of {len(names)} unchecked mutants (seed {args.seed})")
+                sample = draw_sample(scope, args.sample, args.seed, set(retest))
+                print(f"checking a sample of {len(sample)} unchecked mutants (seed {args.seed})")
+                names = [n for n in names if n != "no.such.mutant"] + sample
                 if not names:
                     names = ["no.such.mutant"]
             rc = subprocess.run([sys.executable, "-m", "mutmut", "run", "--max-children", str(args.jobs),
