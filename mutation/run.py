@@ -337,7 +337,7 @@ def draw_sample(scope: str, size: int, seed: int, exclude: set[str] = frozenset(
     ws = BUILD / scope
     pool: dict[str, list[str]] = {}
     for name, status in sorted(statuses(ws).items()):
-        if status == "not checked" and name not in exclude:  # not survivors sent back by --retest
+        if status == "not checked" and name not in exclude:  # not --retest's, not known equivalents
             pool.setdefault(module_of(name), []).append(name)
     total = sum(len(v) for v in pool.values())
     rng = random.Random(seed)
@@ -378,7 +378,7 @@ def estimate(found: dict[str, str], equivalent: dict[str, str], sample_file: Pat
                  and n not in equivalent]
         eq = sum(1 for n in names if n in sample and n in equivalent)
         rest = [n for n in names if n not in sample and n in found]
-        left = [n for n in rest if found[n] == "not checked"]
+        left = [n for n in rest if found[n] == "not checked" and n not in equivalent]
         for n in rest:  # pool members a full run checked after the sample was drawn
             if found[n] not in ("not checked", "skipped") and n not in equivalent:
                 total_exact += 1
@@ -467,7 +467,7 @@ def main(argv: list[str] | None = None) -> int:
                     # matches no mutant does only that
                     subprocess.run([sys.executable, "-m", "mutmut", "run", "--max-children", str(args.jobs),
                                     "no.such.mutant"], cwd=ws, env=env, check=False)
-                sample = draw_sample(scope, args.sample, args.seed, set(retest))
+                sample = draw_sample(scope, args.sample, args.seed, set(retest) | set(equivalents(scope)))
                 print(f"checking a sample of {len(sample)} unchecked mutants (seed {args.seed})")
                 names = [n for n in names if n != "no.such.mutant"] + sample
                 if not names:
