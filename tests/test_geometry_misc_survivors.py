@@ -471,3 +471,102 @@ def test_shaders_keep_float32_buffers_in_float32():
     # integer normals are values, not a reason to truncate the light
     k = lambert_shade(np.array([[0, 0, 1]]), np.array([0.0, 0.6, 0.8]))
     np.testing.assert_allclose(k[0], (0.3 + 0.7 * 0.8) * CLAY, rtol=1e-12)
+
+
+# --- from the seeded sample of geometry's unchecked mutants (mutation/results/geometry.sample.json)
+
+
+def _square_contour(side=2.0, resolution=0.1):
+    from sketchforge.geometry.contour import clean_contour
+
+    s = side / 2.0
+    return clean_contour([[-s, -s], [s, -s], [s, s], [-s, s]], resolution, closed=True, smooth=False)
+
+
+def _circle(cx, cy, r, n=48):
+    t = np.linspace(0.0, 2.0 * np.pi, n, endpoint=False)
+    return np.c_[cx + r * np.cos(t), cy + r * np.sin(t)]
+
+
+def test_a_hole_outside_the_outline_is_placed_in_the_message():
+    from sketchforge.errors import ContourError
+    from sketchforge.geometry.contour import prepare_holes
+
+    with pytest.raises(ContourError) as info:
+        prepare_holes([_circle(3.0, 0.5, 0.3)], _square_contour())
+    msg = str(info.value)
+    assert msg.startswith("hole 1 near (") and "lies outside the outline" in msg
+    x, y = (float(v) for v in msg[len("hole 1 near ("):msg.index(")")].split(","))
+    assert np.hypot(x - 3.0, y - 0.5) < 0.3  # a point of the hole
+
+
+def test_a_hole_across_the_outline_is_placed_where_they_cross():
+    from sketchforge.errors import ContourError
+    from sketchforge.geometry.contour import prepare_holes
+
+    # a circle centred on the right edge x = 1 crosses it near (1, 0.4 +- 0.3): the mean is (1, 0.4)
+    with pytest.raises(ContourError) as info:
+        prepare_holes([_circle(1.0, 0.4, 0.3)], _square_contour())
+    msg = str(info.value)
+    assert msg.startswith("hole 1 crosses the outline near (") and msg.endswith("a hole must lie inside its part")
+    x, y = (float(v) for v in msg[msg.index("(") + 1:msg.index(")")].split(","))
+    assert abs(x - 1.0) < 0.02 and abs(y - 0.4) < 0.02
+
+
+def test_a_system_with_every_vertex_fixed_returns_the_fixed_values():
+    import scipy.sparse as sp
+
+    from sketchforge.geometry.dirichlet import DirichletSolver
+
+    A = sp.csr_matrix(np.array([[2.0, -1.0, 0.0], [-1.0, 2.0, -1.0], [0.0, -1.0, 2.0]]))
+    s = DirichletSolver(A, [2, 0, 1])
+    assert s.n_free == 0 and s._data is None
+    assert np.array_equal(s.solve(np.ones(3), [5.0, 6.0, 7.0]), [5.0, 6.0, 7.0])
+
+
+def test_the_dirichlet_solver_names_the_linear_system_by_default():
+    from sketchforge.errors import SketchforgeError
+    from sketchforge.geometry.dirichlet import DirichletSolver
+
+    import scipy.sparse as sp
+
+    with pytest.raises(SketchforgeError) as info:
+        DirichletSolver(sp.csr_matrix((2, 3)), [0])
+    assert str(info.value) == "the linear system: the matrix must be square, got shape (2, 3)"
+
+
+def test_bad_triangle_and_fixed_indices_are_named_in_the_message():
+    from sketchforge.errors import SketchforgeError
+    from sketchforge.geometry import guard
+
+    import scipy.sparse as sp
+
+    V = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+    with pytest.raises(SketchforgeError) as info:
+        guard.mesh(V, [[0, 1, 7]], "the leg")
+    assert str(info.value).startswith("the leg") and "triangle indices" in str(info.value)
+    with pytest.raises(SketchforgeError) as info:
+        guard.sparse_system(sp.identity(3, format="csr"), "the fairing", fixed=[0, 9])
+    assert str(info.value).startswith("the fairing") and "fixed indices" in str(info.value)
+
+
+def test_inflated_heights_default_to_unit_inflation_and_build_their_own_laplacian():
+    from sketchforge.geometry.inflation import inflate_heights
+    from sketchforge.geometry.laplacian import laplacian_and_mass
+    from sketchforge.geometry.triangulate import triangulate_polygon
+
+    c = _square_contour(resolution=0.25)
+    V, F = triangulate_polygon(c.points, c.edge_length)[:2]
+    b = np.arange(len(c.points))
+    L, M = laplacian_and_mass(V[:, :2], F)
+    z = inflate_heights(V, F, b)
+    assert np.array_equal(z, inflate_heights(V, F, b, 1.0, L, M))
+    assert np.allclose(inflate_heights(V, F, b, 2.0), 2.0 * z, rtol=1e-12, atol=0) and z.max() > 0.1
+
+
+def test_an_edge_length_too_small_to_count_is_counted_as_ten_to_the_eighteen():
+    from sketchforge.geometry.triangulate import estimate_vertex_count
+
+    assert estimate_vertex_count(1.0, 4.0, 1e-300) == 10**18
+    assert estimate_vertex_count(1.0, 4.0, 0.0) == 10**18
+    assert 100 < estimate_vertex_count(1.0, 4.0, 0.1) < 10**4
