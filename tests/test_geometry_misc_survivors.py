@@ -570,3 +570,46 @@ def test_an_edge_length_too_small_to_count_is_counted_as_ten_to_the_eighteen():
     assert estimate_vertex_count(1.0, 4.0, 1e-300) == 10**18
     assert estimate_vertex_count(1.0, 4.0, 0.0) == 10**18
     assert 100 < estimate_vertex_count(1.0, 4.0, 0.1) < 10**4
+
+
+_TRI_V = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
+
+
+@pytest.mark.parametrize("field, value, message", [
+    ("V", np.zeros(3), "Mesh.V must have 2 dimensions, got shape (3,)"),
+    ("boundary", [[0, 1]], "Mesh.boundary must have 1 dimensions, got shape (1, 2)"),
+    ("junction", [[0, 1]], "Mesh.junction must have 1 dimensions, got shape (1, 2)"),
+    ("boundary", [0, 1, 5], "Mesh.boundary refers to a vertex outside 0..2"),
+    ("junction", [7], "Mesh.junction refers to a vertex outside 0..2"),
+])
+def test_a_malformed_mesh_names_the_field_that_is_wrong(field, value, message):
+    from sketchforge.geometry.mesh import Mesh
+
+    kw = {"V": _TRI_V, "F": [[0, 1, 2]], "boundary": [0, 1, 2], "junction": []}
+    kw[field] = value
+    with pytest.raises(ValueError) as info:
+        Mesh(**kw)
+    assert str(info.value) == message
+
+
+def test_a_point_that_is_not_a_number_is_named_by_its_index():
+    from sketchforge.errors import ContourError
+    from sketchforge.geometry.contour import validate_stroke
+
+    with pytest.raises(ContourError) as info:
+        validate_stroke([[0.0, 0.0], [1.0, 0.0], [1.0, float("nan")], [0.0, 1.0]])
+    assert str(info.value).endswith("has a point that is not a finite number (point 2: [1.0, nan])")
+
+
+def test_a_3d_triangle_standing_in_the_xz_plane_is_not_flat():
+    from sketchforge.errors import GeometryError
+    from sketchforge.geometry import guard
+
+    # its area is all in the y component of the cross product, whose two terms add up here
+    V = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 1.0], [1.0, 0.0, -1.0]])
+    V2, F2 = guard.mesh(V, [[0, 1, 2]], "the part")
+    assert F2.tolist() == [[0, 1, 2]]
+    flat = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 1.0], [2.0, 0.0, 2.0]])
+    with pytest.raises(GeometryError) as info:
+        guard.mesh(flat, [[0, 1, 2]], "the part")
+    assert str(info.value).startswith("the part has a triangle of zero area (triangle 0, near (0, 0")
