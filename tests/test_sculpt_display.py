@@ -239,3 +239,65 @@ def test_a_characteristic_runs_through_triangle_zero_like_any_other(result):
     face, _ = locate(pd.V2, pd.F, line)
     k = _seed_index(line, shapely.LineString(stroke))
     assert face[k] != 0 and (face == 0).any()
+
+
+def test_stroke_samples_integrate_any_cubic_along_the_stroke_exactly():
+    # The stroke's misfit is a line integral; two Gauss points per segment integrate every
+    # polynomial of degree 3 along each segment exactly (the squared residual of a linear field
+    # is of degree 2). Checked against the closed form on a bent, unevenly sampled stroke.
+    from sketchforge_isophote_tool.stroke import stroke_samples
+
+    pieces = [np.array([[0.0, 0.0], [1.0, 0.0], [1.0, 2.0], [0.5, 2.5]]), np.array([[3.0, 1.0], [3.0, 1.25]])]
+    S = stroke_samples(pieces)
+    assert S.P.shape == (2 * 4, 2) and S.w.shape == (8,)
+
+    def f(X):
+        x, y = X[..., 0], X[..., 1]
+        return 1.0 + x ** 3 - 2.0 * x * y ** 2 + 0.5 * y
+
+    exact = 0.0
+    for P in pieces:  # per segment: ∫0^1 f(a + t (b - a)) |b - a| dt by 40-point Gauss-Legendre
+        tt, ww = np.polynomial.legendre.leggauss(40)
+        t, w = 0.5 * (tt + 1.0), 0.5 * ww
+        for a, b in zip(P[:-1], P[1:]):
+            exact += np.linalg.norm(b - a) * np.sum(w * f(a + t[:, None] * (b - a)))
+    assert np.sum(S.w * f(S.P)) == pytest.approx(exact, rel=1e-13)
+    assert S.w.sum() == pytest.approx(1.0 + 2.0 + np.sqrt(0.5) + 0.25, rel=1e-14)  # the length
+    # every sample lies on its segment, strictly inside it
+    seg_a = np.concatenate([np.vstack([P[:-1]] * 2) for P in pieces])  # both points of a piece, in turn
+    seg_b = np.concatenate([np.vstack([P[1:]] * 2) for P in pieces])
+    t = np.einsum("ij,ij->i", S.P - seg_a, seg_b - seg_a) / np.einsum("ij,ij->i", seg_b - seg_a, seg_b - seg_a)
+    assert np.all((t > 0.2) & (t < 0.8))
+    assert np.allclose(seg_a + t[:, None] * (seg_b - seg_a), S.P, atol=1e-15)
+
+
+def test_the_gauss_newton_step_s_conjugate_gradients_solve_n_unknowns_in_n_steps():
+    # Conjugate gradients on an n x n SPD system reach the solution in n steps (in exact
+    # arithmetic); a wrong update of the search direction loses that. Also with a Jacobi
+    # preconditioner, and a zero right-hand side stops at once.
+    from sketchforge_isophote_tool.heights import _pcg
+
+    rng = np.random.default_rng(7)
+    Q = rng.standard_normal((8, 8))
+    A = Q @ Q.T + 0.5 * np.eye(8)
+    b = rng.standard_normal(8)
+    x = np.linalg.solve(A, b)
+    for precondition in (lambda r: r.copy(), lambda r: r / np.diag(A)):
+        got = _pcg(lambda v: A @ v, b, precondition, 8)
+        assert np.abs(got - x).max() < 1e-8 * np.abs(x).max()
+        assert np.abs(_pcg(lambda v: A @ v, b, precondition, 3) - x).max() > 1e-4  # not yet after 3
+    assert np.array_equal(_pcg(lambda v: A @ v, np.zeros(8), lambda r: r.copy(), 8), np.zeros(8))
+
+
+def test_a_layer_mesh_with_a_flat_triangle_is_refused_by_name():
+    from sketchforge.errors import GeometryError
+    from sketchforge.geometry.mesh import Mesh
+    from sketchforge.geometry.reflectance import LAMBERTIAN
+    from sketchforge_isophote_tool.layerdata import layer_data
+
+    V = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.1], [0.0, 1.0, 0.1], [2.0, 0.0, 0.0], [1.0, 1.0, 0.0]])
+    F = np.array([[0, 1, 2], [1, 3, 4], [1, 4, 2], [0, 3, 1]])  # the last one is flat (on y = 0)
+    mesh = Mesh(V=V, F=F, boundary=np.array([0, 3, 4, 2]), junction=np.zeros(0, np.int64))
+    with pytest.raises(GeometryError) as info:
+        layer_data(mesh, np.array([1.0, 0.0, 0.0]), LAMBERTIAN)
+    assert str(info.value).startswith("the layer's mesh has a triangle of zero area")
