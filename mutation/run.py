@@ -74,7 +74,7 @@ SCOPES: dict[str, tuple[str, str, list[str], list[str]]] = {
     "assemble": ("plugins/assemble/sketchforge_assemble", "sketchforge_assemble",
                  ["sketchforge_assemble/*"], [
                      "tests/test_assemble.py", "tests/test_assemble_blend.py",
-                     "tests/test_assemble_holes.py", "tests/test_regressions_planted.py",
+                     "tests/test_assemble_holes.py", "tests/test_regressions_planted.py", "tests/test_assemble_cache.py",
                      "tests/test_transform.py"]),
     "animate": ("plugins/animate/sketchforge_animate", "sketchforge_animate",
                 ["sketchforge_animate/*"], ["tests/test_animate.py"]),
