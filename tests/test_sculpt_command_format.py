@@ -4,6 +4,7 @@ largest band a file may ask for, the undo menu's label, and an edit on a layer w
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from sketchforge.errors import DocumentFormatError, SculptError
@@ -53,3 +54,36 @@ def test_sculpting_a_layer_that_has_no_surface_yet_says_to_draw_first(real_host)
         doc.execute({**GOOD, "layer": "blank"})
     assert str(info.value) == "layer 'blank' has no surface to sculpt yet (draw its contour first)"
     assert doc.undo_stack.count() == count
+
+
+@pytest.mark.parametrize("key", ["ring", "rim_margin"])
+def test_ring_and_rim_margin_take_a_length_or_none_and_refuse_the_rest(key):
+    from sketchforge.errors import SculptError
+    from sketchforge_isophote_tool.pipeline import _options
+
+    for good in (0, 0.25, 3, None):
+        assert _options({key: good})[key] == good
+    for bad in (-0.1, float("inf"), float("nan"), "wide", [1]):
+        with pytest.raises(SculptError) as info:
+            _options({key: bad})
+        assert str(info.value) == f"the sculpt option {key!r} must be a number >= 0 (drawing units) or None, got {bad!r}"
+
+
+def test_a_stroke_drawn_as_a_closed_loop_stays_a_smooth_closed_loop():
+    # Redrawing a whole isophote: the loop is smoothed all the way round, with no end pinned,
+    # so a drawn circle stays a circle about its own centre (the (1/4, 1/2, 1/4) filter only
+    # shrinks it by a hair at the h/2 spacing).
+    from sketchforge_isophote_tool.stroke import prepare_stroke
+
+    t = np.linspace(0.0, 2.0 * np.pi, 89, endpoint=False)
+    r, h = 0.6, 0.05
+    circle = np.c_[0.3 + r * np.cos(t), -0.2 + r * np.sin(t)]
+    circle = np.vstack([circle, circle[:1]])  # closed: the first point repeated
+    P = prepare_stroke(circle, h)
+    assert np.array_equal(P[0], P[-1]) and len(P) > 60
+    ring = P[:-1]
+    assert np.abs(ring.mean(axis=0) - [0.3, -0.2]).max() < 1e-3
+    radius = np.hypot(ring[:, 0] - 0.3, ring[:, 1] + 0.2)
+    assert radius.max() - radius.min() < 2e-3 and abs(radius.mean() - r) < 2e-3
+    step = np.linalg.norm(np.diff(P, axis=0), axis=1)
+    assert step.max() < 0.51 * h and step.min() > 0.4 * h  # still about h/2 apart, the seam too
