@@ -41,6 +41,16 @@ def creature(host):
     return doc
 
 
+def sculpted_body(host):
+    """The body alone, with one isophote edit."""
+    doc = Document(host=host)
+    doc.execute({"command": "add_layer", "id": "body", "name": "Body"})
+    doc.execute({"command": "set_contour", "layer": "body", "points": BODY, "closed": True})
+    doc.execute({"command": "sculpt_isophote", "layer": "body", "pick": [0.2, 0.1], "band": 0.3,
+                 "stroke": [[0.1, -0.3], [0.15, -0.1], [0.22, 0.1], [0.3, 0.3]]})
+    return doc
+
+
 def test_move_scale_rotate_are_one_command_each_and_undo_restores_bit_for_bit(real_host):
     doc = creature(real_host)
     body0 = doc.layer("body")
@@ -91,11 +101,7 @@ def test_bad_transforms_are_refused_with_a_clear_message(matrix, message):
 
 
 def test_sculpt_edits_move_with_the_part_and_still_apply(real_host):
-    doc = Document(host=real_host)
-    doc.execute({"command": "add_layer", "id": "body", "name": "Body"})
-    doc.execute({"command": "set_contour", "layer": "body", "points": BODY, "closed": True})
-    doc.execute({"command": "sculpt_isophote", "layer": "body", "pick": [0.2, 0.1], "band": 0.3,
-                 "stroke": [[0.1, -0.3], [0.15, -0.1], [0.22, 0.1], [0.3, 0.3]]})
+    doc = sculpted_body(real_host)
     A = compose_affine(rotate_about([0.0, 0.0], np.radians(90.0)), [[1, 0, 2.0], [0, 1, 0.0]])
     doc.push(TransformLayer(layer="body", matrix=A))
     e = doc.layer("body").edits[0]
@@ -184,11 +190,7 @@ def test_a_layer_drawn_in_front_of_a_part_is_not_taken_for_its_host(real_host):
 
 
 def test_mirroring_a_sculpted_layer_drops_its_edits_and_undo_brings_them_back(real_host):
-    doc = Document(host=real_host)
-    doc.execute({"command": "add_layer", "id": "body", "name": "Body"})
-    doc.execute({"command": "set_contour", "layer": "body", "points": BODY, "closed": True})
-    doc.execute({"command": "sculpt_isophote", "layer": "body", "pick": [0.2, 0.1], "band": 0.3,
-                 "stroke": [[0.1, -0.3], [0.15, -0.1], [0.22, 0.1], [0.3, 0.3]]})
+    doc = sculpted_body(real_host)
     sculpted = doc.layer("body")
     doc.push(MirrorLayer(layer="body", axis="own"))
     # a mirrored outline is re-inflated like a redraw: the edits, drawn on the old surface, go
@@ -203,11 +205,7 @@ def test_mirroring_a_sculpted_layer_drops_its_edits_and_undo_brings_them_back(re
 
 
 def test_a_scaled_or_sheared_part_keeps_a_unit_light_on_its_edits(real_host):
-    doc = Document(host=real_host)
-    doc.execute({"command": "add_layer", "id": "body", "name": "Body"})
-    doc.execute({"command": "set_contour", "layer": "body", "points": BODY, "closed": True})
-    doc.execute({"command": "sculpt_isophote", "layer": "body", "pick": [0.2, 0.1], "band": 0.3,
-                 "stroke": [[0.1, -0.3], [0.15, -0.1], [0.22, 0.1], [0.3, 0.3]]})
+    doc = sculpted_body(real_host)
     light0 = np.array(doc.layer("body").edits[0]["light"])
     doc.push(TransformLayer(layer="body", matrix=scale_about([0.0, 0.0], 2.5)))
     light = np.array(doc.layer("body").edits[0]["light"])
