@@ -12,6 +12,8 @@ Makefile, docs) are copied beside it. The workspace's ``mutants/`` folder comes 
 Usage::
 
     python mutation/run.py SCOPE [--jobs N] [--fresh]
+    python mutation/run.py SCOPE --sample 150  # a seeded sample of the unchecked mutants + estimate
+    python mutation/run.py SCOPE --retest      # the survivors again, after adding tests
     python mutation/run.py SCOPE --report      # score + survivors of the last run
 
 Scopes: see ``SCOPES``.  The score and the survivors are written to
