@@ -286,8 +286,8 @@ def equivalents(scope: str) -> dict[str, str]:
 def forget_survivors(ws: Path, patterns: list[str], keep: set[str] = frozenset()) -> list[str]:
     """Clear the verdict of every surviving (or untested) mutant matching ``patterns`` (all if
     empty), except the listed equivalents ``keep``, so the next run tests it again; mutmut keeps
-    verdicts until the code changes, and picks up new tests by itself. Returns how many were
-    cleared."""
+    verdicts until the code changes, and picks up new tests by itself. Returns the names
+    cleared (sorted)."""
     import fnmatch
 
     out = subprocess.run([sys.executable, "-m", "mutmut", "results"], cwd=ws, capture_output=True,

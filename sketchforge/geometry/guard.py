@@ -618,10 +618,10 @@ def geometry(g, what: str = "the shape"):
     -------
     shapely.Geometry
         ``g`` itself when valid. An invalid Polygon (a self-touching or self-crossing outline)
-        is repaired with ``shapely.make_valid`` and only its polygonal parts are kept; an
-        invalid MultiPolygon is the union of its parts, each repaired so (a Polygon, a MultiPolygon, or an empty Polygon): collapsed slivers
-        that make_valid returns as lines would otherwise surprise every caller that expects
-        an area.
+        is repaired with ``shapely.make_valid`` and only its polygonal parts are kept (a
+        Polygon, a MultiPolygon, or an empty Polygon): collapsed slivers that make_valid
+        returns as lines would otherwise surprise every caller that expects an area. An
+        invalid MultiPolygon (overlapping parts) is the union of its parts, each repaired so.
 
     Raises
     ------
@@ -639,7 +639,8 @@ def geometry(g, what: str = "the shape"):
     if g.geom_type == "MultiPolygon":
         # make_valid reads a twice-covered overlap of two parts as outside (even-odd: their
         # symmetric difference); a person who drew two overlapping parts means their union
-        return shapely.union_all([geometry(p, what) for p in g.geoms])
+        union = shapely.union_all([geometry(p, what) for p in g.geoms])
+        return union if not union.is_empty else shapely.Polygon()  # not an empty collection
     if g.geom_type == "Polygon":
         fixed = shapely.make_valid(g)
         parts = [p for p in shapely.get_parts(fixed) if p.geom_type in ("Polygon", "MultiPolygon")]

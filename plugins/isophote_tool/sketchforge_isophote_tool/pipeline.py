@@ -171,8 +171,6 @@ def _options(options: dict | None) -> dict:
     return opts
 
 
-
-
 _PICKS: "OrderedDict[tuple, tuple]" = OrderedDict()
 
 
