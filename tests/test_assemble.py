@@ -387,13 +387,15 @@ def test_intersection_counter_on_hand_made_triangles():
     assert len(dg.intersecting_pairs(V, F2)) == 0
 
 
+@pytest.mark.parametrize("scale", [(1.0, 1.0, 1.0), (1.0, 3.0, 0.2)])
 @pytest.mark.parametrize("big", [64, 4, 1])
-def test_box_pairs_are_exactly_the_overlapping_boxes(big):
+def test_box_pairs_are_exactly_the_overlapping_boxes(big, scale):
     # the broad phase of the intersection counter (and of the fairing's safety check) must
-    # miss no overlapping pair and report each once, big boxes (tested directly) included
+    # miss no overlapping pair and report each once, big boxes (tested directly) included;
+    # also in a flat, long cloud (a model is thin in z), where the grid has unequal sides
     rng = np.random.default_rng(7)
-    lo = rng.random((300, 3))
-    hi = lo + rng.random((300, 3)) ** 3 * 0.5
+    lo = rng.random((300, 3)) * scale
+    hi = lo + rng.random((300, 3)) ** 3 * 0.5 * np.asarray(scale)
     hi[:3] = lo[:3] + 0.9  # a few big ones
     among = rng.random(300) < 0.3
     for sel in (None, among, np.flatnonzero(among)):
