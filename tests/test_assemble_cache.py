@@ -65,3 +65,18 @@ def test_clearing_forgets_entries_and_counts_and_memo_without_a_cache_computes()
     assert memo(cache, "sheet", (1, 2), lambda: calls.append(1) or "v") == "v"
     assert memo(cache, "sheet", (1, 2), lambda: calls.append(1) or "w") == "v" and len(calls) == 3
     assert memo(cache, "sheet", (1, 3), lambda: "other") == "other"  # another key
+
+
+def test_a_slotted_dataclass_counts_the_arrays_it_holds():
+    # a frozen dataclass with __slots__ has no __dict__: its arrays are found through its fields
+    from dataclasses import dataclass
+
+    from sketchforge_assemble.cache import nbytes
+
+    @dataclass(frozen=True, slots=True)
+    class Held:
+        a: np.ndarray
+        b: tuple
+
+    v = Held(np.zeros(1000), (np.zeros(10, np.int32), None))
+    assert nbytes(v) == 64 + 8000 + 40 + 64
