@@ -1,0 +1,144 @@
+"""Pieces of the assembly checked against their definitions: the vertex adjacency, the fairing's
+safety check (a property of the shape, so the same at any scale), what holds a free part near a
+junction, the rim taper, the intersection counter's answer for every form of ``among``, and one
+point locator per sheet per assembly."""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+import numpy as np
+import pytest
+import shapely
+
+from sketchforge_assemble import assemble_detailed
+from sketchforge_assemble import diagnostics as dg
+from sketchforge_assemble.fair import adjacency, fairing_is_safe, supports
+from sketchforge_assemble.sheet import end_taper, unique_edges
+
+
+def _ellipse(cx, cy, a, b, n=48):
+    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    return np.c_[cx + a * np.cos(t), cy + b * np.sin(t)]
+
+
+def _arc(cx, cy, r, a0, a1, n=40):
+    t = np.radians(np.linspace(a0, a1, n))
+    return np.c_[cx + r * np.cos(t), cy + r * np.sin(t)]
+
+
+def _inflate(points, closed, res=0.05):
+    from sketchforge_inflate import inflate_stroke
+
+    return inflate_stroke(points, closed=closed, params={"resolution": res, "inflation": 1.0, "smoothing": 0.5})
+
+
+@lru_cache(maxsize=None)
+def _scene():
+    """An eye drawn *behind* the body (it settles onto the body's back face), the body and an
+    arm glued to its front, assembled with the blended junction."""
+    eye = _inflate(_ellipse(0.2, -0.1, 0.1, 0.08, 24), True, 0.03)
+    body = _inflate(_ellipse(0, 0, 0.6, 0.4), True)
+    arm = _inflate(_arc(0.35, -0.2, 0.25, 100, 400), False)
+    return assemble_detailed([eye, body, arm], [True, False, False])
+
+
+def test_adjacency_is_the_mesh_s_edges_both_ways():
+    res = _scene()
+    F, n = res.mesh.F, res.mesh.n_vertices
+    A = adjacency(F, n)
+    E = unique_edges(F)
+    want = np.zeros((n, n), bool)
+    want[E[:, 0], E[:, 1]] = want[E[:, 1], E[:, 0]] = True
+    assert np.array_equal(A.toarray() != 0, want)
+    assert np.all(A.data == 1.0)
+
+
+@pytest.mark.parametrize("scale", [1e-3, 1.0, 1e3])
+def test_fairing_safety_is_the_same_at_any_scale(scale):
+    # a flat sliver of area 1e-7 h² is unsafe, one of 1e-5 h² is not, whatever the drawing's units
+    V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0]], float)
+    F = np.array([[0, 1, 2], [1, 3, 2]])
+    moved = np.ones(4, bool)
+    h = 1.0
+    assert fairing_is_safe(V * scale, F, moved, h * scale)
+    for area, safe in ((1e-7, False), (1e-5, True)):
+        W = V.copy()
+        W[3] = [1.0, 2 * area, 0.0]  # triangle 1-3-2 squeezed onto the line from 1 to 2... almost
+        W[3] = W[1] + (W[2] - W[1]) * 0.5 + np.array([1.0, 1.0, 0.0]) / np.sqrt(2) * (2 * area / np.sqrt(2))
+        assert fairing_is_safe(W * scale, F, moved, h * scale) is safe, (area, scale)
+    assert not fairing_is_safe(np.where(np.arange(4)[:, None] == 3, np.nan, V), F, moved, h)
+
+
+def test_a_free_part_behind_a_layer_is_held_by_that_layer_s_back_face():
+    res = _scene()
+    V, F = res.mesh.V, res.mesh.F
+    eye_xy = _ellipse(0.2, -0.1, 0.1, 0.08, 24)
+    footprint = shapely.Polygon(eye_xy).buffer(0.03)
+    zone = np.ones(len(V), bool)
+    held = supports(V, F, res.face_layer, res.face_kind, 0, footprint, zone)
+    assert held.sum() > 5
+    # the held vertices are the body's back face under the eye, and only those
+    body_back = np.zeros(len(V), bool)
+    body_back[F[(res.face_layer == 1) & (res.face_kind == 1)]] = True
+    assert np.all(body_back[held])
+    inside = shapely.contains_xy(footprint, V[:, 0], V[:, 1])
+    assert np.all(inside[held])
+    # nothing is held outside the zone the fairing would move
+    assert not supports(V, F, res.face_layer, res.face_kind, 0, footprint, np.zeros(len(V), bool)).any()
+    # a part over nothing in the zone holds nothing
+    far = shapely.Point(5.0, 5.0).buffer(0.1)
+    assert not supports(V, F, res.face_layer, res.face_kind, 0, far, zone).any()
+
+
+def test_end_taper_runs_from_0_at_the_ends_to_1_from_the_radius_on():
+    rng = np.random.default_rng(3)
+    xy = rng.uniform(-1, 1, (500, 2))
+    ends = np.array([[0.0, 0.0], [0.5, 0.5]])
+    t = end_taper(xy, ends, 0.3)
+    d = np.min(np.linalg.norm(xy[:, None] - ends[None], axis=2), axis=1)
+    assert np.allclose(t, np.minimum(d / 0.3, 1.0), atol=1e-15)
+    assert t.max() == 1.0 and t.min() >= 0.0
+    assert np.all(end_taper(ends, ends, 0.3) == 0.0)
+
+
+def test_intersecting_pairs_read_among_as_indices_or_as_a_mask():
+    rng = np.random.default_rng(11)
+    c = rng.uniform(0, 1, (300, 1, 3))
+    V = (c + rng.normal(0, 0.08, (300, 3, 3))).reshape(-1, 3)
+    F = np.arange(900).reshape(300, 3)
+    mask = rng.random(300) < 0.3
+    by_mask = dg.intersecting_pairs(V, F, among=mask)
+    by_index = dg.intersecting_pairs(V, F, among=np.flatnonzero(mask))
+    assert len(by_mask) > 10
+    assert by_mask.tolist() == by_index.tolist()
+    every = dg.intersecting_pairs(V, F)
+    want = every[mask[every[:, 0]] | mask[every[:, 1]]]
+    assert by_mask.tolist() == want.tolist()
+    # none: still (0, 2) int64 index pairs
+    none = dg.intersecting_pairs(V[:9] + np.arange(9)[:, None] * 10.0, F[:3])
+    assert none.shape == (0, 2) and none.dtype == np.int64
+
+
+def test_each_sheet_gets_one_point_locator_per_assembly(monkeypatch):
+    # the fillets' springs and the depth rows share each sheet's locator (one build per sheet:
+    # the build is most of a sheet's cost in the depth rows)
+    import sketchforge.geometry.locate as locate
+
+    built = []
+    real = locate.TriangleLocator
+
+    class Counting(real):
+        def __init__(self, xy, F, *a, **k):
+            built.append(len(xy))
+            super().__init__(xy, F, *a, **k)
+
+    monkeypatch.setattr(locate, "TriangleLocator", Counting)
+    import sketchforge_assemble.depth as depth
+
+    monkeypatch.setattr(depth, "TriangleLocator", Counting)
+    body = _inflate(_ellipse(0, 0, 0.6, 0.4), True)
+    arm = _inflate(_arc(0.35, -0.2, 0.25, 100, 400), False)
+    res = assemble_detailed([body, arm])
+    assert res.solver["fair_zone"] is not None  # the blended junction: both used a locator
+    assert len(built) == 2  # body and arm, once each
