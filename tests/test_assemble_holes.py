@@ -70,3 +70,24 @@ def test_holes_example_a_b_with_two_legs_one_mirrored_from_the_other(real_host):
     res = assemble_detailed([l.mesh for l in doc.layers], [l.closed for l in doc.layers], names=doc.layer_ids())
     assert sorted((doc.layers[a.upper].id, doc.layers[a.lower].id) for a in res.attachments) == [("leg", "b"), ("leg2", "b")]
     assert check_closed(res) == [-2]
+
+
+@pytest.mark.parametrize("gap", [0.03, 0.01])
+def test_a_junction_passing_within_half_an_edge_of_a_hole_keeps_the_hole_s_rim(gap):
+    # the re-triangulation drops interior vertices near a junction; the hole's rim vertices are
+    # constrained edges and must stay, however close the junction passes (here half an edge
+    # and a sixth of one, h = 0.06)
+    body = slab_with_holes(1)
+    t = np.radians(np.linspace(-90.0, 90.0, 40))
+    arm = inflate_stroke(np.column_stack([0.35 + gap + 0.3 * np.cos(t), 0.25 * np.sin(t)]), False, PARAMS)
+    res = assemble_detailed([body, arm], [True, False], names=["body", "arm"])
+    assert [(a.upper, a.lower) for a in res.attachments] == [(1, 0)]
+    assert check_closed(res) == [0]  # body with its hole, arm glued on: one genus-1 surface
+    # the plain sleeve (no fairing, which moves the vertices near the junction) keeps every
+    # rim vertex of the hole where it was drawn
+    plain = assemble_detailed([body, arm], [True, False], params={"fillet": 0.0}, names=["body", "arm"])
+    assert check_closed(plain) == [0]
+    hole = body.V[np.asarray(body.holes[0]), :2]
+    V = plain.mesh.V
+    for p in hole:
+        assert np.min(np.linalg.norm(V[:, :2] - p, axis=1)) <= 1e-9
