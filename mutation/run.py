@@ -186,6 +186,26 @@ def pytest_collection_finish(session):
                     fd._scope = Scope.Function
 
 
+def pytest_runtest_setup(item):
+    # The same trap as module fixtures, in plain Python: a test helper memoised with
+    # functools.lru_cache (a creature assembled once for a whole file) runs the product code
+    # inside the first test that calls it, and the stats run mapped that code to that test
+    # alone. In the stats run, and only there, every memo of the workspace's modules (tests
+    # and the package) is emptied before each test, so each test is traced with what it reads.
+    import os
+    import sys
+    if os.environ.get("MUTANT_UNDER_TEST") != "stats":
+        return
+    root = str(_MROOT)
+    for mod in list(sys.modules.values()):
+        path = getattr(mod, "__file__", None) or ""
+        if not path.startswith(root) or "site-packages" in path:
+            continue
+        for value in list(vars(mod).values()):
+            if callable(getattr(value, "cache_clear", None)) and hasattr(value, "__wrapped__"):
+                value.cache_clear()
+
+
 def pytest_collection_modifyitems(config, items):
     slow = tuple(_MSCOPE["slow"])
     keep = [item for item in items if not item.nodeid.startswith(slow)]

@@ -91,3 +91,18 @@ def test_a_junction_passing_within_half_an_edge_of_a_hole_keeps_the_hole_s_rim(g
     V = plain.mesh.V
     for p in hole:
         assert np.min(np.linalg.norm(V[:, :2] - p, axis=1)) <= 1e-9
+
+
+def test_a_part_inside_a_hole_does_not_overlap_the_holed_layer():
+    # a disk drawn in front, wholly inside the hole: it overlaps nothing (the hole is not part of
+    # the layer's region), so it gets no depth row and rests at the drawing plane
+    body = slab_with_holes(1)
+    disk = inflate_stroke(ring(0.2, 40), True, PARAMS)
+    res = assemble_detailed([body, disk], [True, True], names=["body", "disk"])
+    assert res.solver["overlapping_pairs"] == 0 and res.n_inequalities == 0
+    assert res.solver["free_shift"] == {}
+    assert sorted(check_closed(res)) == [0, 2]
+    # a larger disk reaching over the rim does overlap it
+    big = inflate_stroke(ring(0.5, 40), True, PARAMS)
+    res = assemble_detailed([body, big], [True, True], names=["body", "disk"])
+    assert res.solver["overlapping_pairs"] == 1 and res.n_inequalities > 0
