@@ -142,3 +142,27 @@ def test_each_sheet_gets_one_point_locator_per_assembly(monkeypatch):
     res = assemble_detailed([body, arm])
     assert res.solver["fair_zone"] is not None  # the blended junction: both used a locator
     assert len(built) == 2  # body and arm, once each
+
+
+def test_the_fairing_solve_runs_on_libigl_and_agrees_with_superlu(monkeypatch):
+    # SuperLU is only the fallback for a binding that fails: the fast path must work on its own
+    # (a broken call into libigl would otherwise hide behind the fallback, 2x slower)
+    import scipy.sparse as sp
+
+    import sketchforge_assemble.fair as fair
+
+    res = _scene()
+    A = adjacency(res.mesh.F, res.mesh.n_vertices)
+    Lg = sp.diags(np.asarray(A.sum(axis=1)).ravel()) - A
+    K = (Lg @ Lg + sp.eye(A.shape[0])).tocsc()
+    rhs = np.random.default_rng(4).normal(size=(A.shape[0], 3))
+    X_lu = fair.splu(K, permc_spec="COLAMD").solve(rhs)
+
+    def no_fallback(*a, **k):
+        raise AssertionError("the SuperLU fallback was used")
+
+    monkeypatch.setattr(fair, "splu", no_fallback)
+    X = fair._spd_solve(K, rhs)
+    assert X.shape == rhs.shape
+    assert np.abs(K @ X - rhs).max() <= 1e-9 * np.abs(rhs).max()
+    assert np.abs(X - X_lu).max() <= 1e-9 * np.abs(X_lu).max()

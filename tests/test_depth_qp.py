@@ -220,7 +220,7 @@ def test_the_step_limit_stops_the_active_set_with_a_clear_error():
 
 def test_memory_budget_counts_what_the_working_set_holds(monkeypatch):
     # the budget charged at each check is the method's real memory: cached columns P⁻¹cᵀ of the
-    # rows probed, the buffer's columns and the m×m factors, never more
+    # rows probed, the buffer's columns and the m×m factor, never more
     P, q, Aeq, beq, Ain, bin_ = _random_qp(6, n=2000, n_in=20)
     seen = []
     real = depth._WorkingSet.check_budget
@@ -229,7 +229,7 @@ def test_memory_budget_counts_what_the_working_set_holds(monkeypatch):
         n = len(self.x0)
         zc = self.Z.shape[1] if z_columns is None else z_columns
         mm = self.m if m is None else m
-        seen.append((len(self.cache) + new_columns, zc, mm, 8 * n * (len(self.cache) + new_columns + zc) + 16 * mm * mm))
+        seen.append((len(self.cache) + new_columns, zc, mm, 8 * n * (len(self.cache) + new_columns + zc) + 8 * mm * mm))
         return real(self, new_columns, z_columns, m)
 
     monkeypatch.setattr(depth._WorkingSet, "check_budget", spy)
@@ -355,6 +355,15 @@ def test_screening_guess_is_the_anchored_glue_only_minimiser(monkeypatch):
     assert np.abs(_screening_guess(P, q, Aeq, beq) - ref).max() <= 1e-9
     monkeypatch.setattr(igl, "min_quad_with_fixed", lambda *a, **k: np.full((P.shape[0], 1), np.nan))
     assert np.abs(_screening_guess(P, q, Aeq, beq) - ref).max() <= 1e-9
+    monkeypatch.undo()
+    # and libigl's path on its own: the SuperLU fallback is for a binding that fails, and must
+    # not hide a broken call into libigl
+    def no_fallback(*a, **k):
+        raise AssertionError("the SuperLU fallback was used")
+
+    monkeypatch.setattr(depth, "_equality_solution", no_fallback)
+    assert np.abs(_screening_guess(P, q, Aeq, beq) - ref).max() <= 1e-9
+    monkeypatch.undo()
     # with no glue rows: the anchored minimiser
     g0 = _screening_guess(P, q, Aeq[:0], beq[:0])
     assert np.abs(Pa @ g0 + qa).max() <= 1e-9

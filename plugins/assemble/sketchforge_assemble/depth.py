@@ -596,8 +596,8 @@ class _WorkingSet:
     """Working set of the active-set method in range-space form.
 
     P is factorised once; row c of the working set keeps z = P⁻¹cᵀ (computed once per row that
-    ever enters, in ``cache``) and G = C P⁻¹ Cᵀ is held with its Cholesky factor L, grown by one
-    row and column per added row: the new pivot g_pp - |L⁻¹g|² is the squared distance (in the
+    ever enters, in ``cache``) and G = C P⁻¹ Cᵀ is held as its Cholesky factor L alone (G itself
+    is never solved with), grown by one row and column per added row: the new pivot g_pp - |L⁻¹g|² is the squared distance (in the
     P⁻¹ metric) of the row from the span of the working set, so a row that is linearly
     dependent on the set shows up as a pivot at round-off level and is never added. The z of
     the rows in the set live in the columns ``slot`` of one buffer (a row that leaves frees its
@@ -616,7 +616,6 @@ class _WorkingSet:
         self.free: list[int] = []
         self.Z = np.zeros((len(x0), 16))
         self.used = 0  # columns of Z ever used
-        self.G = np.zeros((0, 0))
         self.L = np.zeros((0, 0))
 
     @property
@@ -625,11 +624,11 @@ class _WorkingSet:
 
     def check_budget(self, new_columns: int = 0, z_columns: int | None = None, m: int | None = None) -> None:
         """Refuse to grow past the memory budget (before allocating, so nothing is ever
-        half-grown): cached and buffered columns of N floats, and the m×m factors G, L."""
+        half-grown): cached and buffered columns of N floats, and the m×m factor L."""
         n = len(self.x0)
         z_columns = self.Z.shape[1] if z_columns is None else z_columns
         m = self.m if m is None else m
-        need = 8 * n * (len(self.cache) + new_columns + z_columns) + 16 * m * m
+        need = 8 * n * (len(self.cache) + new_columns + z_columns) + 8 * m * m
         if need > self.budget:
             raise DepthOrderError(
                 f"The depth-order solve stopped: it needed {need / 2**20:.0f} MB, over its budget of "
@@ -662,22 +661,22 @@ class _WorkingSet:
 
     def probe(self, key):
         """For a row c not in the set: z = P⁻¹cᵀ, r = G⁻¹ C z, the pivot c z - (C z)ᵀ G⁻¹ (C z), c z,
-        and l = L⁻¹ C z, g = C z (to add the row)."""
+        and l = L⁻¹ C z (to add the row)."""
         (zp,) = self.z([key])
         cols, vals = self.row(key)
         cz = float(vals @ zp[cols])
         if self.m == 0:
-            return zp, np.zeros(0), cz, cz, np.zeros(0), np.zeros(0)
+            return zp, np.zeros(0), cz, cz, np.zeros(0)
         g = vals @ self.Z[cols][:, self.slot]  # C P⁻¹ cᵀ (P symmetric)
         l = solve_triangular(self.L, g, lower=True, check_finite=False)
         r = solve_triangular(self.L, l, lower=True, trans="T", check_finite=False)
-        return zp, r, cz - float(l @ l), cz, l, g
+        return zp, r, cz - float(l @ l), cz, l
 
     def step(self, zp, r):
         """z = P⁻¹(cᵀ - Cᵀr): the move of x that keeps the rows of the set tight."""
         return zp - self.Z[:, :self.used] @ self.spread(r) if self.m else zp
 
-    def add(self, key, zp, l, g, piv):
+    def add(self, key, zp, l, piv):
         m = self.m
         full = not self.free and self.used == self.Z.shape[1]
         self.check_budget(z_columns=self.Z.shape[1] * (2 if full else 1), m=m + 1)
@@ -689,16 +688,11 @@ class _WorkingSet:
             j = self.used
             self.used += 1
         self.Z[:, j] = zp
-        cols, vals = self.row(key)
-        G = np.empty((m + 1, m + 1))
-        G[:m, :m] = self.G
-        G[m, :m] = G[:m, m] = g
-        G[m, m] = float(vals @ zp[cols])
         L = np.zeros((m + 1, m + 1))
         L[:m, :m] = self.L
         L[m, :m] = l
         L[m, m] = np.sqrt(piv)
-        self.G, self.L = G, L
+        self.L = L
         self.keys.append(key)
         self.slot.append(j)
 
@@ -709,7 +703,6 @@ class _WorkingSet:
         self.free.append(self.slot.pop(j))
         del self.keys[j]
         keep = np.r_[0:j, j + 1:m]
-        self.G = self.G[np.ix_(keep, keep)]
         L = self.L[np.ix_(keep, keep)]
         if j < m - 1:
             l = self.L[j + 1:, j]
@@ -766,9 +759,9 @@ def _active_set(P, q, Aeq, beq, Ain, bin_, warm, tol, max_iter, memory_budget=ME
     scale = 1.0 + float(np.abs(bin_).max(initial=0.0)) + float(np.abs(beq).max(initial=0.0))
 
     def try_add(key):
-        zp, _, piv, cz, l, g = W.probe(key)
+        zp, _, piv, cz, l = W.probe(key)
         if piv > dep * cz:
-            W.add(key, zp, l, g, piv)
+            W.add(key, zp, l, piv)
 
     W.z([-1 - i for i in range(len(beq))] + [int(k) for k in warm])
     for i in range(len(beq)):
@@ -798,7 +791,7 @@ def _active_set(P, q, Aeq, beq, Ain, bin_, warm, tol, max_iter, memory_budget=ME
             steps += 1
             if steps > max_iter:
                 raise DepthOrderError("The depth-order solve did not converge; reorder or redraw the parts.")
-            zp, r, piv, cz, l, g = W.probe(p)
+            zp, r, piv, cz, l = W.probe(p)
             dependent = piv <= dep * cz
             # partial step: the first depth row of W whose multiplier reaches 0 (equality rows have
             # free multipliers)
@@ -825,7 +818,7 @@ def _active_set(P, q, Aeq, beq, Ain, bin_, warm, tol, max_iter, memory_budget=ME
                 x = x + t * W.step(zp, r)
                 s_p += t * piv
             if t2 <= t1:  # full step: p joins W; x and λ afresh (no drift from the updates)
-                W.add(p, zp, l, g, piv)
+                W.add(p, zp, l, piv)
                 in_set[p] = True
                 x, lam = W.minimiser()
                 lam[n_eq:] = np.maximum(lam[n_eq:], 0.0)
