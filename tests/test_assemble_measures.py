@@ -109,3 +109,12 @@ def test_distance_to_a_polyline_within_reach_is_exact_and_infinite_beyond():
     assert 0 < near.sum() < len(xy)
     assert np.allclose(got[near], want[near], atol=1e-12)
     assert np.all(np.isinf(got[~near]))
+
+
+def test_box_pairs_of_fewer_than_two_boxes_or_of_points():
+    none = dg.box_pairs(np.zeros((1, 3)), np.ones((1, 3)))
+    assert none.shape == (0, 2) and none.dtype == np.int64
+    assert dg.box_pairs(np.zeros((0, 3)), np.zeros((0, 3))).shape == (0, 2)
+    # boxes of zero extent (points): those at one place overlap (closed boxes), the rest do not
+    P = np.array([[0, 0, 0], [0, 0, 0], [1, 0, 0], [0, 0, 0]], float)
+    assert dg.box_pairs(P, P.copy()).tolist() == [[0, 1], [0, 3], [1, 3]]

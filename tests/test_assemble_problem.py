@@ -280,3 +280,45 @@ def test_a_bad_fillet_or_fair_is_named_with_its_value():
         with pytest.raises(ParameterError) as err:
             assemble_detailed(list(meshes), list(closed), params={"fair": bad})
         assert str(err.value) == f"assembly parameter 'fair' must be a whole number of rings from 0 to 50, got {bad!r}"
+
+
+def test_a_bad_solver_is_named_with_its_value():
+    meshes, closed = _layers()
+    with pytest.raises(ParameterError) as err:
+        assemble_detailed(list(meshes), list(closed), params={"solver": "cg"})
+    assert str(err.value) == "assembly parameter 'solver' must be 'osqp' or 'active_set', got 'cg'"
+
+
+def test_a_fairing_taken_from_the_cache_still_reports_its_time():
+    from sketchforge_assemble import AssemblyCache
+
+    meshes, closed = _layers()
+    cache = AssemblyCache()
+    first = assemble_detailed(list(meshes), list(closed), cache=cache)
+    t0 = time.perf_counter()
+    again = assemble_detailed(list(meshes), list(closed), cache=cache)
+    wall = time.perf_counter() - t0
+    assert again.mesh.identical(first.mesh)
+    assert 0.0 <= again.timings["fair"] <= wall and again.timings["fair_check"] == 0.0
+
+
+def test_two_junctions_touching_on_one_layer_name_both_parts():
+    # two legs side by side whose junctions (the closing segments of their strokes) meet at one
+    # point on the body
+    from sketchforge_assemble import AttachmentError
+
+    body = _inflate(_ellipse(0, 0, 0.6, 0.4), True)
+    def leg(pts):
+        pts = np.asarray(pts, float)
+        return np.vstack([np.linspace(a, b, 12, endpoint=False) for a, b in zip(pts[:-1], pts[1:])] + [pts[-1:]])
+
+    left = _inflate(leg([[0.0, 0.0], [-0.1, -0.7], [-0.35, -0.7], [-0.25, 0.0]]), False)
+    right = _inflate(leg([[0.25, 0.0], [0.35, -0.7], [0.1, -0.7], [0.0, 0.0]]), False)
+    with pytest.raises(AttachmentError) as err:
+        assemble_detailed([body, left, right], names=["body", "left", "right"])
+    assert str(err.value) == ("The junctions of layers 'left' and 'right' cross or touch on layer 'body'; "
+                              "move one of them apart.")
+    # moved apart by a few edges, the same two legs attach
+    apart = _inflate(leg([[0.45, 0.0], [0.55, -0.7], [0.3, -0.7], [0.2, 0.0]]), False)
+    res = assemble_detailed([body, left, apart], names=["body", "left", "right"])
+    assert sorted((a.upper, a.lower) for a in res.attachments) == [(1, 0), (2, 0)]
