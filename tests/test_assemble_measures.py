@@ -118,3 +118,51 @@ def test_box_pairs_of_fewer_than_two_boxes_or_of_points():
     # boxes of zero extent (points): those at one place overlap (closed boxes), the rest do not
     P = np.array([[0, 0, 0], [0, 0, 0], [1, 0, 0], [0, 0, 0]], float)
     assert dg.box_pairs(P, P.copy()).tolist() == [[0, 1], [0, 3], [1, 3]]
+
+
+def test_a_fold_back_onto_itself_bends_by_180_degrees_not_nan():
+    # a plain sleeve folds by 180 degrees; with round-off the normals' dot product dips below -1
+    # (a third of random folds here), and the bend must still read 180, not NaN (a NaN bend
+    # passes every "bend > limit" check)
+    rng = np.random.default_rng(0)
+    for _ in range(60):
+        P = rng.normal(size=(3, 3))
+        V = np.vstack([P, P[2]])
+        got = dg.dihedral_angles(V, np.array([[0, 1, 2], [1, 0, 3]]))
+        assert got.shape == (1,) and got[0] == pytest.approx(180.0, abs=1e-5)
+
+
+def test_box_pairs_of_boxes_that_overlap_nowhere():
+    lo = np.array([[0.0, 0, 0], [2.0, 0, 0]])
+    got = dg.box_pairs(lo, lo + 1.0)
+    assert got.shape == (0, 2) and got.dtype == np.int64
+
+
+def test_the_pair_check_called_from_its_own_pool_does_not_deadlock(monkeypatch):
+    # the two-thread split is skipped on the pool's own threads: two checks running there at
+    # once would each wait for the pool they occupy
+    monkeypatch.setattr(dg, "SPLIT_FROM", 10)
+    rng = np.random.default_rng(2)
+    c = rng.uniform(0, 1, (200, 1, 3))
+    V = (c + rng.normal(0, 0.05, (200, 3, 3))).reshape(-1, 3)
+    F = np.arange(600).reshape(200, 3)
+    want = dg.intersecting_pairs(V, F, among=np.arange(200))
+    jobs = [dg._pool().submit(dg.intersecting_pairs, V, F, None, 200_000, np.arange(200)) for _ in range(2)]
+    for job in jobs:
+        assert job.result(timeout=60).tolist() == want.tolist()
+
+
+def test_box_pairs_of_many_points_spread_apart_are_exact():
+    # every box a point (collapsed triangles), spread over a unit cube: the grid must stay
+    # finite (it divided by a cell of 1e-300 and cast 1e300 to int64)
+    rng = np.random.default_rng(9)
+    lo = rng.integers(0, 4, (200, 3)) / 4.0  # points on a coarse lattice: many coincide
+    hi = lo.copy()
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # numpy warns of a cast of inf or 1e300 to int64
+        got = dg.box_pairs(lo, hi)
+    i, j = np.triu_indices(200, 1)
+    hit = np.all((lo[i] <= hi[j]) & (lo[j] <= hi[i]), axis=1)
+    assert got.tolist() == np.c_[i[hit], j[hit]].tolist()

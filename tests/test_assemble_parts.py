@@ -166,3 +166,50 @@ def test_the_fairing_solve_runs_on_libigl_and_agrees_with_superlu(monkeypatch):
     assert X.shape == rhs.shape
     assert np.abs(K @ X - rhs).max() <= 1e-9 * np.abs(rhs).max()
     assert np.abs(X - X_lu).max() <= 1e-9 * np.abs(X_lu).max()
+
+
+def test_rings_count_edges_from_the_seed_like_a_breadth_first_search():
+    from collections import deque
+
+    from sketchforge_assemble.fair import rings_from
+
+    res = _scene()
+    F, n = res.mesh.F, res.mesh.n_vertices
+    A = adjacency(F, n)
+    seed = np.array([0, 7])
+    got = rings_from(A, seed, 4)
+    dist = np.full(n, 5)
+    dist[seed] = 0
+    todo = deque(seed.tolist())
+    while todo:
+        v = todo.popleft()
+        for w in A.indices[A.indptr[v]:A.indptr[v + 1]]:
+            if dist[w] > dist[v] + 1 and dist[v] + 1 <= 4:
+                dist[w] = dist[v] + 1
+                todo.append(w)
+    assert np.array_equal(got, dist)
+    assert got.dtype == np.int64 and set(np.unique(got)) == {0, 1, 2, 3, 4, 5}
+
+
+def test_hold_weights_rise_smoothly_from_hold_start_to_the_zone_s_edge():
+    from sketchforge_assemble.fair import HOLD_START, HOLD_WEIGHT, hold_weights
+
+    t = np.linspace(0.0, 1.0, 101)
+    w = hold_weights(t)
+    assert np.all(w[t <= HOLD_START] == 0.0)
+    assert w[-1] == pytest.approx(HOLD_WEIGHT, rel=1e-12)
+    mid = HOLD_START + 0.5 * (1.0 - HOLD_START)
+    assert hold_weights(np.array([mid]))[0] == pytest.approx(0.5 * HOLD_WEIGHT, rel=1e-12)
+    assert np.all(np.diff(w) >= 0.0)
+
+
+def test_fairing_builds_the_adjacency_it_is_not_given():
+    from sketchforge_assemble.fair import fair_seams
+
+    res = _scene()
+    V, F = res.mesh.V, res.mesh.F
+    moved = np.zeros(len(V), bool)
+    moved[F[res.face_layer == 2].ravel()[:200]] = True  # part of the arm
+    a = fair_seams(V, F, moved)
+    b = fair_seams(V, F, moved, adjacency(F, len(V)))
+    assert np.array_equal(a, b) and not np.array_equal(a, V)

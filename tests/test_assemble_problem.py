@@ -322,3 +322,13 @@ def test_two_junctions_touching_on_one_layer_name_both_parts():
     apart = _inflate(leg([[0.45, 0.0], [0.55, -0.7], [0.3, -0.7], [0.2, 0.0]]), False)
     res = assemble_detailed([body, left, apart], names=["body", "left", "right"])
     assert sorted((a.upper, a.lower) for a in res.attachments) == [(1, 0), (2, 0)]
+
+
+def test_assemble_meshes_passes_closed_and_params_on():
+    from sketchforge_assemble import assemble_meshes
+
+    meshes, closed = _layers()
+    body, arm = meshes[2], meshes[3]
+    for cl, params in (([False, True], None), ([False, False], {"fillet": 0.0})):
+        assert assemble_meshes([body, arm], cl, params).identical(assemble_detailed([body, arm], cl, params).mesh)
+    assert not assemble_meshes([body, arm], [False, True]).identical(assemble_meshes([body, arm]))
