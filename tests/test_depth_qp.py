@@ -398,7 +398,7 @@ def _segment_crossings(xy_k, ek, xy_i, ei, eps=1e-9):
     return pk, pi, s[ok], t[ok]
 
 
-@pytest.mark.parametrize("dx, dy", [(0.3, 0.0), (0.0, 0.35), (-0.25, -0.3), (0.2, 0.45)])
+@pytest.mark.parametrize("dx, dy", [(0.3, 0.0), (0.0, 0.35), (-0.25, -0.3), (0.2, 0.45), (-0.55, 0.3)])
 def test_crossing_rows_are_exactly_the_edge_crossings_in_the_overlap(dx, dy):
     # one row per pair of crossing edges, at the crossing point of both, requiring the front
     # sheet's back face to clear the back sheet's front face by the gap there
