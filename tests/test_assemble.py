@@ -19,6 +19,9 @@ from sketchforge.errors import SketchforgeError
 from sketchforge.geometry.locate import TriangleLocator
 from sketchforge.geometry.mesh import Mesh
 from sketchforge.geometry.normals import face_normals
+from assemble_shapes import arc as _arc
+from assemble_shapes import ellipse as _ellipse
+from assemble_shapes import inflate as _inflate
 from sketchforge_assemble import BACK, FRONT, AttachmentError, DepthOrderError, assemble_detailed, assemble_meshes
 from sketchforge_assemble import diagnostics as dg
 from sketchforge_assemble.depth import _active_set, solve_depth
@@ -209,22 +212,6 @@ def test_moving_a_layer_behind_flips_what_the_ray_sees():
 
 
 # --- edge cases ------------------------------------------------------------------------------
-
-
-def _ellipse(cx, cy, a, b, n=48):
-    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
-    return np.c_[cx + a * np.cos(t), cy + b * np.sin(t)]
-
-
-def _arc(cx, cy, r, a0, a1, n=40):
-    t = np.radians(np.linspace(a0, a1, n))
-    return np.c_[cx + r * np.cos(t), cy + r * np.sin(t)]
-
-
-def _inflate(points, closed, res=0.05):
-    from sketchforge_inflate import inflate_stroke
-
-    return inflate_stroke(points, closed=closed, params={"resolution": res, "inflation": 1.0, "smoothing": 0.5})
 
 
 def test_junction_spanning_two_layers_is_a_clear_error_or_a_free_part():

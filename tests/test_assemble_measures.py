@@ -67,10 +67,6 @@ def test_digest_tells_bytes_and_types_apart_and_refuses_what_it_cannot_read():
 
 
 def test_the_memory_budget_sentence_counts_the_rows_in_play():
-    import sys
-    from pathlib import Path
-
-    sys.path.insert(0, str(Path(__file__).parent))
     from test_depth_qp import _random_qp
 
     from sketchforge_assemble.depth import _WorkingSet, solve_depth

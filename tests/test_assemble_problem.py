@@ -20,24 +20,11 @@ import sketchforge_assemble.assemble as asm
 from sketchforge.errors import ParameterError
 from sketchforge.geometry.laplacian import laplacian_and_mass
 from sketchforge.geometry.mesh import Mesh
+from assemble_shapes import arc as _arc
+from assemble_shapes import ellipse as _ellipse
+from assemble_shapes import inflate as _inflate
 from sketchforge_assemble import BACK, FRONT, assemble_detailed
 from sketchforge_assemble.attach import lo_chain_index
-
-
-def _ellipse(cx, cy, a, b, n=48):
-    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
-    return np.c_[cx + a * np.cos(t), cy + b * np.sin(t)]
-
-
-def _arc(cx, cy, r, a0, a1, n=40):
-    t = np.radians(np.linspace(a0, a1, n))
-    return np.c_[cx + r * np.cos(t), cy + r * np.sin(t)]
-
-
-def _inflate(points, closed, res=0.05):
-    from sketchforge_inflate import inflate_stroke
-
-    return inflate_stroke(points, closed=closed, params={"resolution": res, "inflation": 1.0, "smoothing": 0.5})
 
 
 @lru_cache(maxsize=None)
