@@ -672,10 +672,6 @@ class _WorkingSet:
         r = solve_triangular(self.L, l, lower=True, trans="T", check_finite=False)
         return zp, r, cz - float(l @ l), cz, l
 
-    def step(self, zp, r):
-        """z = P⁻¹(cᵀ - Cᵀr): the move of x that keeps the rows of the set tight."""
-        return zp - self.Z[:, :self.used] @ self.spread(r) if self.m else zp
-
     def add(self, key, zp, l, piv):
         m = self.m
         full = not self.free and self.used == self.Z.shape[1]
@@ -815,7 +811,9 @@ def _active_set(P, q, Aeq, beq, Ain, bin_, warm, tol, max_iter, memory_budget=ME
             t = min(t1, t2)
             lam = lam - t * r  # (p's own multiplier, t so far, is recomputed when p joins W)
             if not dependent:
-                x = x + t * W.step(zp, r)
+                # x moves by t·P⁻¹(c_pᵀ - Cᵀr) here, but nothing reads it before the full step
+                # recomputes it from W: p, independent of W, stays so as rows leave, so this
+                # loop ends in a full step. Only p's slack is tracked.
                 s_p += t * piv
             if t2 <= t1:  # full step: p joins W; x and λ afresh (no drift from the updates)
                 W.add(p, zp, l, piv)
