@@ -597,7 +597,8 @@ class _WorkingSet:
 
     P is factorised once; row c of the working set keeps z = P⁻¹cᵀ (computed once per row that
     ever enters, in ``cache``) and G = C P⁻¹ Cᵀ is held as its Cholesky factor L alone (G itself
-    is never solved with), grown by one row and column per added row: the new pivot g_pp - |L⁻¹g|² is the squared distance (in the
+    is never solved with), grown by one row and column per added row: the new pivot
+    g_pp - |L⁻¹g|² is the squared distance (in the
     P⁻¹ metric) of the row from the span of the working set, so a row that is linearly
     dependent on the set shows up as a pivot at round-off level and is never added. The z of
     the rows in the set live in the columns ``slot`` of one buffer (a row that leaves frees its

@@ -97,11 +97,12 @@ def box_pairs(lo: np.ndarray, hi: np.ndarray, among: np.ndarray | None = None, b
     ext = (hi - lo).max(axis=1)
     cell = 2.0 * float(np.median(ext))
     if not np.isfinite(cell) or cell <= 0.0:
-        # Most boxes are points (collapsed triangles): a cell of the largest box, but never so
-        # small that the grid's indices overflow int64 (1e-300 over a unit spread did, and
-        # garbage keys decided the pairs); at most 1024 cells a side.
-        span = float(np.max(hi.max(axis=0) - lo.min(axis=0), initial=0.0))
-        cell = max(float(ext.max(initial=0.0)), span / 1024.0, 1e-300)
+        cell = float(ext.max(initial=0.0))  # most boxes are points (collapsed triangles)
+    # Never so fine that the grid's indices overflow int64 (a cell of 1e-300 over a unit spread
+    # cast 1e300 to int64: garbage keys decided the pairs): at most 2^20 cells a side, so a
+    # cell's key (three axes) stays below 2^61.
+    span = float(np.max(hi.max(axis=0) - lo.min(axis=0), initial=0.0))
+    cell = max(cell, span / 2.0**20, 1e-300)
     origin = lo.min(axis=0)
     a = np.floor((lo - origin) / cell).astype(np.int64)
     b = np.floor((hi - origin) / cell).astype(np.int64)
