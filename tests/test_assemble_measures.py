@@ -118,7 +118,7 @@ def test_box_pairs_of_fewer_than_two_boxes_or_of_points():
 
 def test_a_fold_back_onto_itself_bends_by_180_degrees_not_nan():
     # a plain sleeve folds by 180 degrees; with round-off the normals' dot product dips below -1
-    # (a third of random folds here), and the bend must still read 180, not NaN (a NaN bend
+    # (about one random fold in six), and the bend must still read 180, not NaN (a NaN bend
     # passes every "bend > limit" check)
     rng = np.random.default_rng(0)
     for _ in range(60):

@@ -51,7 +51,8 @@ def test_fairing_safety_is_the_same_at_any_scale(scale):
     assert fairing_is_safe(V * scale, F, moved, h * scale)
     for area, safe in ((1e-7, False), (1e-5, True)):
         W = V.copy()
-        W[3] = [1.0, 2 * area, 0.0]  # triangle 1-3-2 squeezed onto the line from 1 to 2... almost
+        # vertex 3 moved to the middle of edge 1-2, off it by the height that gives triangle
+        # 1-3-2 that area
         W[3] = W[1] + (W[2] - W[1]) * 0.5 + np.array([1.0, 1.0, 0.0]) / np.sqrt(2) * (2 * area / np.sqrt(2))
         assert fairing_is_safe(W * scale, F, moved, h * scale) is safe, (area, scale)
     assert not fairing_is_safe(np.where(np.arange(4)[:, None] == 3, np.nan, V), F, moved, h)
