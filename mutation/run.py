@@ -79,7 +79,8 @@ SCOPES: dict[str, tuple[str, str, list[str], list[str]]] = {
                      "tests/test_assemble_holes.py", "tests/test_regressions_planted.py", "tests/test_assemble_cache.py",
                      "tests/test_transform.py", "tests/test_depth_qp.py", "tests/test_assemble_problem.py",
                      "tests/test_assemble_speed.py", "tests/test_guard.py", "tests/test_assemble_culprit.py",
-                     "tests/test_assemble_parts.py", "tests/test_assemble_measures.py"]),
+                     "tests/test_assemble_parts.py", "tests/test_assemble_measures.py",
+                     "tests/test_assemble_contracts.py"]),
     "animate": ("plugins/animate/sketchforge_animate", "sketchforge_animate",
                 ["sketchforge_animate/*"], ["tests/test_animate.py"]),
 }

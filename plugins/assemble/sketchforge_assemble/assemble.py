@@ -73,7 +73,8 @@ class AssemblyResult:
     components : int
         Connected components (one per group of attached parts, one per free part).
     n_equalities, n_inequalities, n_active : int
-        Glue rows, depth-order rows, depth rows active at the solution.
+        Glue rows, depth-order rows, and the depth rows active at the answer: within half the
+        gap (+1e-6) of binding, counted the same way whichever solver ran.
     max_violation : float
         Largest violation of any depth-order row (0 when all hold).
     glue_error : float
@@ -210,8 +211,9 @@ def assemble_detailed(meshes: Sequence[Mesh | None], closed: Sequence[bool] | No
     sinfo["gap"] = gap
     x, shift = settle_free_parts(x, Ain, bin_, offsets, free, pad)
     sinfo["free_shift"] = {keep[i]: v for i, v in shift.items()}
-    if shift and sinfo.get("iterations", 0) == 0 and len(bin_):  # OSQP's count, as in solve_depth
-        sinfo["active"] = int(np.sum(Ain @ x - bin_ <= pad + 1e-6))
+    # Counted at the settled answer, the same way for both solvers: the active set's own count
+    # (its working set) knows nothing of the rows a free part came to rest on.
+    sinfo["active"] = int(np.sum(Ain @ x - bin_ <= pad + 1e-6)) if len(bin_) else 0
     timings["solve"] = time.perf_counter() - t
     viol = 0.0
     if len(bin_):
