@@ -146,6 +146,71 @@ def test_a_wide_body_reads_at_least_the_reach_even_next_to_its_rim():
     assert (rho[1:] >= reach - spacing).all()  # within reach of a deep interior
 
 
+def test_the_width_grid_reads_the_deepest_point_exactly_reach_away():
+    # A square whose sides lie on grid nodes: there the distance transform is exact (a node k
+    # nodes in from a side is k spacings from it), so the half-width read at the nodes next
+    # to a side is the distance of the node r = ceil(reach / spacing) nodes further in: r + 1
+    # spacings, on the left, right, bottom and top side alike.
+    from sketchforge_isophote_tool.layerdata import _width_grid
+
+    h = 0.04
+    s = 0.5 * h
+    L = 200 * s
+    square = shapely.box(0.0, 0.0, L, L)
+    for reach, r in ((10 * s, 10), (9.5 * s, 10), (0.5 * s, 1)):
+        origin, spacing, W = _width_grid(square, h, reach)
+        assert spacing == s and origin.tolist() == [-2 * h, -2 * h]
+        # nodes from 2h before the square to the first node at least 2h beyond it
+        assert W.shape == (L / s + 9, L / s + 9)
+        i0 = int(round(-origin[0] / s))  # the node on the square's left (and bottom) side
+        mid = i0 + 100
+        want = (r + 1) * s
+        for node in ((i0 + 1, mid), (i0 + 199, mid), (mid, i0 + 1), (mid, i0 + 199)):
+            assert W[node] == pytest.approx(want, abs=1e-12), (reach, node)
+        # deep inside: the distance of the node itself, when the centre is out of reach
+        assert W[i0 + 50, mid] == pytest.approx((50 + r) * s, abs=1e-12)
+        if r == 1:  # outside, the side's own node and beyond read nothing unless in reach
+            assert W[i0 - 1, mid] == 0.0 and W[i0, mid] == s
+
+
+def test_a_huge_layer_gets_a_grid_of_about_600_nodes_a_side():
+    from sketchforge_isophote_tool.layerdata import _width_grid
+
+    h = 0.02
+    origin, spacing, W = _width_grid(shapely.box(0.0, 0.0, 1000.0, 400.0), h, 1.0)
+    assert spacing == pytest.approx((1000.0 + 4 * h) / 600.0, rel=1e-12)
+    assert 601 <= W.shape[0] <= 602 and W.shape[1] == np.ceil((400 + 4 * h) / spacing) + 1
+
+
+def test_the_rim_margin_is_read_bilinearly_from_the_width_grid():
+    from sketchforge_isophote_tool.layerdata import RIM_WIDTH_FRACTION, _width_grid, local_margin
+
+    t = np.linspace(0, 2 * np.pi, 200, endpoint=False)
+    blob = shapely.Polygon(np.column_stack([np.cos(t) * (1 + 0.3 * np.cos(3 * t)), 0.6 * np.sin(t)]))
+    grid = _width_grid(blob, 0.05, 0.3)
+    origin, spacing, W = grid
+    rng = np.random.default_rng(5)
+    P = rng.uniform(origin, origin + spacing * (np.array(W.shape) - 1.0001), (300, 2))  # over the grid
+    u = (P - origin) / spacing
+    i, f = np.floor(u).astype(int), u - np.floor(u)
+    want = (W[i[:, 0], i[:, 1]] * (1 - f[:, 0]) * (1 - f[:, 1]) + W[i[:, 0] + 1, i[:, 1]] * f[:, 0] * (1 - f[:, 1])
+            + W[i[:, 0], i[:, 1] + 1] * (1 - f[:, 0]) * f[:, 1] + W[i[:, 0] + 1, i[:, 1] + 1] * f[:, 0] * f[:, 1])
+    assert np.ptp(want) > 0.1  # thin lobes and a wide middle
+    got = local_margin(grid, np.inf, P)
+    assert got == pytest.approx(RIM_WIDTH_FRACTION * want, abs=1e-12)
+    capped = local_margin(grid, 0.01, P)
+    assert np.array_equal(capped, np.minimum(0.01, got))
+
+
+def test_a_hole_with_a_broken_point_is_named_as_the_layer_s_outline():
+    from sketchforge.errors import GeometryError
+
+    square = [(0.0, 0.0), (2.0, 0.0), (2.0, 2.0), (0.0, 2.0)]
+    with pytest.raises(GeometryError) as err:
+        _outline_of(square, holes=[[(0.5, 0.5), (1.0, np.inf), (1.0, 1.0)]])
+    assert str(err.value) == "the layer's outline has a point that is not a finite number (point 6: [1.0, inf])"
+
+
 # --- the layer's planar data: edge length and rim margin -----------------------------------
 
 
