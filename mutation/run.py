@@ -72,7 +72,8 @@ SCOPES: dict[str, tuple[str, str, list[str], list[str]]] = {
                           "tests/test_regressions_planted.py", "tests/test_fidelity_measures.py",
                           "tests/test_sculpt_tool_preview.py", "tests/test_corpus_measures.py",
                           "tests/test_sculpt_display.py", "tests/test_sculpt_pick.py",
-                          "tests/test_sculpt_command_format.py", "tests/test_sculpt_tool_state.py"]),
+                          "tests/test_sculpt_command_format.py", "tests/test_sculpt_tool_state.py",
+                          "tests/test_sculpt_stroke_band.py"]),
     "assemble": ("plugins/assemble/sketchforge_assemble", "sketchforge_assemble",
                  ["sketchforge_assemble/*"], [
                      "tests/test_assemble.py", "tests/test_assemble_blend.py",
