@@ -1,5 +1,6 @@
-"""The redrawn isophote stroke on its way in: its length limit and its clipping to the band
-around the picked isophote (the parts outside are not the person's intent)."""
+"""The redrawn isophote stroke on its way in: its length limit, its clipping to the band
+around the picked isophote (the parts outside are not the person's intent), and the shading
+change it asks for, checked against its definition."""
 
 from __future__ import annotations
 
@@ -52,3 +53,53 @@ def test_a_long_stroke_is_measured_along_its_length():
     assert str(err.value) == (f"the stroke is 60 drawing units long, too long for a layer of edge length "
                               f"0.001 (at most {limit:.3g}): draw it over the layer")
     assert np.array_equal(guard_length(zig[:800], h), zig[:800])  # 48 units: taken as drawn
+
+
+# --- the shading change the stroke asks for (thesis 4.4) ----------------------------------------
+
+
+def _shading_problem():
+    from sketchforge_isophote_tool.layerdata import planar_data
+    from sketchforge_isophote_tool.shading import bary_rows
+    from sketchforge_isophote_tool.testing import inflated
+
+    mesh = inflated("ellipse", 0.04)
+    pd = planar_data(mesh)
+    x, y = pd.V2[:, 0], pd.V2[:, 1]
+    E = 0.5 + 0.3 * x - 0.2 * y**2  # any shading: the definition holds for every one
+    free = np.abs(x - 0.1) < 0.25
+    P = np.c_[np.full(40, 0.1), np.linspace(-0.3, 0.3, 40)]
+    B = bary_rows(pd, P)
+    ws = np.full(40, 0.6 / 40)
+    return pd, E, free, B, ws
+
+
+def test_the_shading_change_is_the_minimiser_it_is_defined_as():
+    # δE = 0 off the free vertices; on them, the gradient of
+    # δEᵀ Q δE + β Σ w_k (E(P_k) + δE(P_k) − c)² vanishes, and the stroke's points move towards c
+    from sketchforge_isophote_tool.shading import STROKE_WEIGHT, shading_change
+
+    pd, E, free, B, ws = _shading_problem()
+    c = 0.7
+    dE = shading_change(pd, E, free, B, ws, c)
+    assert np.all(dE[~free] == 0.0) and np.abs(dE[free]).max() > 0.01
+    idx = np.flatnonzero(free)
+    beta = STROKE_WEIGHT / pd.h**3
+    Bf = B[:, idx]
+    grad = pd.Q[idx][:, idx] @ dE[idx] + beta * (Bf.T @ (ws * (B @ (E + dE) - c)))
+    scale = beta * np.abs(Bf.T @ (ws * (B @ E - c))).max()
+    assert np.abs(grad).max() <= 1e-9 * scale
+    assert np.abs(B @ (E + dE) - c).max() < np.abs(B @ E - c).min()
+    assert not shading_change(pd, E, np.zeros(len(E), bool), B, ws, c).any()  # nothing free
+
+
+def test_a_broken_shading_is_refused_by_name():
+    from sketchforge_isophote_tool.shading import shading_change
+
+    pd, E, free, B, ws = _shading_problem()
+    E = E.copy()
+    E[B.indices[0]] = np.nan  # under the stroke
+    with pytest.raises(GeometryError) as err:
+        shading_change(pd, E, free, B, ws, 0.7)
+    assert str(err.value).startswith("the right-hand side of the shading interpolation has a value that is not "
+                                     "a finite number"), str(err.value)
