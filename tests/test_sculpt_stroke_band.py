@@ -1,6 +1,6 @@
 """The redrawn isophote stroke on its way in: its length limit, its clipping to the band
 around the picked isophote (the parts outside are not the person's intent), and the shading
-change it asks for, checked against its definition."""
+change it asks for, checked against its definition, and the characteristics traced from it."""
 
 from __future__ import annotations
 
@@ -103,3 +103,19 @@ def test_a_broken_shading_is_refused_by_name():
         shading_change(pd, E, free, B, ws, 0.7)
     assert str(err.value).startswith("the right-hand side of the shading interpolation has a value that is not "
                                      "a finite number"), str(err.value)
+
+
+def test_characteristics_are_traced_only_from_stroke_points_on_the_layer():
+    # a stroke over the layer gives one characteristic per seed, each a polyline through its
+    # seed; seeds off the layer (the stroke drawn past the outline) can take no step: none
+    from sketchforge.geometry.reflectance import LAMBERTIAN
+    from sketchforge_isophote_tool.characteristics import base_characteristics
+    from sketchforge_isophote_tool.layerdata import layer_data
+    from sketchforge_isophote_tool.testing import LIGHT, inflated
+
+    ld = layer_data(inflated("ellipse", 0.04), LIGHT, LAMBERTIAN)
+    on = [np.c_[np.full(20, 0.1), np.linspace(-0.3, 0.3, 20)]]
+    lines = base_characteristics(ld, on, 0.2, n=6)
+    assert len(lines) == 6 and all(len(q) >= 3 for q in lines)
+    off = [np.c_[np.full(20, 3.0), np.linspace(-0.3, 0.3, 20)]]
+    assert base_characteristics(ld, off, 0.2, n=6) == []
