@@ -73,7 +73,8 @@ SCOPES: dict[str, tuple[str, str, list[str], list[str]]] = {
                           "tests/test_sculpt_tool_preview.py", "tests/test_corpus_measures.py",
                           "tests/test_sculpt_display.py", "tests/test_sculpt_pick.py",
                           "tests/test_sculpt_command_format.py", "tests/test_sculpt_tool_state.py",
-                          "tests/test_sculpt_stroke_band.py", "tests/test_sculpt_heights.py"]),
+                          "tests/test_sculpt_stroke_band.py", "tests/test_sculpt_heights.py",
+                          "tests/test_sculpt_report.py"]),
     "assemble": ("plugins/assemble/sketchforge_assemble", "sketchforge_assemble",
                  ["sketchforge_assemble/*"], [
                      "tests/test_assemble.py", "tests/test_assemble_blend.py",

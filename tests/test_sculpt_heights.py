@@ -66,3 +66,21 @@ def test_a_single_free_vertex_is_solved_too():
     assert np.flatnonzero(dz).tolist() == [v]
     after = layer_data(ld.mesh.with_heights(ld.z + dz), LIGHT, LAMBERTIAN).E
     assert after[v] - ld.E[v] > 5e-5  # 1.4e-4 measured
+
+
+def test_one_gauss_newton_step_already_goes_downhill():
+    # the first step is the direct solve of the linearised problem: alone, it must lower the
+    # misfit (later steps refine from where it leaves the surface)
+    ld = _layer()
+    n = len(ld.z)
+    v = int(np.argmin(np.linalg.norm(ld.planar.V2 - [0.2, -0.1], axis=1)))
+    F = ld.mesh.F
+    U = np.zeros(n, bool)
+    U[np.unique(F[(F == v).any(axis=1)])] = True
+    target = ld.E.copy()
+    target[v] += 0.05
+    misfit = lambda E: float(np.sum((E[U] - target[U]) ** 2))  # noqa: E731
+    for steps in (1, 2):
+        dz = solve_heights(ld, target, U, np.ones(n), 0.01, steps=steps)
+        after = layer_data(ld.mesh.with_heights(ld.z + dz), LIGHT, LAMBERTIAN).E
+        assert misfit(after) < 0.6 * misfit(ld.E), steps
