@@ -16,6 +16,22 @@ def _layer():
     return layer_data(inflated("ellipse", 0.04), LIGHT, LAMBERTIAN)
 
 
+def _brighter(ld, at, ring=True):
+    """(v, U, target): the vertex nearest ``at`` asked to be 0.05 brighter, everything else as
+    it is; free: that vertex, with its one ring when ``ring``."""
+    v = int(np.argmin(np.linalg.norm(ld.planar.V2 - at, axis=1)))
+    F = ld.mesh.F
+    U = np.zeros(len(ld.z), bool)
+    U[np.unique(F[(F == v).any(axis=1)]) if ring else v] = True
+    target = ld.E.copy()
+    target[v] += 0.05
+    return v, U, target
+
+
+def _shading_after(ld, dz):
+    return layer_data(ld.mesh.with_heights(ld.z + dz), LIGHT, LAMBERTIAN).E
+
+
 def test_no_free_vertex_changes_nothing():
     ld = _layer()
     n = len(ld.z)
@@ -37,16 +53,10 @@ def test_a_vertex_asked_to_be_brighter_gets_closer_and_only_its_region_moves():
     # vertex's shading reads its neighbours' heights). Only they move, and the misfit over them
     # drops by more than half (to 0.33 of it, measured).
     ld = _layer()
-    n = len(ld.z)
-    v = int(np.argmin(np.linalg.norm(ld.planar.V2 - [0.2, -0.1], axis=1)))
-    F = ld.mesh.F
-    U = np.zeros(n, bool)
-    U[np.unique(F[(F == v).any(axis=1)])] = True
-    target = ld.E.copy()
-    target[v] += 0.05
-    dz = solve_heights(ld, target, U, np.ones(n), 0.01)
+    v, U, target = _brighter(ld, [0.2, -0.1])
+    dz = solve_heights(ld, target, U, np.ones(len(U)), 0.01)
     assert set(np.flatnonzero(dz)) <= set(np.flatnonzero(U)) and np.abs(dz).max() > 1e-4
-    after = layer_data(ld.mesh.with_heights(ld.z + dz), LIGHT, LAMBERTIAN).E
+    after = _shading_after(ld, dz)
     misfit = lambda E: float(np.sum((E[U] - target[U]) ** 2))  # noqa: E731
     assert misfit(after) < 0.5 * misfit(ld.E)
     assert after[v] > ld.E[v] + 0.02  # 0.027 measured
@@ -56,15 +66,10 @@ def test_a_single_free_vertex_is_solved_too():
     # one free vertex can do little (its shading reads mostly its neighbours' heights), but what
     # it can do it does: it moves, and its shading rises towards the brighter target
     ld = _layer()
-    n = len(ld.z)
-    v = int(np.argmin(np.linalg.norm(ld.planar.V2 - [0.5, 0.2], axis=1)))
-    U = np.zeros(n, bool)
-    U[v] = True
-    target = ld.E.copy()
-    target[v] += 0.05
-    dz = solve_heights(ld, target, U, np.ones(n), 0.01)
+    v, U, target = _brighter(ld, [0.5, 0.2], ring=False)
+    dz = solve_heights(ld, target, U, np.ones(len(U)), 0.01)
     assert np.flatnonzero(dz).tolist() == [v]
-    after = layer_data(ld.mesh.with_heights(ld.z + dz), LIGHT, LAMBERTIAN).E
+    after = _shading_after(ld, dz)
     assert after[v] - ld.E[v] > 5e-5  # 1.4e-4 measured
 
 
@@ -72,15 +77,8 @@ def test_one_gauss_newton_step_already_goes_downhill():
     # the first step is the direct solve of the linearised problem: alone, it must lower the
     # misfit (later steps refine from where it leaves the surface)
     ld = _layer()
-    n = len(ld.z)
-    v = int(np.argmin(np.linalg.norm(ld.planar.V2 - [0.2, -0.1], axis=1)))
-    F = ld.mesh.F
-    U = np.zeros(n, bool)
-    U[np.unique(F[(F == v).any(axis=1)])] = True
-    target = ld.E.copy()
-    target[v] += 0.05
+    _, U, target = _brighter(ld, [0.2, -0.1])
     misfit = lambda E: float(np.sum((E[U] - target[U]) ** 2))  # noqa: E731
     for steps in (1, 2):
-        dz = solve_heights(ld, target, U, np.ones(n), 0.01, steps=steps)
-        after = layer_data(ld.mesh.with_heights(ld.z + dz), LIGHT, LAMBERTIAN).E
-        assert misfit(after) < 0.6 * misfit(ld.E), steps
+        dz = solve_heights(ld, target, U, np.ones(len(U)), 0.01, steps=steps)
+        assert misfit(_shading_after(ld, dz)) < 0.6 * misfit(ld.E), steps
