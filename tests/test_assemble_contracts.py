@@ -1,7 +1,8 @@
 """Smaller promises of the assembly that no whole-creature test reaches: what the report counts
 whichever solver ran, junction checks among three parts, a single pair of crossing edges, the
 blended junction's lips (on a back face too), the fairing's bend check, messages that name the
-layer at fault, and the crossing check's thread pool."""
+layer at fault, the crossing check's thread pool, two free parts settled, a signed volume and a
+loop turned to run along its triangles."""
 
 from __future__ import annotations
 
@@ -203,3 +204,54 @@ def test_the_crossing_check_knows_its_own_worker_threads():
     # both workers waiting); it recognises them by name
     assert not dg._in_pool()
     assert dg._pool().submit(dg._in_pool).result(timeout=60)
+
+
+def test_every_free_part_settles_not_only_the_first():
+    # two free eyes drawn over an arm glued to the body's front (plain sleeve): at their rest
+    # depths they hover in front of the arm the glue moved; settled back to front, each is
+    # lowered onto it, its tightest depth row left at the pad (half the gap)
+    body = _inflate(_ellipse(0, 0, 0.6, 0.4), True)
+    arm = _inflate(_arc(0.35, -0.2, 0.25, 100, 400), False)
+    eyes = [_inflate(_ellipse(cx, cy, 0.06, 0.05, 24), True, 0.03) for cx, cy in ((0.45, -0.3), (0.3, -0.35))]
+    got = {}
+    build, settle = asm.build_problem, asm.settle_free_parts
+
+    def spy_build(*a, **k):
+        got["problem"], got["offsets"], got["gap"] = build(*a, **k), a[1], a[5]
+        return got["problem"]
+
+    def spy_settle(*a, **k):
+        got["settled"] = settle(*a, **k)
+        return got["settled"]
+
+    asm.build_problem, asm.settle_free_parts = spy_build, spy_settle
+    try:
+        res = assemble_detailed([body, arm, *eyes], [False, False, True, True], params={"fillet": 0.0})
+    finally:
+        asm.build_problem, asm.settle_free_parts = build, settle
+    assert res.components == 3
+    Ain, bin_ = got["problem"][4], got["problem"][5]
+    x, shift = got["settled"]
+    assert sorted(shift) == [2, 3] and min(shift.values()) > 0.03  # 0.064 and 0.038 measured
+    slack = Ain @ x - bin_
+    for k in (2, 3):
+        nearer = np.asarray(Ain[:, got["offsets"][k]:got["offsets"][k + 1]].sum(axis=1)).ravel() > 0.5
+        assert slack[nearer].min() == pytest.approx(0.5 * got["gap"], abs=1e-12), k
+
+
+def test_the_signed_volume_of_a_tetrahedron_and_of_it_turned_inside_out():
+    V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float) * 2.0
+    F = np.array([[0, 2, 1], [0, 1, 3], [0, 3, 2], [1, 2, 3]])
+    assert dg.signed_volume(V, F) == pytest.approx(8.0 / 6.0, rel=1e-12)
+    assert dg.signed_volume(V, F[:, ::-1]) == pytest.approx(-8.0 / 6.0, rel=1e-12)
+
+
+def test_an_outline_loop_given_against_the_triangles_is_turned_round():
+    from sketchforge_assemble.sheet import has_directed_edge, oriented_loop
+
+    F = np.array([[0, 1, 2], [0, 2, 3], [0, 3, 4]])  # a fan, counter-clockwise
+    loop = np.array([0, 4, 3, 2, 1])  # clockwise
+    got = oriented_loop(F, loop)
+    assert sorted(got.tolist()) == [0, 1, 2, 3, 4] and np.array_equal(got, loop[::-1])
+    assert all(has_directed_edge(F, a, b) for a, b in zip(got[:-1], got[1:]))
+    assert np.array_equal(oriented_loop(F, got), got)  # already along F: kept
