@@ -28,6 +28,28 @@ def _leg(pts):
     return np.vstack([np.linspace(a, b, 12, endpoint=False) for a, b in zip(pts[:-1], pts[1:])] + [pts[-1:]])
 
 
+def _caught(meshes, closed, params=None):
+    """(result, got): the assembly, with the depth problem it built (``problem``, ``offsets``,
+    ``gap``) and the free parts' settled answer (``settled``) caught on the way."""
+    got = {}
+    build, settle = asm.build_problem, asm.settle_free_parts
+
+    def spy_build(*a, **k):
+        got["problem"], got["offsets"], got["gap"] = build(*a, **k), a[1], a[5]
+        return got["problem"]
+
+    def spy_settle(*a, **k):
+        got["settled"] = settle(*a, **k)
+        return got["settled"]
+
+    asm.build_problem, asm.settle_free_parts = spy_build, spy_settle
+    try:
+        res = assemble_detailed(meshes, closed, params=params)
+    finally:
+        asm.build_problem, asm.settle_free_parts = build, settle
+    return res, got
+
+
 def test_both_solvers_count_the_active_rows_at_the_settled_answer():
     # a glued group and a free eye that comes to rest on the front arm: the rows it rests on
     # are active too, whichever solver placed the glued group
@@ -35,23 +57,7 @@ def test_both_solvers_count_the_active_rows_at_the_settled_answer():
     arm = _inflate(_arc(0.35, -0.2, 0.25, 100, 400), False)
     eye = _inflate(_ellipse(0.45, -0.3, 0.06, 0.05, 24), True, 0.03)
     for solver in ("osqp", "active_set"):
-        got = {}
-        build, settle = asm.build_problem, asm.settle_free_parts
-
-        def spy_build(*a, **k):
-            got["problem"] = build(*a, **k)
-            got["offsets"], got["gap"] = a[1], a[5]
-            return got["problem"]
-
-        def spy_settle(*a, **k):
-            got["settled"] = settle(*a, **k)
-            return got["settled"]
-
-        asm.build_problem, asm.settle_free_parts = spy_build, spy_settle
-        try:
-            res = assemble_detailed([body, arm, eye], [False, False, True], params={"solver": solver})
-        finally:
-            asm.build_problem, asm.settle_free_parts = build, settle
+        res, got = _caught([body, arm, eye], [False, False, True], {"solver": solver})
         Ain, bin_ = got["problem"][4], got["problem"][5]
         x, shift = got["settled"]
         assert list(shift) == [2]  # the eye was settled onto what lies below it
@@ -213,22 +219,7 @@ def test_every_free_part_settles_not_only_the_first():
     body = _inflate(_ellipse(0, 0, 0.6, 0.4), True)
     arm = _inflate(_arc(0.35, -0.2, 0.25, 100, 400), False)
     eyes = [_inflate(_ellipse(cx, cy, 0.06, 0.05, 24), True, 0.03) for cx, cy in ((0.45, -0.3), (0.3, -0.35))]
-    got = {}
-    build, settle = asm.build_problem, asm.settle_free_parts
-
-    def spy_build(*a, **k):
-        got["problem"], got["offsets"], got["gap"] = build(*a, **k), a[1], a[5]
-        return got["problem"]
-
-    def spy_settle(*a, **k):
-        got["settled"] = settle(*a, **k)
-        return got["settled"]
-
-    asm.build_problem, asm.settle_free_parts = spy_build, spy_settle
-    try:
-        res = assemble_detailed([body, arm, *eyes], [False, False, True, True], params={"fillet": 0.0})
-    finally:
-        asm.build_problem, asm.settle_free_parts = build, settle
+    res, got = _caught([body, arm, *eyes], [False, False, True, True], {"fillet": 0.0})
     assert res.components == 3
     Ain, bin_ = got["problem"][4], got["problem"][5]
     x, shift = got["settled"]
