@@ -1,5 +1,6 @@
-"""Shapes the assembly tests draw: ellipses and arcs as stroke points, inflated by the real
-inflate plugin."""
+"""Shapes the assembly tests draw (ellipses and arcs as stroke points, inflated by the real
+inflate plugin), and an assembly whose depth problem and settled answer are caught on their
+way through it."""
 
 from __future__ import annotations
 
@@ -23,3 +24,33 @@ def inflate(points, closed, res=0.05):
     from sketchforge_inflate import inflate_stroke
 
     return inflate_stroke(points, closed=closed, params={"resolution": res, "inflation": 1.0, "smoothing": 0.5})
+
+
+def assemble_caught(meshes, closed=None, params=None):
+    """(result, got): ``assemble_detailed`` with spies on ``build_problem`` (its arguments in
+    ``got["args"]``/``got["kw"]``, its answer in ``got["out"]``) and ``settle_free_parts`` (its
+    answer in ``got["settled"]``); ``got["wall"]``: the assembly's wall time (s)."""
+    import time
+
+    import sketchforge_assemble.assemble as asm
+
+    got = {}
+    build, settle = asm.build_problem, asm.settle_free_parts
+
+    def spy_build(*args, **kw):
+        got["args"], got["kw"] = args, kw
+        got["out"] = build(*args, **kw)
+        return got["out"]
+
+    def spy_settle(*args, **kw):
+        got["settled"] = settle(*args, **kw)
+        return got["settled"]
+
+    asm.build_problem, asm.settle_free_parts = spy_build, spy_settle
+    try:
+        t0 = time.perf_counter()
+        res = asm.assemble_detailed(list(meshes), None if closed is None else list(closed), params=params)
+        got["wall"] = time.perf_counter() - t0
+    finally:
+        asm.build_problem, asm.settle_free_parts = build, settle
+    return res, got

@@ -12,8 +12,8 @@ import numpy as np
 import pytest
 import shapely
 
-import sketchforge_assemble.assemble as asm
 from assemble_shapes import arc as _arc
+from assemble_shapes import assemble_caught
 from assemble_shapes import ellipse as _ellipse
 from assemble_shapes import inflate as _inflate
 from sketchforge.errors import GeometryError
@@ -29,24 +29,10 @@ def _leg(pts):
 
 
 def _caught(meshes, closed, params=None):
-    """(result, got): the assembly, with the depth problem it built (``problem``, ``offsets``,
-    ``gap``) and the free parts' settled answer (``settled``) caught on the way."""
-    got = {}
-    build, settle = asm.build_problem, asm.settle_free_parts
-
-    def spy_build(*a, **k):
-        got["problem"], got["offsets"], got["gap"] = build(*a, **k), a[1], a[5]
-        return got["problem"]
-
-    def spy_settle(*a, **k):
-        got["settled"] = settle(*a, **k)
-        return got["settled"]
-
-    asm.build_problem, asm.settle_free_parts = spy_build, spy_settle
-    try:
-        res = assemble_detailed(meshes, closed, params=params)
-    finally:
-        asm.build_problem, asm.settle_free_parts = build, settle
+    """(result, got): the assembly with its depth problem (``problem``, ``offsets``, ``gap``) and
+    the free parts' settled answer (``settled``), caught on the way (:func:`assemble_caught`)."""
+    res, got = assemble_caught(meshes, closed, params)
+    got.update(problem=got["out"], offsets=got["args"][1], gap=got["args"][5])
     return res, got
 
 

@@ -16,11 +16,11 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
-import sketchforge_assemble.assemble as asm
 from sketchforge.errors import ParameterError
 from sketchforge.geometry.laplacian import laplacian_and_mass
 from sketchforge.geometry.mesh import Mesh
 from assemble_shapes import arc as _arc
+from assemble_shapes import assemble_caught
 from assemble_shapes import ellipse as _ellipse
 from assemble_shapes import inflate as _inflate
 from sketchforge_assemble import BACK, FRONT, assemble_detailed
@@ -42,26 +42,7 @@ def _layers(eye_at=(0.45, -0.3)):
 def _caught(fillet: float, eye_at=(0.45, -0.3)):
     """(result, build_problem's arguments and answer, settle_free_parts' answer)."""
     meshes, closed = _layers(eye_at)
-    got = {}
-    build, settle = asm.build_problem, asm.settle_free_parts
-
-    def spy_build(*args, **kw):
-        got["args"], got["kw"] = args, kw
-        got["out"] = build(*args, **kw)
-        return got["out"]
-
-    def spy_settle(*args, **kw):
-        got["settled"] = settle(*args, **kw)
-        return got["settled"]
-
-    asm.build_problem, asm.settle_free_parts = spy_build, spy_settle
-    try:
-        t0 = time.perf_counter()
-        res = assemble_detailed(list(meshes), list(closed), params={"fillet": fillet})
-        got["wall"] = time.perf_counter() - t0
-    finally:
-        asm.build_problem, asm.settle_free_parts = build, settle
-    return res, got
+    return assemble_caught(meshes, closed, {"fillet": fillet})
 
 
 FILLETS = [0.0, 4.0]
