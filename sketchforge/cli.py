@@ -32,6 +32,15 @@ def printable(text) -> str:
     return "".join(out)
 
 
+def _warn_plugin_problems() -> None:
+    """A plugin that could not be loaded (a missing dependency, a broken hook) is one line on
+    stderr naming it, never a traceback; the command goes on with the other plugins."""
+    from sketchforge.plugins.manager import default_host
+
+    for text in default_host().problems:
+        print(f"sketchforge: warning: {printable(text)}", file=sys.stderr)
+
+
 def cmd_replay(args) -> int:
     from sketchforge.document import fileformat as ff
     from sketchforge.document.provenance import check_available
@@ -67,7 +76,12 @@ def cmd_replay(args) -> int:
         snap = ff.document_from_dict(data, str(args.doc))
         diffs = ff.compare(snap, doc)
         if diffs:
-            raise SketchforgeError(f"{args.doc}: replay differs from the saved snapshot: " + "; ".join(diffs))
+            from sketchforge.document.provenance import version_notes
+
+            # A solver of another version explains a difference better than "mesh differs".
+            notes = version_notes(data, host)
+            why = f" ({'; '.join(notes)})" if notes else ""
+            raise SketchforgeError(f"{args.doc}: replay differs from the saved snapshot: " + "; ".join(diffs) + why)
         print("replay matches the snapshot", file=sys.stderr)
     if args.export:
         out = Path(args.export)
@@ -163,6 +177,7 @@ def main(argv=None) -> int:
     try:
         if argv and argv[0] in SUBCOMMANDS:
             args = build_parser().parse_args(argv)
+            _warn_plugin_problems()
             return args.func(args)
         args = build_app_parser().parse_args(argv)
         if args.screenshot and args.doc is not None:

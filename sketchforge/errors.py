@@ -65,3 +65,8 @@ class EditsDoNotApplyError(SketchforgeError):
 class PluginError(SketchforgeError):
     """A plugin misbehaved (a hook raised, returned the wrong type, broke a contract); the
     message names the plugin. The document is left as it was before."""
+
+
+class UnknownSolverError(SketchforgeError, ValueError):
+    """A document or command names a solver (inflater, sculpt solver, assembler) that no
+    installed plugin provides; the message lists the installed ones."""

@@ -25,6 +25,13 @@ The README's *Plugin guide* documents each contract with a complete brush exampl
   ``doc.push`` inside a tool is collected and the command prepared on a worker thread.
 - **Reflectance models** (:class:`ReflectanceModel`): ``R(n, l)`` in ``jax.numpy``, signed
   (negative in shadow); probed at registration.
+- **Solvers** (:class:`Inflater`, :class:`SculptSolver`, :class:`Assembler`): named values in
+  the registries ``sketchforge_inflaters``, ``sketchforge_sculpt_solvers``,
+  ``sketchforge_assemblers``; each validates its own parameters with ``check_params``
+  (:func:`validate_params`, :func:`number`, :func:`choice`, :func:`flag` do the usual work). A
+  sculpt solver gets a :class:`SculptProblem` and returns a :class:`SculptSolution`.
+- **Panels** (:class:`Panel`): widgets for the desktop app (``sketchforge_qt_panels``);
+  ``create(app)`` imports Qt itself, so the plugin stays importable headless.
 - **Exporters** (:class:`Exporter`): ``write(path, mesh)`` writes to the path it is given
   (the host's temp file: no atomic-write code needed); suffixes like ``".off"``.
 - **Provenance**: saved documents record which plugin (and version) provided each command
@@ -54,37 +61,63 @@ from sketchforge.errors import (
     PluginError,
     SculptError,
     SketchforgeError,
+    SolverError,
+    UnknownSolverError,
 )
 from sketchforge.geometry.mesh import Mesh
 from sketchforge.geometry.reflectance_model import ReflectanceModel, Shader
 from sketchforge.plugins.hookspecs import hookimpl
-from sketchforge.plugins.registry import Exporter
+from sketchforge.plugins.registry import Exporter, Panel
+from sketchforge.plugins.sculpt_problem import SculptProblem, SculptSolution
+from sketchforge.plugins.solvers import (
+    Assembler,
+    Inflater,
+    SculptSolver,
+    choice,
+    flag,
+    no_params,
+    number,
+    validate_params,
+)
 from sketchforge.tools.base import Tool
 
 __all__ = [
+    "Assembler",
     "Command",
     "ContourError",
     "DocumentFormatError",
     "ExportError",
     "Exporter",
+    "Inflater",
     "Layer",
     "Light",
     "MacroCommand",
     "Mesh",
     "NothingToDoError",
+    "Panel",
     "ParameterError",
     "PluginError",
     "ReflectanceModel",
     "ReplaceLayerCommand",
     "SculptError",
+    "SculptProblem",
+    "SculptSolution",
+    "SculptSolver",
     "Shader",
     "SketchforgeError",
+    "SolverError",
+    "UnknownSolverError",
     "Tool",
+    "choice",
+    "flag",
     "hookimpl",
     "inflate_layer",
     "new_gesture_id",
+    "no_params",
+    "number",
     "parse_field",
     "parse_points",
     "parse_vector",
     "reapply_edits",
+    "validate_params",
 ]

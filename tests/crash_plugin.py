@@ -46,12 +46,18 @@ class AbortPlugin:
         return [AbortSolve]
 
 
+def _abort(layers, params):
+    os.abort()
+
+
 class AbortingAssembler:
     """An assembler that crashes (as OSQP might)."""
 
     @hookimpl
-    def sketchforge_assemble(self, layers, params):
-        os.abort()
+    def sketchforge_assemblers(self):
+        from sketchforge.plugin_api import Assembler
+
+        return [Assembler("aborting", _abort)]
 
 
 # Another session: an autosave with the record of the solve running on it (unsaved work), and a

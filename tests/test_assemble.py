@@ -25,7 +25,7 @@ from assemble_shapes import inflate as _inflate
 from sketchforge_assemble import BACK, FRONT, AttachmentError, DepthOrderError, assemble_detailed, assemble_meshes
 from sketchforge_assemble import diagnostics as dg
 from sketchforge_assemble.depth import _active_set, solve_depth
-from sketchforge_assemble.plugin import sketchforge_assemble
+from sketchforge_assemble.plugin import assemble_layers
 from sketchforge_assemble.testing import meshes_from_journal
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
@@ -243,7 +243,7 @@ def test_layers_without_mesh_are_skipped_and_hook_returns_a_mesh():
     assert set(np.unique(res.face_layer)) == {1, 2}
     assert [(a.upper, a.lower, a.side) for a in res.attachments] == [(2, 1, FRONT)]
     layers = [Layer("b", "Body", mesh=body, closed=True), Layer("e", "Empty"), Layer("h", "Head", mesh=head)]
-    mesh = sketchforge_assemble(layers=layers, params={})
+    mesh = assemble_layers(layers, {})
     assert isinstance(mesh, Mesh)
     assert np.array_equal(mesh.F, res.mesh.F) and np.array_equal(mesh.V, res.mesh.V)
 
@@ -258,8 +258,8 @@ def test_assembly_is_deterministic():
 def test_active_set_matches_osqp_on_a_small_document():
     body = _inflate(_ellipse(0, 0, 0.6, 0.4), True, 0.08)
     arm = _inflate(_arc(0.35, -0.2, 0.25, 100, 400), False, 0.08)
-    r1 = assemble_detailed([body, arm], params={"solver": "osqp"})
-    r2 = assemble_detailed([body, arm], params={"solver": "active_set"})
+    r1 = assemble_detailed([body, arm], params={"qp_solver": "osqp"})
+    r2 = assemble_detailed([body, arm], params={"qp_solver": "active_set"})
     assert r1.max_violation <= 0 and r2.max_violation <= 1e-9  # the active set is exact up to round-off
     # OSQP is asked for half a gap of extra clearance, so the two differ by about that much
     assert np.abs(r1.mesh.V - r2.mesh.V).max() < 0.02

@@ -43,7 +43,7 @@ def test_both_solvers_count_the_active_rows_at_the_settled_answer():
     arm = _inflate(_arc(0.35, -0.2, 0.25, 100, 400), False)
     eye = _inflate(_ellipse(0.45, -0.3, 0.06, 0.05, 24), True, 0.03)
     for solver in ("osqp", "active_set"):
-        res, got = _caught([body, arm, eye], [False, False, True], {"solver": solver})
+        res, got = _caught([body, arm, eye], [False, False, True], {"qp_solver": solver})
         Ain, bin_ = got["problem"][4], got["problem"][5]
         x, shift = got["settled"]
         assert list(shift) == [2]  # the eye was settled onto what lies below it

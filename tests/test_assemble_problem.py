@@ -253,8 +253,8 @@ def test_a_bad_fillet_or_fair_is_named_with_its_value():
 def test_a_bad_solver_is_named_with_its_value():
     meshes, closed = _layers()
     with pytest.raises(ParameterError) as err:
-        assemble_detailed(list(meshes), list(closed), params={"solver": "cg"})
-    assert str(err.value) == "assembly parameter 'solver' must be 'osqp' or 'active_set', got 'cg'"
+        assemble_detailed(list(meshes), list(closed), params={"qp_solver": "cg"})
+    assert str(err.value) == "assembly parameter 'qp_solver' must be 'osqp' or 'active_set', got 'cg'"
 
 
 def test_a_fairing_taken_from_the_cache_still_reports_its_time():

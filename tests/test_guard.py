@@ -687,7 +687,7 @@ def _damage(mesh: Mesh, kind: str, rng) -> Mesh:
 def _assembly_of_damaged_meshes(kinds, seed):
     """The assembly hook on hand-edited (snapshot) meshes: geometry no stroke could produce."""
     from sketchforge.document.layer import Layer
-    from sketchforge_assemble.plugin import sketchforge_assemble
+    from sketchforge_assemble.plugin import assemble_layers
 
     global _PAIR
     if "_PAIR" not in globals():
@@ -697,7 +697,7 @@ def _assembly_of_damaged_meshes(kinds, seed):
     for kind, which in kinds:
         meshes[which] = _damage(meshes[which], kind, rng)
     layers = [Layer("body", "Body", mesh=meshes[0], closed=True), Layer("head", "Head", mesh=meshes[1])]
-    mesh = _outcome("damaged", lambda: sketchforge_assemble(layers=layers, params={}))
+    mesh = _outcome("damaged", lambda: assemble_layers(layers, {}))
     if mesh is not None:
         assert np.isfinite(mesh.V).all()
 

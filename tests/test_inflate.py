@@ -170,7 +170,10 @@ def test_hook_implementation_through_pluggy():
     pm = pluggy.PluginManager("sketchforge")
     pm.add_hookspecs(hookspecs)
     pm.register(inflate_plugin)
-    mesh = pm.hook.sketchforge_inflate(points=circle(n=100).tolist(), closed=True, params={"resolution": 0.1}, holes=[])
+    (inflaters,) = pm.hook.sketchforge_inflaters()
+    assert [i.name for i in inflaters] == ["poisson"]
+    poisson = inflaters[0]
+    mesh = poisson.inflate(circle(n=100).tolist(), True, poisson.check_params({"resolution": 0.1}), [])
     _check_contract(mesh)
 
 
@@ -193,10 +196,14 @@ def test_bad_parameters(params, message):
         inflate_stroke(circle(), True, params)
 
 
-def test_missing_and_unknown_keys():
-    a = inflate_stroke(circle(n=100), True, {"resolution": 0.1, "colour": "red"})
+def test_missing_keys_take_the_defaults_and_unknown_keys_are_refused():
+    a = inflate_stroke(circle(n=100), True, {"resolution": 0.1})
     b = inflate_stroke(circle(n=100), True, {**DEFAULT_PARAMS, "resolution": 0.1})
     assert a.identical(b)
+    # A misspelt key would otherwise be dropped and the person never learn why nothing changed.
+    with pytest.raises(ParameterError) as info:
+        inflate_stroke(circle(n=100), True, {"resolution": 0.1, "colour": "red"})
+    assert str(info.value) == "unknown inflation parameter 'colour' (known: resolution, inflation, smoothing)"
 
 
 @pytest.mark.parametrize(

@@ -16,6 +16,7 @@ from sketchforge.document.commands import Command, ReplaceLayerCommand
 from sketchforge.errors import ExportError, PluginError, SketchforgeError
 from sketchforge.plugins.hookspecs import hookimpl
 from sketchforge.plugins.registry import Exporter, ReflectanceModel, Shader
+from sketchforge.plugins.solvers import Inflater
 from sketchforge.plugins.testing import FanInflater, make_test_host
 
 TRIANGLE = [[0, 0], [1, 0], [0, 1]]
@@ -339,12 +340,12 @@ def test_pytest_fixtures_are_installed_and_strict(tmp_path):
 def test_a_solver_hook_bug_names_its_plugin_and_changes_nothing():
     class BadInflater:
         @hookimpl
-        def sketchforge_inflate(self, points, closed, params):
-            return np.linalg.inv(np.zeros((2, 2)))  # LinAlgError: a bug, not a user error
+        def sketchforge_inflaters(self):
+            return [Inflater("bad", lambda points, closed, params, holes: np.linalg.inv(np.zeros((2, 2))))]
 
     doc = Document(host=make_test_host(BadInflater()))
     doc.execute({"command": "add_layer", "id": "a"})
     with pytest.raises(PluginError) as info:
-        doc.execute({"command": "set_contour", "layer": "a", "points": TRIANGLE})
-    assert "the sketchforge_inflate hook of plugin 'plugin-0-BadInflater' failed: LinAlgError" in str(info.value)
+        doc.execute({"command": "set_contour", "layer": "a", "points": TRIANGLE})  # a LinAlgError: a bug
+    assert "the inflater 'bad' of plugin 'plugin-0-BadInflater' failed: LinAlgError" in str(info.value)
     assert doc.layer("a").mesh is None and doc.undo_stack.count() == 1

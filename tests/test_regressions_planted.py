@@ -216,24 +216,23 @@ def test_recovery_lists_the_newest_autosave_first(tmp_path, fan_host):
 def test_sculpt_heights_stay_non_negative_when_the_solve_pushes_below(monkeypatch):
     # planted: the z >= 0 clamp of the sculpt removed. The solver's change is made to dig a
     # pit deeper than the layer under the stroke: the surface must stop at the drawing plane.
-    import sketchforge_isophote_tool.pipeline as pl
+    from sketchforge.plugin_api import SculptSolver
     from sketchforge_isophote_tool import sculpt
+    from sketchforge_isophote_tool.gauss_newton import check_params, solve
     from sketchforge_isophote_tool.testing import LIGHT, inflated
 
     mesh = inflated("ellipse")
-    solve = pl.solve_heights
     pushed = {}
 
-    def digging(ld, *args, **kw):
-        dz = solve(ld, *args, **kw)
-        d = np.hypot(ld.planar.V2[:, 0] - 0.35, ld.planar.V2[:, 1])
-        pit = -3.0 * ld.z.max() * np.clip(1.0 - d / 0.25, 0.0, 1.0)
-        pushed["below"] = int(np.sum(ld.z + dz + pit < 0))
+    def digging(problem, params):
+        dz = solve(problem, params).dz
+        d = np.hypot(problem.V[:, 0] - 0.35, problem.V[:, 1])
+        pit = -3.0 * problem.z.max() * np.clip(1.0 - d / 0.25, 0.0, 1.0)
+        pushed["below"] = int(np.sum(problem.z + dz + pit < 0))
         return dz + pit
 
-    monkeypatch.setattr(pl, "solve_heights", digging)
     r = sculpt(mesh, LIGHT, [0.2, 0.1], 0.3, [[0.15, -0.3], [0.3, 0.0], [0.15, 0.3]],
-               options={"never_worse": False})
+               solver=SculptSolver("digging", digging, check_params), never_worse=False)
     z = r.mesh.V[:, 2]
     assert pushed["below"] > 20
     assert z.min() >= 0.0 and np.sum(z == 0.0) >= pushed["below"]

@@ -7,7 +7,7 @@ import shapely
 import shapely.ops
 
 from sculpt_helpers import fidelity, isophote_stroke
-from sketchforge.errors import SculptError, SketchforgeError
+from sketchforge.errors import ParameterError, SculptError, SketchforgeError
 from sketchforge.geometry.contour import segment_crossings
 from sketchforge.geometry.isophotes import isophotes
 from sketchforge.geometry.mesh import Mesh
@@ -44,15 +44,15 @@ def ellipse():
         ({"stroke": [[0.1, 0.2, 0.3]]}, "pairs"),
         ({"stroke": ISSUE_STROKE + [[1e9, 0.3]]}, "too long"),  # was a MemoryError (600 GiB)
         ({"stroke": ISSUE_STROKE + [[1e300, 0.3]]}, "within"),
-        ({"options": {"solver": "euler"}}, "unknown sculpt options"),
-        ({"options": {"smoothness": -1}}, "smoothness"),
-        ({"options": {"steps": 0}}, "steps"),
+        ({"params": {"solver": "euler"}}, r"sculpt solver 'gauss_newton': unknown parameter 'solver' \(known: "),
+        ({"params": {"smoothness": -1}}, "smoothness"),
+        ({"params": {"steps": 0}}, "steps"),
     ],
 )
 def test_invalid_edits_raise_sculpt_error(ellipse, kw, msg):
-    args = {"pick": [0.2, 0.1], "band": 0.3, "stroke": ISSUE_STROKE, "options": None} | kw
-    with pytest.raises(SculptError, match=msg):
-        sculpt(ellipse, LIGHT, args["pick"], args["band"], args["stroke"], options=args["options"])
+    args = {"pick": [0.2, 0.1], "band": 0.3, "stroke": ISSUE_STROKE, "params": None} | kw
+    with pytest.raises((SculptError, ParameterError), match=msg):
+        sculpt(ellipse, LIGHT, args["pick"], args["band"], args["stroke"], params=args["params"])
 
 
 def test_stroke_inside_the_rim_margin_is_refused_with_what_to_do(ellipse):
@@ -198,19 +198,20 @@ def test_an_edit_that_would_end_farther_falls_back_or_is_refused(ellipse, monkey
     """If the height solve's answer moved the isophote away from the stroke, the pipeline keeps
     the best partial edit that brings it closer, or refuses with what to do: never a silent
     worse result."""
-    import sketchforge_isophote_tool.pipeline as pl
+    from sketchforge.plugin_api import SculptSolver
+    from sketchforge_isophote_tool.gauss_newton import check_params, solve
 
-    real = pl.solve_heights
+    def scaled(k):  # the built-in solver's answer times k: the host's guard is for every solver
+        return SculptSolver(f"times_{k}", lambda problem, params: k * solve(problem, params).dz, check_params)
+
     st, _, _ = isophote_stroke(ellipse, [0.2, 0.1], 0.1)
     good = sculpt(ellipse, LIGHT, [0.2, 0.1], 0.3, st)
     # Overshoot: 8x the change puts the isophote past the stroke, farther than before...
-    monkeypatch.setattr(pl, "solve_heights", lambda *a, **k: 8.0 * real(*a, **k))
-    r = sculpt(ellipse, LIGHT, [0.2, 0.1], 0.3, st)
+    r = sculpt(ellipse, LIGHT, [0.2, 0.1], 0.3, st, solver=scaled(8.0))
     assert r.fraction < 1.0 and r.after < r.before
     # ...and the wrong sign can only be refused.
-    monkeypatch.setattr(pl, "solve_heights", lambda *a, **k: -real(*a, **k))
     with pytest.raises(SculptError, match="farther from the stroke.*draw"):
-        sculpt(ellipse, LIGHT, [0.2, 0.1], 0.3, st)
+        sculpt(ellipse, LIGHT, [0.2, 0.1], 0.3, st, solver=scaled(-1.0))
     assert good.fraction == 1.0
 
 
@@ -251,7 +252,8 @@ def test_command_journal_undo_redo(real_host):
     cmd = doc.execute(entry)
     after = doc.layer("body")
     assert not after.mesh.identical(before.mesh)
-    assert after.edits[-1] == {**entry, "light": [float(v) for v in doc.light.direction]}
+    # The layer's record of the edit names the solver that made it and the light it used.
+    assert after.edits[-1] == {**entry, "light": [float(v) for v in doc.light.direction], "solver": "gauss_newton"}
     assert cmd.to_dict() == entry
     doc.undo_stack.undo()
     assert doc.layer("body").same_state(before)

@@ -58,15 +58,17 @@ def test_sculpting_a_layer_that_has_no_surface_yet_says_to_draw_first(real_host)
 
 @pytest.mark.parametrize("key", ["ring", "rim_margin"])
 def test_ring_and_rim_margin_take_a_length_or_none_and_refuse_the_rest(key):
-    from sketchforge.errors import SculptError
-    from sketchforge_isophote_tool.pipeline import _options
+    from sketchforge.errors import ParameterError
+    from sketchforge_isophote_tool.gauss_newton import check_params
 
     for good in (0, 0.25, 3, None):
-        assert _options({key: good})[key] == good
-    for bad in (-0.1, float("inf"), float("nan"), "wide", [1]):
-        with pytest.raises(SculptError) as info:
-            _options({key: bad})
-        assert str(info.value) == f"the sculpt option {key!r} must be a number >= 0 (drawing units) or None, got {bad!r}"
+        assert check_params({key: good})[key] == good
+    for bad, why in ((-0.1, "must be >= 0, got -0.1"), (float("inf"), "must be a finite number, got inf"),
+                     (float("nan"), "must be a finite number, got nan"), ("wide", "must be a number or null, got 'wide'"),
+                     ([1], "must be a number or null, got [1]")):
+        with pytest.raises(ParameterError) as info:
+            check_params({key: bad})
+        assert str(info.value) == f"{key!r} {why}"
 
 
 def test_a_stroke_drawn_as_a_closed_loop_stays_a_smooth_closed_loop():

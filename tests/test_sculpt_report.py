@@ -9,18 +9,18 @@ import numpy as np
 import pytest
 
 from sculpt_helpers import isophote_stroke
-from sketchforge.errors import SculptError
+from sketchforge.errors import ParameterError
 from sketchforge_isophote_tool import sculpt
 from sketchforge_isophote_tool.testing import LIGHT, inflated
 
 PICK = [0.2, 0.1]
 
 
-def _edit(**options):
+def _edit(**params):
     mesh = inflated("ellipse", 0.04)
     stroke, _, _ = isophote_stroke(mesh, PICK, offset=0.04)
     t0 = time.perf_counter()
-    r = sculpt(mesh, LIGHT, PICK, 0.3, stroke, options=options or None)
+    r = sculpt(mesh, LIGHT, PICK, 0.3, stroke, params=params or None)
     return r, time.perf_counter() - t0
 
 
@@ -41,9 +41,9 @@ def test_the_steps_option_takes_1_to_50(steps, ok):
         r, _ = _edit(steps=steps)
         assert r.options["steps"] == steps and r.changed.any()
         return
-    with pytest.raises(SculptError) as err:
+    with pytest.raises(ParameterError) as err:
         _edit(steps=steps)
-    assert str(err.value) == f"the sculpt option 'steps' must be an integer in 1..50, got {steps}"
+    assert str(err.value) == f"sculpt solver 'gauss_newton': 'steps' must be an integer in 1..50, got {steps}"
 
 
 def test_a_rim_margin_of_zero_weighs_the_whole_stroke_fully():

@@ -111,12 +111,18 @@ def test_the_result_describes_the_fidelity_in_edge_lengths(real_host):
     r = tool.preview_job(STROKE)()
     h = r.h
     full = r.describe()
-    assert full == f"isophote {r.before / h:.1f} → {r.after / h:.1f} edge lengths from the stroke"
+    # This stroke runs on past the band: the part that was ignored is said too.
+    ignored = r.ignored_length / (r.ignored_length + r.stroke.length)
+    assert 0.1 < ignored < 0.3
+    assert full == (f"isophote {r.before / h:.1f} → {r.after / h:.1f} edge lengths from the stroke; "
+                    f"{r.ignored_length / h:.0f} edge lengths of the stroke ({ignored:.0%}) ran outside the band and "
+                    "were ignored")
     numbers = [float(x) for x in re.findall(r"\d+\.\d", full)]
     assert numbers[0] > numbers[1] >= 0.0
     half = dataclasses.replace(r, fraction=0.5).describe()
-    assert half == full + " (50% of the change: the whole of it overshot)"
-    assert dataclasses.replace(r, fraction=0.25).describe().endswith("(25% of the change: the whole of it overshot)")
+    head, tail = full.split("; ", 1)
+    assert half == head + " (50% of the change: the whole of it overshot); " + tail
+    assert "(25% of the change: the whole of it overshot)" in dataclasses.replace(r, fraction=0.25).describe()
 
 
 def test_warm_up_compiles_the_reflectance_evaluation_every_edit_calls():
@@ -185,11 +191,12 @@ def test_choosing_another_model_re_picks_the_isophote_under_it():
 
 def test_the_package_exports_its_public_names_lazily():
     import sketchforge_isophote_tool as pkg
-    from sketchforge_isophote_tool import command, pipeline, tool, warmup
+    from sketchforge_isophote_tool import command, gauss_newton, pipeline, tool, warmup
 
     expected = {
         "sculpt": pipeline.sculpt, "SculptResult": pipeline.SculptResult,
-        "DEFAULT_OPTIONS": pipeline.DEFAULT_OPTIONS, "warm_up": warmup.warm_up,
+        "DEFAULT_OPTIONS": gauss_newton.DEFAULT_PARAMS, "GAUSS_NEWTON": gauss_newton.GAUSS_NEWTON,
+        "warm_up": warmup.warm_up,
         "SculptIsophote": command.SculptIsophote, "SculptIsophoteTool": tool.SculptIsophoteTool,
     }
     assert sorted(pkg.__all__) == sorted(expected)

@@ -125,12 +125,17 @@ def test_solver_producing_nan_rolls_back_and_says_so():
     from sketchforge.plugins.hookspecs import hookimpl
     from sketchforge.plugins.testing import make_test_host
 
+    from sketchforge.plugin_api import Inflater
+
+    def nan_mesh(points, closed, params, holes):
+        P = np.asarray(points, float)
+        V = np.c_[P, np.full(len(P), np.nan)]
+        return Mesh(V, [[0, 1, 2]], np.arange(len(P)))
+
     class NaNInflater:
         @hookimpl
-        def sketchforge_inflate(self, points, closed, params):
-            P = np.asarray(points, float)
-            V = np.c_[P, np.full(len(P), np.nan)]
-            return Mesh(V, [[0, 1, 2]], np.arange(len(P)))
+        def sketchforge_inflaters(self):
+            return [Inflater("nan", nan_mesh)]
 
     doc = Document(host=make_test_host(NaNInflater()))
     doc.push(AddLayer(id="a"))

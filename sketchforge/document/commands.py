@@ -17,12 +17,12 @@ import itertools
 import math
 import numbers
 from dataclasses import dataclass, field, replace
+from types import MappingProxyType
 from typing import Any, ClassVar
 
 import numpy as np
 
 from sketchforge.document.layer import Layer, Light
-from sketchforge.geometry.inflate_params import check_inflate_params
 from sketchforge.errors import (
     DocumentFormatError,
     EditsDoNotApplyError,
@@ -46,6 +46,10 @@ class Command:
     name: ClassVar[str] = ""
     #: Commands with the same non-None ``merge_id`` may merge (see :meth:`merge`).
     merge_id: ClassVar[str | None] = None
+    #: A command that runs a named solver ("inflate", "sculpt", "assemble"; see
+    #: :mod:`sketchforge.plugins.solvers`): its journal entry may name it (``"solver"``) and
+    #: pass its parameters (``"params"``), which the solver checks; provenance records it.
+    solver_kind: ClassVar[str | None] = None
 
     def text(self) -> str:
         """Human-readable name for menus ("Undo Set light")."""
@@ -150,12 +154,34 @@ def parse_vector(d: dict, key: str, cmd: str) -> list[float]:
     return out
 
 
+def layer_inflater(doc, layer: Layer):
+    """The inflater of ``layer`` (its ``solver``, or the default for a layer that names none)
+    and the layer's complete parameters for it (checked by the inflater).
+
+    Raises
+    ------
+    UnknownSolverError, ParameterError, SketchforgeError
+    """
+    host = doc.host
+    try:
+        inflater = host.solver("inflate", layer.solver)
+    except SketchforgeError:
+        if layer.solver is None and not host.solvers("inflate"):
+            raise SketchforgeError("no inflate plugin is installed, so a contour cannot become a mesh") from None
+        raise
+    return inflater, host.solver_params("inflate", inflater, layer.params)
+
+
 def inflate_layer(doc, layer: Layer) -> Layer:
-    """``layer`` with a mesh freshly inflated from its points and parameters, and its sculpt
-    edits re-applied in order. Raises before anything changes."""
+    """``layer`` with a mesh freshly inflated from its points by its inflater, with that
+    inflater's name and complete parameters recorded, and its sculpt edits re-applied in
+    order. Raises before anything changes."""
+    inflater, params = layer_inflater(doc, layer)
+    layer = layer.evolve(solver=inflater.name, params=params)
     if layer.points is None:
         return layer.evolve(mesh=None, edits=())
-    mesh = doc.host.inflate(layer.points, layer.closed, dict(layer.params), holes=[np.asarray(h) for h in layer.holes])
+    mesh = doc.host.inflate(layer.points, layer.closed, params, holes=[np.asarray(h) for h in layer.holes],
+                            solver=inflater.name)
     if mesh is None:
         raise SketchforgeError("no inflate plugin is installed, so a contour cannot become a mesh")
     if not np.all(np.isfinite(mesh.V)):
@@ -379,28 +405,97 @@ class SetContour(ReplaceLayerCommand):
 
 @dataclass
 class SetInflateParams(ReplaceLayerCommand):
-    """Change inflation parameters; the mesh is rebuilt and the layer's sculpt edits are
-    re-applied in order (if one no longer applies, the whole change is refused with its
-    message and nothing changes)."""
+    """Change a layer's inflater or its parameters; the mesh is rebuilt and the layer's sculpt
+    edits are re-applied in order (if one no longer applies, the whole change is refused with
+    its message and nothing changes).
+
+    ``solver`` names the inflater (None: keep the layer's). Choosing another inflater starts
+    from its defaults (the old inflater's parameters mean nothing to it); otherwise ``params``
+    are merged into the layer's. The inflater checks them: an unknown key or a bad value is a
+    one-line ParameterError naming the inflater and the key."""
 
     name: ClassVar[str] = "set_inflate_params"
+    solver_kind: ClassVar[str | None] = "inflate"
     params: dict = field(default_factory=dict)
+    solver: str | None = None
 
     def text(self) -> str:
-        return "Set inflation parameters"
+        return "Set inflater" if self.solver is not None and not self.params else "Set inflation parameters"
 
     def compute(self, doc, old: Layer) -> Layer:
-        merged = check_inflate_params({**dict(old.params), **self.params})
-        return inflate_layer(doc, old.evolve(params=merged))
+        switch = self.solver is not None and self.solver != old.solver
+        base = {} if switch else dict(old.params)
+        solver = self.solver if self.solver is not None else old.solver
+        return inflate_layer(doc, old.evolve(solver=solver, params={**base, **self.params}))
 
     def to_dict(self) -> dict:
-        return {"command": self.name, "layer": self.layer, "params": dict(self.params)}
+        d = {"command": self.name, "layer": self.layer, "params": dict(self.params)}
+        if self.solver is not None:
+            d["solver"] = self.solver
+        return d
 
     @classmethod
     def from_dict(cls, d: dict) -> "SetInflateParams":
-        params = parse_field(d, "params", dict, cls.name)
-        check_inflate_params(params)
-        return cls(layer=parse_field(d, "layer", str, cls.name), params=dict(params))
+        params = parse_params(d, cls.name)
+        return cls(layer=parse_field(d, "layer", str, cls.name), params=params,
+                   solver=parse_field(d, "solver", str, cls.name, None))
+
+
+def parse_params(d: dict, cmd: str, key: str = "params") -> dict:
+    """A journal entry's solver parameters: an object of JSON values (the solver checks the
+    keys and values when the command runs, and when a document with a snapshot is opened)."""
+    from sketchforge.plugins.solvers import json_value
+
+    params = parse_field(d, key, dict, cmd, {})
+    if not json_value(params):
+        raise DocumentFormatError(f"command {cmd!r}: {key!r} must hold numbers, strings, true/false or lists of them")
+    return dict(params)
+
+
+@dataclass
+class SetAssembly(Command):
+    """Choose the document's assembler and its parameters (``set_assembly``): ``solver`` (None:
+    the default, the built-in ``"depth_qp"``) and its ``params``, checked by the assembler
+    (an unknown key or a bad value is refused, naming the assembler and the key). Naming
+    another assembler starts from its defaults; otherwise ``params`` are merged into the
+    current ones. The assembled model is rebuilt when next shown."""
+
+    name: ClassVar[str] = "set_assembly"
+    solver_kind: ClassVar[str | None] = "assemble"
+    solver: str | None = None
+    params: dict = field(default_factory=dict)
+    _old: Any = field(default=None, repr=False)
+    _new: Any = field(default=None, repr=False)
+
+    def text(self) -> str:
+        return "Set assembly"
+
+    def do(self, doc) -> None:
+        from sketchforge.plugins.solvers import SolverChoice
+
+        old = doc.assembly
+        switch = self.solver is not None and self.solver != old.solver
+        solver = self.solver if self.solver is not None else old.solver
+        assembler = doc.host.solver("assemble", solver)  # raises for an unknown or ambiguous name
+        params = {} if switch else dict(old.params)
+        params.update(self.params)
+        doc.host.solver_params("assemble", assembler, params)  # checked now: a bad key is refused here
+        self._old, self._new = old, SolverChoice(solver, MappingProxyType(params))
+        doc._set_assembly(self._new)
+
+    def undo(self, doc) -> None:
+        doc._set_assembly(self._old)
+
+    def to_dict(self) -> dict:
+        d: dict = {"command": self.name}
+        if self.solver is not None:
+            d["solver"] = self.solver
+        d["params"] = dict(self.params)
+        return d
+
+    @classmethod
+    def from_dict(cls, d: dict) -> "SetAssembly":
+        return cls(solver=parse_field(d, "solver", str, cls.name, None), params=parse_params(d, cls.name))
 
 
 #: Mirror axes: the host's vertical symmetry axis (the layer an attached part's junction lies
@@ -898,6 +993,7 @@ CORE_COMMANDS: tuple[type[Command], ...] = (
     MirrorLayer,
     SetContour,
     SetInflateParams,
+    SetAssembly,
     SetLight,
     MacroCommand,
 )
@@ -906,7 +1002,9 @@ CORE_COMMANDS: tuple[type[Command], ...] = (
 class CommandRegistry:
     """Maps journal names to command classes (core + plugins)."""
 
-    def __init__(self, classes) -> None:
+    def __init__(self, classes, ambiguous: dict | None = None) -> None:
+        #: {name: [plugins]}: names two plugins registered (neither is used).
+        self._ambiguous = dict(ambiguous or {})
         self._classes: dict[str, type[Command]] = {}
         for cls in classes:
             if not cls.name:
@@ -924,6 +1022,11 @@ class CommandRegistry:
         try:
             return self._classes[name]
         except KeyError:
+            if name in self._ambiguous:
+                from sketchforge.errors import PluginError
+
+                both = " and ".join(repr(p) for p in self._ambiguous[name])
+                raise PluginError(f"the command {name!r} is registered by both plugins {both}; uninstall one of them") from None
             known = ", ".join(self.names())
             raise UnknownCommandError(
                 f"unknown command {name!r} (is the plugin that provides it installed? known: {known})"

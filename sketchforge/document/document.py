@@ -13,6 +13,7 @@ reads it. Signals, emitted after the change:
 - ``history_changed()`` (undo stack index, texts or clean state)
 - ``assembly_invalidated()`` (the assembled model must be recomputed)
 - ``plugin_data_changed(str key)`` (a plugin's document-level data, e.g. an animation)
+- ``assembly_changed()`` (the assembler or its parameters: ``set_assembly``)
 
 Plugin data: plugins that keep document-level state which is not a layer (the animation's
 pins and motions) store it as one JSON value per key (dicts, lists, strings, numbers, bools)
@@ -21,12 +22,15 @@ through their own commands. It is saved in the snapshot and compared by ``differ
 
 from __future__ import annotations
 
+import numpy as np
+
 from sketchforge.document.commands import Command
 from sketchforge.document.events import Signal
 from sketchforge.document.layer import Layer, Light
 from sketchforge.document.undo import UndoStack
-from sketchforge.errors import LayerNotFoundError, SketchforgeError
+from sketchforge.errors import LayerNotFoundError, SketchforgeError, SolverError
 from sketchforge.geometry.merge import merge_meshes
+from sketchforge.plugins.solvers import SolverChoice
 
 
 class Document:
@@ -47,6 +51,7 @@ class Document:
         self._assembled = None
         self._assembled_revision = -1
         self._plugin_data: dict = {}
+        self._assembly = SolverChoice()
 
         self.layer_inserted = Signal(int, Layer, name="layer_inserted")
         self.layer_removed = Signal(int, Layer, name="layer_removed")
@@ -57,6 +62,7 @@ class Document:
         self.history_changed = Signal(name="history_changed")
         self.assembly_invalidated = Signal(name="assembly_invalidated")
         self.plugin_data_changed = Signal(str, name="plugin_data_changed")
+        self.assembly_changed = Signal(name="assembly_changed")
         self.undo_stack = UndoStack(self)
 
     # --- queries --------------------------------------------------------------------------------
@@ -68,6 +74,11 @@ class Document:
     @property
     def light(self) -> Light:
         return self._light
+
+    @property
+    def assembly(self) -> SolverChoice:
+        """The assembler (``solver``, None: the default) and its ``params`` (``set_assembly``)."""
+        return self._assembly
 
     def plugin_data(self, key: str, default=None):
         """A plugin's document-level JSON value (treat as read-only), or ``default``."""
@@ -115,7 +126,8 @@ class Document:
         Cached until the next change of a layer (the light does not invalidate it)."""
         if self._assembled_revision != self.geometry_revision:
             parts = [layer for layer in self._layers if layer.visible and layer.mesh is not None]
-            self._assembled = self.host.assemble(parts, {}) if parts else None
+            a = self._assembly
+            self._assembled = self.host.assemble(parts, dict(a.params), a.solver) if parts else None
             self._assembled_revision = self.geometry_revision
         return self._assembled
 
@@ -132,7 +144,23 @@ class Document:
         self.geometry_revision += 1
         self.assembly_invalidated.emit()
 
+    @staticmethod
+    def _check_finite(layer: Layer) -> None:
+        """A layer whose mesh has a NaN or infinite coordinate never reaches the document,
+        whichever command (a plugin's included) produced it: every view, the assembly and the
+        file would be poisoned by it. Raised before anything changes."""
+        mesh = layer.mesh
+        if mesh is None:
+            return
+        bad = ~np.isfinite(mesh.V).all(axis=1)
+        if bad.any():
+            raise SolverError(
+                f"the change would leave layer {layer.id[:80]!r} with non-finite heights or positions at {int(bad.sum())} "
+                "vertices; it was refused and the document is unchanged"
+            )
+
     def _insert_layer(self, index: int, layer: Layer) -> None:
+        self._check_finite(layer)
         self._layers.insert(index, layer)
         self._touch()
         self.layer_inserted.emit(index, layer)
@@ -145,6 +173,7 @@ class Document:
 
     def _replace_layer(self, layer: Layer) -> None:
         index = self.index_of(layer.id)
+        self._check_finite(layer)
         old = self._layers[index]
         self._layers[index] = layer
         self._touch()
@@ -163,6 +192,11 @@ class Document:
         self.revision += 1  # shading only: the assembled geometry does not depend on the light
         self.light_changed.emit(light)
 
+    def _set_assembly(self, choice: SolverChoice) -> None:
+        self._assembly = choice
+        self._touch()  # the assembled model depends on it
+        self.assembly_changed.emit()
+
     def _set_plugin_data(self, key: str, value) -> None:
         """Set (or, with None, remove) a plugin's value; the assembled geometry is unaffected."""
         if value is None:
@@ -178,12 +212,12 @@ class Document:
         references; plugin data is copied deeply (a buggy command may mutate it in place)."""
         import copy
 
-        return (tuple(self._layers), self._light, copy.deepcopy(self._plugin_data))
+        return (tuple(self._layers), self._light, copy.deepcopy(self._plugin_data), self._assembly)
 
     def _restore_snapshot(self, snap) -> None:
         """Put back a :meth:`_snapshot` after a command failed part-way, emitting the signals
         of what really changed so views follow."""
-        layers, light, plugin_data = snap
+        layers, light, plugin_data, assembly = snap
         if len(layers) != len(self._layers) or any(a is not b for a, b in zip(layers, self._layers)):
             same_ids = [l.id for l in layers] == self.layer_ids()
             if same_ids:
@@ -197,6 +231,8 @@ class Document:
                     self._insert_layer(i, layer)
         if light != self._light:
             self._set_light(light)
+        if assembly is not self._assembly:
+            self._set_assembly(assembly)
         for key in sorted(set(plugin_data) | set(self._plugin_data)):
             if plugin_data.get(key) != self._plugin_data.get(key):
                 self._set_plugin_data(key, plugin_data.get(key))
@@ -212,19 +248,26 @@ class Document:
         if ia != ib:
             return out + [f"layers differ: {ia} vs {ib}"]
         for la, lb in zip(self._layers, other._layers):
+            if la.solver != lb.solver and None not in (la.solver, lb.solver):
+                out.append(f"layer {la.id!r}: made with the inflater {la.solver!r} in one, {lb.solver!r} in the other")
+                continue
             if not la.same_state(lb):
                 mesh_differs = (la.mesh is None) != (lb.mesh is None) or (la.mesh is not None and not la.mesh.identical(lb.mesh))
                 out.append(f"layer {la.id!r}: {'mesh' if mesh_differs else 'fields'} differ")
         for key in sorted(set(self._plugin_data) | set(other._plugin_data)):
             if self._plugin_data.get(key) != other._plugin_data.get(key):
                 out.append(f"plugin data {key!r} differs")
+        a, b = self._assembly, other._assembly
+        if a.solver != b.solver or dict(a.params) != dict(b.params):
+            out.append(f"assembly differs: {a.to_dict()} vs {b.to_dict()}")
         return out
 
     def same_state(self, other: "Document") -> bool:
         return not self.differences(other)
 
     def restore_state(
-        self, layers, light: Light, initial_light: Light | None = None, base_journal=(), plugin_data=None
+        self, layers, light: Light, initial_light: Light | None = None, base_journal=(), plugin_data=None,
+        assembly: SolverChoice | None = None,
     ) -> None:
         """Set the whole state at once (opening a file): layers, current light, plugin data,
         and the light and journal that led to them. Not undoable: clears history; the result
@@ -233,6 +276,7 @@ class Document:
         old_keys = set(self._plugin_data)
         self._plugin_data = dict(plugin_data or {})
         self._light = light
+        self._assembly = SolverChoice() if assembly is None else assembly
         self.initial_light = light if initial_light is None else initial_light
         self.base_journal = [dict(e) for e in base_journal]
         self._touch()
@@ -242,7 +286,8 @@ class Document:
 
     def adopt(self, other: "Document") -> None:
         """Take over another document's state (the app opening a file into its window)."""
-        self.restore_state(other.layers, other.light, other.initial_light, other.base_journal, other._plugin_data)
+        self.restore_state(other.layers, other.light, other.initial_light, other.base_journal, other._plugin_data,
+                           other._assembly)
 
     def export_mesh(self, layer_id: str | None = None):
         """The mesh to export: one layer's own front surface, else the assembled model, else

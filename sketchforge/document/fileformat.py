@@ -7,11 +7,12 @@
 - ``journal``: command dicts, each with a ``"command"`` name, in order; each acts with the light
   current at its place (``set_light`` entries change it).
 - ``providers`` (optional, written since plugins record provenance): which plugin and version
-  provided each command and reflectance model the document uses
-  (:mod:`sketchforge.document.provenance`); only read to name missing plugins.
+  provided each command, reflectance model and solver the document uses
+  (:mod:`sketchforge.document.provenance`); read to name missing plugins and solvers.
 - ``snapshot`` (optional): the state after the journal: ``light`` and every layer (id, name,
-  visible, closed, points, params, edits, mesh) and, when a plugin keeps document-level data
-  (an animation), ``plugin_data``: {key: JSON value}. Mesh arrays are stored as base64 of their
+  visible, closed, points, ``solver`` (its inflater) and its params, edits, mesh), the
+  document's ``assembly`` ({"solver", "params"}, absent for the default) and, when a plugin
+  keeps document-level data (an animation), ``plugin_data``: {key: JSON value}. Mesh arrays are stored as base64 of their
   little-endian bytes, so a reopened file is bit-identical to the saved one.
 
 Opening uses the snapshot (a file reopens exactly as saved even after the solvers change);
@@ -27,6 +28,7 @@ import math
 import os
 import stat
 from pathlib import Path
+from types import MappingProxyType
 from typing import Any
 
 import numpy as np
@@ -36,8 +38,8 @@ from sketchforge.document import provenance
 from sketchforge.document.document import Document
 from sketchforge.document.layer import Layer, Light
 from sketchforge.errors import DocumentFormatError, ExportError, LimitError, SketchforgeError
-from sketchforge.geometry.inflate_params import check_inflate_params
 from sketchforge.geometry.mesh import Mesh
+from sketchforge.plugins.solvers import SOLVER_KINDS, SolverChoice
 
 FORMAT_NAME = "sketchforge"
 FORMAT_VERSION = 1
@@ -164,6 +166,7 @@ def _layer_to_dict(layer: Layer) -> dict:
         "closed": layer.closed,
         "points": None if layer.points is None else layer.points.tolist(),
         **({"holes": [h.tolist() for h in layer.holes]} if layer.holes else {}),
+        **({"solver": layer.solver} if layer.solver is not None else {}),
         "params": dict(layer.params),
         "edits": [dict(e) for e in layer.edits],
         "mesh": None if layer.mesh is None else encode_mesh(layer.mesh),
@@ -182,6 +185,8 @@ def document_to_dict(doc: Document, snapshot: bool = True) -> dict:
         keys = doc.plugin_data_keys
         if keys:
             out["snapshot"]["plugin_data"] = {k: doc.plugin_data(k) for k in keys}
+        if doc.assembly.to_dict():
+            out["snapshot"]["assembly"] = doc.assembly.to_dict()
     out["providers"] = provenance.record(doc)
     return out
 
@@ -197,10 +202,25 @@ def _parse_light(v: Any, where: str) -> Light:
         raise DocumentFormatError(f"{where}: {exc}") from None
 
 
-def _check_edits(edits: list, where: str, registry) -> None:
+def check_solver_entry(host, entry: dict) -> None:
+    """A journal entry (or stored edit) of a solver command that names its solver: that solver
+    must be installed and accept the entry's ``params`` (its own check, one line naming the
+    solver and the key). Entries that name none are checked when they run (the layer's solver
+    decides). Raises SketchforgeError."""
+    cls = host.commands._classes.get(entry.get("command")) if isinstance(entry.get("command"), str) else None
+    kind = getattr(cls, "solver_kind", None)
+    if kind is None or not isinstance(entry.get("solver"), str):
+        return
+    solver = host.solver(kind, entry["solver"])
+    params = entry.get("params", {})
+    host.solver_params(kind, solver, params if isinstance(params, dict) else {})
+
+
+def _check_edits(edits: list, where: str, registry, host=None) -> None:
     """Each stored sculpt edit must be a journal entry of an edit command (one that can be
-    re-applied) that parses, with an optional ``light`` of 3 finite numbers: a garbage edit
-    would otherwise be accepted and fail at the next parameter change."""
+    re-applied) that parses, with an optional ``light`` of 3 finite numbers, and parameters its
+    solver accepts: a garbage edit would otherwise be accepted and fail at the next parameter
+    change."""
     from sketchforge.document.commands import Command
 
     for i, e in enumerate(edits):
@@ -212,6 +232,8 @@ def _check_edits(edits: list, where: str, registry) -> None:
             if getattr(cls.reapply, "__func__", None) is Command.reapply.__func__:
                 raise DocumentFormatError(f"{cls.name!r} is not a sculpt edit")
             registry.from_dict(e)
+            if host is not None:
+                check_solver_entry(host, e)
         except SketchforgeError as exc:
             raise DocumentFormatError(f"{at}: {exc}") from None
         if "light" in e:
@@ -225,7 +247,7 @@ def _check_edits(edits: list, where: str, registry) -> None:
                 raise DocumentFormatError(f"{at}.light: must be a unit direction of 3 finite numbers")
 
 
-def _layer_from_dict(d: Any, where: str, registry=None) -> Layer:
+def _layer_from_dict(d: Any, where: str, registry=None, host=None) -> Layer:
     if not isinstance(d, dict):
         raise DocumentFormatError(f"{where}: a layer must be an object")
     try:
@@ -253,19 +275,27 @@ def _layer_from_dict(d: Any, where: str, registry=None) -> Layer:
     edits = d.get("edits", [])
     if not isinstance(params, dict) or not isinstance(edits, list) or not all(isinstance(e, dict) for e in edits):
         raise DocumentFormatError(f"{where}: params must be an object and edits a list of objects")
-    try:
-        params = check_inflate_params(params)
-    except SketchforgeError as exc:
-        raise DocumentFormatError(f"{where}.params: {exc}") from None
+    solver = d.get("solver")
+    if solver is not None and not isinstance(solver, str):
+        raise DocumentFormatError(f"{where}.solver: must be the name of an inflater (a string)")
+    if solver is None and d.get("mesh") is not None:
+        # Written before inflaters had names: only the built-in existed.
+        solver = SOLVER_KINDS["inflate"].default
+    if host is not None and (solver is not None or params):
+        try:
+            inflater = host.solver("inflate", solver)
+            params = host.solver_params("inflate", inflater, params)
+        except SketchforgeError as exc:
+            raise DocumentFormatError(f"{where}.params: {exc}") from None
     visible, closed = d.get("visible", True), d.get("closed", False)
     if not isinstance(visible, bool) or not isinstance(closed, bool):
         raise DocumentFormatError(f"{where}: visible and closed must be true or false")
     if registry is not None:
-        _check_edits(edits, where, registry)
+        _check_edits(edits, where, registry, host)
     mesh = d.get("mesh")
     mesh = None if mesh is None else decode_mesh(mesh, f"{where}.mesh")
     return Layer(id=lid, name=name, visible=visible, points=pts, closed=closed, params=params, mesh=mesh, edits=tuple(edits),
-                 holes=tuple(holes))
+                 holes=tuple(holes), solver=solver)
 
 
 def validate_header(data: Any, source: str) -> tuple[Light, list]:
@@ -309,9 +339,12 @@ def document_from_dict(data: Any, source: str = "document", host=None, use_snaps
     for i, entry in enumerate(journal):
         try:
             doc.host.commands.from_dict(entry)
+            for e in provenance._entries([entry]):
+                check_solver_entry(doc.host, e)
         except SketchforgeError as exc:
             raise DocumentFormatError(f"{source}: journal entry {i}: {exc}") from None
-    layers = [_layer_from_dict(l, f"{source}: snapshot.layers[{i}]", doc.host.commands) for i, l in enumerate(snap["layers"])]
+    layers = [_layer_from_dict(l, f"{source}: snapshot.layers[{i}]", doc.host.commands, doc.host)
+              for i, l in enumerate(snap["layers"])]
     ids = [l.id for l in layers]
     if len(set(ids)) != len(ids):
         raise DocumentFormatError(f"{source}: snapshot.layers has duplicate ids")
@@ -319,8 +352,25 @@ def document_from_dict(data: Any, source: str = "document", host=None, use_snaps
     plugin_data = snap.get("plugin_data", {})
     if not isinstance(plugin_data, dict) or not all(isinstance(k, str) for k in plugin_data):
         raise DocumentFormatError(f"{source}: snapshot.plugin_data must be an object")
-    doc.restore_state(layers, cur_light, light, journal, plugin_data)
+    assembly = _assembly_from_dict(snap.get("assembly"), f"{source}: snapshot.assembly", doc.host)
+    doc.restore_state(layers, cur_light, light, journal, plugin_data, assembly)
     return doc
+
+
+def _assembly_from_dict(d: Any, where: str, host) -> SolverChoice:
+    """The document's assembler choice from a snapshot (absent: the default)."""
+    if d is None:
+        return SolverChoice()
+    if not isinstance(d, dict) or set(d) - {"solver", "params"}:
+        raise DocumentFormatError(f"{where}: must be an object with 'solver' and 'params'")
+    solver, params = d.get("solver"), d.get("params", {})
+    if (solver is not None and not isinstance(solver, str)) or not isinstance(params, dict):
+        raise DocumentFormatError(f"{where}: 'solver' must be a name and 'params' an object")
+    try:
+        host.solver_params("assemble", host.solver("assemble", solver), params)
+    except SketchforgeError as exc:
+        raise DocumentFormatError(f"{where}: {exc}") from None
+    return SolverChoice(solver, MappingProxyType(dict(params)))
 
 
 def replay_journal(light: Light, journal: list, source: str = "journal", host=None, progress=None) -> Document:

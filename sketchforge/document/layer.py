@@ -61,8 +61,13 @@ class Layer:
     closed : bool
         True when the whole outline is free; False lets an open stroke's closing segment be
         the junction Γ_conn.
-    params : Mapping[str, float]
-        Inflation parameters (``resolution``, ``inflation``, ``smoothing``).
+    params : Mapping[str, Any]
+        The inflater's parameters (for the built-in ``poisson``: ``resolution``, ``inflation``,
+        ``smoothing``); empty until the layer is first inflated, then the complete set its
+        inflater returned (defaults filled in).
+    solver : str or None
+        The layer's inflater (see :mod:`sketchforge.plugins.solvers`); None until it is first
+        inflated (then the default's name is recorded: the built-in ``"poisson"``).
     mesh : Mesh or None
         The current front surface (inflated, then sculpted).
     edits : tuple of dict
@@ -77,10 +82,11 @@ class Layer:
     visible: bool = True
     points: np.ndarray | None = None
     closed: bool = False
-    params: Mapping[str, float] = field(default_factory=lambda: dict(DEFAULT_INFLATE_PARAMS))
+    params: Mapping[str, Any] = field(default_factory=dict)
     mesh: Mesh | None = None
     edits: tuple = ()
     holes: tuple = ()
+    solver: str | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "points", _points(self.points))
@@ -114,6 +120,7 @@ class Layer:
             and self.name == other.name
             and self.visible == other.visible
             and self.closed == other.closed
+            and self.solver == other.solver
             and dict(self.params) == dict(other.params)
             and list(self.edits) == list(other.edits)
             and pts_equal

@@ -1,5 +1,5 @@
-"""Inflation parameters: their defaults and validation, shared by the document (which checks a
-journal before running it) and the inflate plugin (which fills in defaults)."""
+"""The built-in (``poisson``) inflater's parameters: their defaults and validation (its
+``check_params``). Other inflaters have their own; the document never reads these keys."""
 
 from __future__ import annotations
 
@@ -22,7 +22,7 @@ MAX_PARAM = 1e9
 
 
 def check_inflate_params(params: Mapping | None) -> dict:
-    """Defaults filled in, values checked; unknown keys ignored.
+    """Defaults filled in, values checked, unknown keys refused.
 
     Returns
     -------
@@ -37,6 +37,9 @@ def check_inflate_params(params: Mapping | None) -> dict:
     if params is not None:
         if not isinstance(params, Mapping):
             raise ParameterError(f"inflation parameters must be a mapping, got {type(params).__name__}")
+        unknown = sorted(str(k) for k in params if k not in DEFAULT_INFLATE_PARAMS)
+        if unknown:
+            raise ParameterError(f"unknown inflation parameter {unknown[0][:60]!r} (known: {', '.join(DEFAULT_INFLATE_PARAMS)})")
         for key in DEFAULT_INFLATE_PARAMS:
             if key in params:
                 v = params[key]

@@ -117,3 +117,61 @@ def check_reflectance_model(model, plugin: str) -> None:
                     f"(R = {r:.3g}, |∇R| = {abs(rp) + abs(rq):.3g} at n·l = {-k / np.hypot(1, k):.2f}), so the "
                     "height solve cannot move its isophotes there; do not use max(·, 0) (ignored)",
                 )
+
+
+#: A parameter no solver takes: ``check_params`` must refuse it (unknown keys are never
+#: silently dropped).
+PROBE_KEY = "__sketchforge_probe__"
+
+
+def solver_check(kind: str):
+    """The registration check for a solver of ``kind``: the right value type, a callable
+    function and ``check_params``, a string version, defaults that are JSON, and an unknown
+    parameter refused."""
+    from sketchforge.errors import SketchforgeError
+    from sketchforge.plugins.solvers import SOLVER_KINDS, SOLVER_TYPES, json_value
+
+    spec, cls = SOLVER_KINDS[kind], SOLVER_TYPES[kind]
+
+    def check(item, plugin: str) -> None:
+        if not isinstance(item, cls):
+            _fail(plugin, f"{spec.hook} must return {cls.__name__} values, got {type(item).__name__} (ignored)")
+        if not callable(getattr(item, spec.call, None)):
+            _fail(plugin, f"{spec.what} {item.name!r}: {spec.call} must be callable (ignored)")
+        if not callable(item.check_params):
+            _fail(plugin, f"{spec.what} {item.name!r}: check_params must be callable as check_params(params) -> dict (ignored)")
+        if not isinstance(item.version, str) or not item.version:
+            _fail(plugin, f"{spec.what} {item.name!r}: version must be a non-empty string (ignored)")
+        try:
+            defaults = item.check_params({})
+        except Exception as exc:  # noqa: BLE001 - foreign code
+            _fail(plugin, f"{spec.what} {item.name!r}: check_params({{}}) raised {type(exc).__name__}: {exc}; it must "
+                          "return the default parameters (ignored)")
+        if not isinstance(defaults, dict) or not json_value(defaults):
+            _fail(plugin, f"{spec.what} {item.name!r}: check_params({{}}) must return a dict of JSON values (the "
+                          f"defaults), got {type(defaults).__name__} (ignored)")
+        try:
+            item.check_params({PROBE_KEY: 1})
+        except SketchforgeError:
+            pass
+        except Exception as exc:  # noqa: BLE001 - foreign code
+            _fail(plugin, f"{spec.what} {item.name!r}: check_params raised {type(exc).__name__} for an unknown parameter; "
+                          "it must raise ParameterError (ignored)")
+        else:
+            _fail(plugin, f"{spec.what} {item.name!r} accepted the unknown parameter {PROBE_KEY!r}: check_params must "
+                          "refuse unknown keys with a ParameterError, never drop them (ignored)")
+
+    return check
+
+
+def check_panel(panel, plugin: str) -> None:
+    from sketchforge.plugins.registry import PANEL_PLACES, Panel
+
+    if not isinstance(panel, Panel):
+        _fail(plugin, f"sketchforge_qt_panels must return Panel values, got {type(panel).__name__} (ignored)")
+    if panel.place not in PANEL_PLACES:
+        _fail(plugin, f"panel {panel.name!r}: place must be one of {', '.join(PANEL_PLACES)}, got {panel.place!r} (ignored)")
+    if not callable(panel.create):
+        _fail(plugin, f"panel {panel.name!r}: create must be callable as create(app) -> QWidget (ignored)")
+    if panel.available is not None and not callable(panel.available):
+        _fail(plugin, f"panel {panel.name!r}: available must be callable as available(host) -> bool (ignored)")

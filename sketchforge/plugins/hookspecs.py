@@ -7,18 +7,30 @@ built-in plugins are loaded through exactly that path.
 
 Hooks are grouped by phase:
 
-Solvers (``firstresult``: pluggy calls implementations last-registered first and stops at the
-first result that is not ``None``; plugins are registered in a fixed order, built-ins first,
-then entry points sorted by name, so the choice never depends on installation order):
+Solvers are named registries, like every other contribution: a plugin returns a list of
+named solver values and a document names the one it uses, so the choice never depends on
+installation or registration order:
 
-- :func:`sketchforge_inflate`
-- :func:`sketchforge_assemble`
-- :func:`sketchforge_pose`
+- :func:`sketchforge_inflaters` (contour -> a layer's front mesh; built-in ``"poisson"``)
+- :func:`sketchforge_sculpt_solvers` (wanted shading -> heights; built-in ``"gauss_newton"``,
+  and the thesis' ``"strips"``)
+- :func:`sketchforge_assemblers` (layers -> one closed mesh; built-in ``"depth_qp"``)
 
-Registries (every implementation is called, results are collected; names must be unique):
+Registries (every implementation is called, results are collected):
 
 - :func:`sketchforge_tools`, :func:`sketchforge_reflectance_models`,
-  :func:`sketchforge_shaders`, :func:`sketchforge_commands`, :func:`sketchforge_exporters`
+  :func:`sketchforge_shaders`, :func:`sketchforge_commands`, :func:`sketchforge_exporters`,
+  the three solver registries above, and :func:`sketchforge_qt_panels` (the app's panels)
+
+One override rule for every kind: a name belongs to one plugin. A plugin that registers a name
+the core already has is refused; two plugins registering the same name is an error naming
+both, and the name is left unusable until one of them is uninstalled (never "the last one
+registered wins"). The one remaining ``firstresult`` hook, :func:`sketchforge_pose`, follows
+the same rule: a second implementation is an error naming both.
+
+pluggy wrappers (``hookwrapper=True`` or ``wrapper=True``) are refused with a message: the host
+calls each plugin's hook on its own (so that a failing plugin is named and disabled alone),
+so a wrapper would never run.
 
 Each registry hook must return a list. The host calls them plugin by plugin: one that raises
 disables its plugin; each contribution is checked (:mod:`sketchforge.plugins.contracts`) and
@@ -37,60 +49,61 @@ hookimpl = pluggy.HookimplMarker("sketchforge")
 # --- solvers ---------------------------------------------------------------------------------
 
 
-@hookspec(firstresult=True)
-def sketchforge_inflate(points, closed, params, holes):
-    """Turn a drawn stroke into a layer's front surface.
+@hookspec
+def sketchforge_inflaters():
+    """Return a list of inflaters (:class:`sketchforge.plugin_api.Inflater`).
 
-    Called by the ``set_contour`` and ``set_inflate_params`` commands (and on replay).
+    An inflater turns a drawn stroke into a layer's front surface. Called when the host
+    starts; the ``set_contour``, ``set_inflate_params``, ``mirror_layer`` commands (and
+    replay) call ``inflate(points, closed, params, holes)`` of the layer's inflater:
 
-    Parameters
-    ----------
     points : (n, 2) float64
         The stroke as drawn, in drawing units (x right, y up), either orientation.
     closed : bool
         True: the whole outline is free. False: if the ends are far apart, the closing segment
         is the junction Γ_conn where the part attaches to the layer below.
     params : dict
-        ``resolution`` (target edge length, drawing units), ``inflation`` (height scale),
-        ``smoothing`` (fairing weight α in [0, 1), 0 = none). Unknown keys are ignored.
+        What ``check_params`` returned for the layer's parameters (defaults filled in).
     holes : list of (k_i, 2) float64
-        Inner rings to cut out of the part (empty: none), either orientation; the surface
-        keeps z = 0 on each and the returned mesh lists their loops in ``holes``. An
-        implementation without this argument cannot make holes: the host refuses a layer
-        with holes rather than silently fill them.
+        Inner rings to cut out of the part (empty: none); the surface keeps z = 0 on each and
+        the mesh lists their loops in ``holes``. An inflater with ``holes=False`` is never
+        given any (the host refuses a layer with holes rather than fill them).
 
-    Returns
-    -------
-    sketchforge.geometry.Mesh
-        V (n,3) float64 with z >= 0 and z = 0 on the boundary, F (m,3) int64
-        counter-clockwise seen from +z, ``boundary`` loop, ``junction`` vertices and ``holes``
-        loops.
-
-    Raises
-    ------
-    sketchforge.errors.ContourError
-        For a stroke that cannot be inflated; the message says what is wrong.
+    Returns a ``Mesh``: V (n,3) float64 with z >= 0 and z = 0 on the boundary, F (m,3) int64
+    counter-clockwise seen from +z, ``boundary`` loop, ``junction`` vertices and ``holes``
+    loops. Raises ``ContourError`` for a stroke that cannot be inflated. The built-in
+    ``"poisson"`` (plugin ``inflate``) solves -L u = 4M, z = sqrt(u), then fairs (thesis 4.2).
     """
 
 
-@hookspec(firstresult=True)
-def sketchforge_assemble(layers, params):
-    """Assemble layers into one closed, oriented 2-manifold mesh (Monster Mash style).
+@hookspec
+def sketchforge_sculpt_solvers():
+    """Return a list of sculpt solvers (:class:`sketchforge.plugin_api.SculptSolver`).
 
-    Called when the assembled model is needed (observation mode, export) after a layer changed.
+    A sculpt solver turns the shading a redrawn isophote asks for into heights: the
+    ``sculpt_isophote`` command calls ``solve(problem, params)`` of the solver its entry names
+    (``"solver"``, default ``"gauss_newton"``) with a
+    :class:`sketchforge.plugin_api.SculptProblem` (the layer's mesh and shading, the isovalue,
+    the band, the cleaned stroke, and the host's shading services) and the dict
+    ``check_params`` returned for the entry's ``"params"``. It returns a
+    :class:`sketchforge.plugin_api.SculptSolution` (or the height change δz (n,) float64
+    alone). Raise ``SculptError`` (one line, what to draw instead) for an edit it cannot make.
+    The host keeps the rim at 0 and heights >= 0, refuses non-finite heights and keeps the
+    edit only if the isophote ends no farther from the stroke than it was.
+    """
 
-    Parameters
-    ----------
-    layers : list of sketchforge.document.Layer
-        The visible layers that have a mesh, back to front (later = in front). Read-only:
-        use ``layer.id``, ``layer.mesh`` (its ``junction`` marks Γ_conn) and ``layer.closed``.
-    params : dict
-        Assembly options (plugin specific; empty by default).
 
-    Returns
-    -------
-    sketchforge.geometry.Mesh
-        One mesh, outward-oriented triangles; ``boundary`` and ``junction`` empty.
+@hookspec
+def sketchforge_assemblers():
+    """Return a list of assemblers (:class:`sketchforge.plugin_api.Assembler`).
+
+    An assembler builds one closed, oriented 2-manifold mesh from the layers (Monster Mash
+    style). Called when the assembled model is needed (observation mode, export) after a
+    layer changed: ``assemble(layers, params)`` of the document's assembler
+    (``set_assembly``; default ``"depth_qp"``), with ``layers`` the visible layers that have a
+    mesh, back to front (read-only ``Layer`` values: ``id``, ``mesh`` whose ``junction`` marks
+    Γ_conn, ``closed``), and the dict ``check_params`` returned. Returns one ``Mesh``,
+    outward-oriented triangles, ``boundary`` and ``junction`` empty.
     """
 
 
@@ -98,7 +111,8 @@ def sketchforge_assemble(layers, params):
 def sketchforge_pose(doc, frame):
     """The document's assembled model posed at animation frame ``frame`` (animation plugins).
 
-    Called by ``sketchforge replay DOC --frame N --export OUT``.
+    Called by ``sketchforge replay DOC --frame N --export OUT``. At most one plugin may
+    implement it: a second one is an error naming both (the host calls neither).
 
     Parameters
     ----------
@@ -170,3 +184,16 @@ def sketchforge_exporters():
     (``host.export``) passes a path in a private temp folder and moves the finished file into
     place atomically; errors become one line naming the plugin.
     """
+
+
+@hookspec
+def sketchforge_qt_panels():
+    """Return a list of panels for the desktop app (:class:`sketchforge.plugin_api.Panel`).
+
+    The app builds each panel's widget with ``create(app)`` once, when its window is made,
+    and shows it in the controls of its ``place`` ("creation", "sculpture", "observation");
+    ``app`` is a :class:`sketchforge.qt.panel_api.AppContext`. Only the app calls ``create``,
+    so a plugin imports Qt inside it and stays usable headless. The animation panel (plugin
+    ``animate``) and the sculpt panel (plugin ``isophote_tool``) come through this hook.
+    """
+

@@ -1,10 +1,11 @@
 """The plugin manager and the host facade the document and front ends use.
 
-Registration order is fixed, so ``firstresult`` hooks never depend on how packages were
-installed: the built-in core plugin first, then entry points of the group ``sketchforge``
-sorted by name, then ``check_pending()``. pluggy calls the most recently registered
-implementation first, so an entry-point plugin overrides the core, and of two entry points
-the one whose name sorts last wins.
+Registration order is fixed: the built-in core plugin first, then entry points of the group
+``sketchforge`` sorted by name, each checked as it is registered (its hooks must exist, no
+pluggy wrappers, no replaced legacy hook). Every contribution is named, and a name belongs to
+one plugin: a plugin cannot replace the core's, and two plugins registering the same name is
+an error naming both (the name is then unusable until one of them goes), never "the last
+registered wins" (:meth:`PluginHost._collect`).
 
 ``SKETCHFORGE_PLUGINS`` (comma-separated entry-point names) is an allowlist: when set, only
 those entry points are loaded ("" loads none). ``SKETCHFORGE_PLUGINS`` does not affect the
@@ -22,15 +23,50 @@ from typing import Iterable
 
 import pluggy
 
-from sketchforge.errors import PluginError, SketchforgeError
+from sketchforge.errors import ParameterError, PluginError, SketchforgeError, UnknownSolverError
 from sketchforge.plugins import contracts, hookspecs
+from sketchforge.plugins.solvers import SOLVER_KINDS, json_value
 
 log = logging.getLogger("sketchforge.plugins")
 #: The built-in plugin's registration name.
 CORE = "sketchforge-core"
 
 ENTRY_POINT_GROUP = "sketchforge"
+
+def _short(v, n: int = 60) -> str:
+    """repr(v), cut to ``n`` characters for a message line."""
+    text = repr(v)
+    return text if len(text) <= n else text[: n - 1] + "…"
+
+
 ALLOWLIST_ENV = "SKETCHFORGE_PLUGINS"
+
+
+#: Hooks of earlier releases that named registries replaced: a plugin that still implements
+#: one is refused with what to write instead.
+LEGACY_HOOKS = {
+    "sketchforge_inflate": "sketchforge_inflaters (return [Inflater('my_inflater', inflate, check_params)])",
+    "sketchforge_assemble": "sketchforge_assemblers (return [Assembler('my_assembler', assemble, check_params)])",
+}
+
+
+def _hook_problem(pm: pluggy.PluginManager, plugin, name: str) -> str | None:
+    """Why a registered plugin's hooks cannot be used (None: they can): a hook the
+    specification does not know (a typo, or a legacy hook), or a pluggy wrapper, which the
+    host would never call since it calls each plugin's hook on its own."""
+    for caller in pm.get_hookcallers(plugin) or []:
+        if caller.spec is None:
+            if caller.name in LEGACY_HOOKS:
+                return (f"plugin {name!r} implements {caller.name}, which was replaced by the named registry "
+                        f"{LEGACY_HOOKS[caller.name]}; it was not loaded")
+            known = ", ".join(sorted(n for n in dir(hookspecs) if n.startswith("sketchforge_")))
+            return f"plugin {name!r} implements the unknown hook {caller.name!r} (known: {known}); it was not loaded"
+        for impl in caller.get_hookimpls():
+            if impl.plugin is plugin and (getattr(impl, "hookwrapper", False) or getattr(impl, "wrapper", False)):
+                return (f"plugin {name!r}: its {caller.name} hook is a pluggy wrapper (wrapper=True); sketchforge calls "
+                        "each plugin's hook on its own, so a wrapper would never run: return your contribution from "
+                        "a plain hook instead; it was not loaded")
+    return None
 
 
 def make_plugin_manager(
@@ -39,9 +75,11 @@ def make_plugin_manager(
     """Build a manager: core plugin, then ``plugins`` (objects or modules, in order), then
     installed entry points (filtered by ``allowlist`` or the environment variable).
 
-    With ``skip_broken`` an entry point that fails to import is left out instead of failing
-    the whole host (the app must start even if one plugin is broken); the failures are in
-    ``pm.skipped`` ({name: "ExceptionType: message"})."""
+    Each plugin's hooks are checked as it is registered (:func:`_hook_problem`). A plugin given
+    in ``plugins`` that fails raises PluginError. With ``skip_broken`` an entry point that
+    fails to import or to register is left out instead of failing the whole host (the app, the
+    CLI and ``Document()`` must start even if one plugin is broken or lacks a dependency); the
+    failures are in ``pm.skipped`` ({name: one line}) and ``pm.problems``."""
     from sketchforge.plugins import builtin
 
     pm = pluggy.PluginManager("sketchforge")
@@ -50,8 +88,22 @@ def make_plugin_manager(
     pm.skipped = {}
     pm.problems = []
     pm.versions = {}
+
+    def register(plugin, name: str, explicit: bool) -> bool:
+        pm.register(plugin, name=name)
+        problem = _hook_problem(pm, plugin, name)
+        if problem is None:
+            return True
+        pm.unregister(name=name)
+        if explicit or not skip_broken:
+            raise PluginError(problem)
+        pm.skipped[name] = problem
+        pm.problems.append(problem)
+        log.warning("%s", problem)
+        return False
+
     for i, plugin in enumerate(plugins):
-        pm.register(plugin, name=getattr(plugin, "__name__", None) or f"plugin-{i}-{type(plugin).__name__}")
+        register(plugin, getattr(plugin, "__name__", None) or f"plugin-{i}-{type(plugin).__name__}", True)
     if load_entry_points:
         if allowlist is None and ALLOWLIST_ENV in os.environ:
             allowlist = [s.strip() for s in os.environ[ALLOWLIST_ENV].split(",") if s.strip()]
@@ -64,9 +116,15 @@ def make_plugin_manager(
                 except Exception as exc:  # noqa: BLE001 - any import error of foreign code
                     if not skip_broken:
                         raise
+                    # One line naming the plugin and what it lacks (a missing dependency is a
+                    # ModuleNotFoundError naming the module).
+                    text = f"plugin {ep.name!r} could not be loaded: {type(exc).__name__}: {exc}"
                     pm.skipped[ep.name] = f"{type(exc).__name__}: {exc}"
+                    pm.problems.append(text)
+                    log.warning("%s", text)
                     continue
-                pm.register(plugin, name=ep.name)
+                if not register(plugin, ep.name, False):
+                    continue
                 dist = getattr(ep, "dist", None)
                 if dist is not None:
                     pm.versions[ep.name] = dist.version
@@ -92,14 +150,17 @@ class PluginHost:
     def plugin_names(self) -> list[str]:
         return [name for name, _ in self.pm.list_name_plugin()]
 
-    # solvers
+    # the one firstresult hook ----------------------------------------------------------------
     def _solve(self, hookname: str, **kwargs):
-        """A ``firstresult`` hook called implementation by implementation (pluggy's order:
-        last registered first), so a bug in one (an exception that is not a SketchforgeError)
-        becomes a PluginError naming that plugin."""
-        for impl in reversed(getattr(self.pm.hook, hookname).get_hookimpls()):
-            if getattr(impl, "hookwrapper", False) or getattr(impl, "wrapper", False):
-                continue
+        """A ``firstresult`` hook: at most one plugin may implement it (two are an error naming
+        both, never "the last registered wins"); a bug in it (an exception that is not a
+        SketchforgeError) becomes a PluginError naming the plugin."""
+        impls = getattr(self.pm.hook, hookname).get_hookimpls()
+        if len(impls) > 1:
+            names = " and ".join(repr(i.plugin_name) for i in impls)
+            raise PluginError(f"plugins {names} both implement {hookname}; uninstall one of them (or leave one out "
+                              f"with {ALLOWLIST_ENV})")
+        for impl in impls:
             try:
                 result = impl.function(*[kwargs[a] for a in impl.argnames])
             except SketchforgeError:
@@ -110,21 +171,117 @@ class PluginHost:
                 return result
         return None
 
-    def inflate(self, points, closed: bool, params: dict, holes=()):
-        holes = [] if holes is None else list(holes)
-        if holes:
-            impls = self.pm.hook.sketchforge_inflate.get_hookimpls()
-            if impls and "holes" not in impls[-1].argnames:  # the last registered answers first
-                from sketchforge.errors import ContourError
+    # named solvers ----------------------------------------------------------------------------
+    def solvers(self, kind: str) -> dict:
+        """The installed solvers of one kind ("inflate", "sculpt", "assemble"): {name: value}."""
+        return getattr(self, f"_solvers_{kind}")
 
-                raise ContourError(f"the inflate plugin {impls[-1].plugin_name!r} cannot cut holes; remove the holes or install one that can")
-        return self._solve("sketchforge_inflate", points=points, closed=closed, params=params, holes=holes)
+    @cached_property
+    def _solvers_inflate(self) -> dict:
+        return self._collect("sketchforge_inflaters", "inflater", contracts.solver_check("inflate"))
+
+    @cached_property
+    def _solvers_sculpt(self) -> dict:
+        return self._collect("sketchforge_sculpt_solvers", "sculpt solver", contracts.solver_check("sculpt"))
+
+    @cached_property
+    def _solvers_assemble(self) -> dict:
+        return self._collect("sketchforge_assemblers", "assembler", contracts.solver_check("assemble"))
+
+    def default_solver_name(self, kind: str) -> str | None:
+        """The solver a document that names none uses: the built-in, or on a host without it
+        the only one of that kind installed; None when that does not decide it."""
+        reg = self.solvers(kind)
+        default = SOLVER_KINDS[kind].default
+        if default in reg:
+            return default
+        if len(reg) == 1:
+            return next(iter(reg))
+        return None
+
+    def solver(self, kind: str, name: str | None = None):
+        """The solver value ``name`` of ``kind`` (None: :meth:`default_solver_name`).
+
+        Raises
+        ------
+        UnknownSolverError
+            No such solver is installed (the message lists the installed ones).
+        PluginError
+            Two plugins register that name.
+        """
+        spec = SOLVER_KINDS[kind]
+        reg = self.solvers(kind)
+        if name is None:
+            name = self.default_solver_name(kind)
+            if name is None:
+                if not reg:
+                    raise UnknownSolverError(f"no {spec.what} is installed (the built-in {spec.default!r} comes with "
+                                             "its plugin; is it left out by SKETCHFORGE_PLUGINS?)")
+                raise UnknownSolverError(f"no {spec.what} is chosen and the built-in {spec.default!r} is not installed; "
+                                         f"name one of: {', '.join(sorted(reg))}")
+        if name in reg:
+            return reg[name]
+        clash = self._ambiguous.get(spec.what, {}).get(name)
+        if clash:
+            raise PluginError(f"the {spec.what} {name!r} is registered by both plugins {clash[0]!r} and {clash[1]!r}; "
+                              f"uninstall one of them (or leave one out with {ALLOWLIST_ENV})")
+        known = ", ".join(sorted(reg)) or "none"
+        raise UnknownSolverError(f"no {spec.what} named {_short(name)} is installed (installed: {known})")
+
+    def solver_params(self, kind: str, solver, params) -> dict:
+        """``solver``'s complete parameters for ``params`` (a mapping, maybe partial), checked by
+        the solver itself. Raises ParameterError naming the solver ("sculpt solver 'strips':
+        unknown parameter 'x' (known: ...)"), or PluginError if its check is broken."""
+        spec = SOLVER_KINDS[kind]
+        try:
+            out = solver.check_params(dict(params or {}))
+        except SketchforgeError as exc:
+            raise ParameterError(f"{spec.what} {solver.name!r}: {exc}") from None
+        except Exception as exc:  # noqa: BLE001 - foreign code
+            raise PluginError(f"the {spec.what} {solver.name!r} (plugin {self.provider_of(solver)!r}) failed to check its "
+                              f"parameters: {type(exc).__name__}: {exc}") from exc
+        if not isinstance(out, dict) or not json_value(out):
+            raise PluginError(f"the {spec.what} {solver.name!r} (plugin {self.provider_of(solver)!r}): check_params must "
+                              f"return a dict of JSON values, got {_short(out)}")
+        return out
+
+    def run_solver(self, kind: str, solver, *args):
+        """Call ``solver``'s function; a bug in it (not a SketchforgeError) becomes a
+        PluginError naming the solver and its plugin."""
+        spec = SOLVER_KINDS[kind]
+        try:
+            return getattr(solver, spec.call)(*args)
+        except SketchforgeError:
+            raise
+        except Exception as exc:  # noqa: BLE001 - foreign code: named, not hidden
+            raise PluginError(f"the {spec.what} {solver.name!r} of plugin {self.provider_of(solver)!r} failed: "
+                              f"{type(exc).__name__}: {exc}") from exc
+
+    def inflate(self, points, closed: bool, params: dict, holes=(), solver: str | None = None):
+        """Inflate with the inflater ``solver`` (None: the default) and its ``params``."""
+        from sketchforge.errors import ContourError
+
+        holes = [] if holes is None else list(holes)
+        try:
+            inflater = self.solver("inflate", solver)
+        except UnknownSolverError:
+            if solver is None and not self.solvers("inflate"):
+                raise SketchforgeError("no inflate plugin is installed, so a contour cannot become a mesh") from None
+            raise
+        if holes and not inflater.holes:
+            raise ContourError(f"the inflater {inflater.name!r} (plugin {self.provider_of(inflater)!r}) cannot cut holes; "
+                               "remove the holes or choose one that can")
+        full = self.solver_params("inflate", inflater, params)
+        return self.run_solver("inflate", inflater, points, closed, full, holes)
 
     def has_assembler(self) -> bool:
-        return bool(self.pm.hook.sketchforge_assemble.get_hookimpls())
+        return bool(self.solvers("assemble"))
 
-    def assemble(self, layers, params: dict | None = None):
-        return self._solve("sketchforge_assemble", layers=list(layers), params=dict(params or {}))
+    def assemble(self, layers, params: dict | None = None, solver: str | None = None):
+        """Assemble with the assembler ``solver`` (None: the default) and its ``params``."""
+        assembler = self.solver("assemble", solver)
+        full = self.solver_params("assemble", assembler, params)
+        return self.run_solver("assemble", assembler, list(layers), full)
 
     # registries
     @property
@@ -148,22 +305,25 @@ class PluginHost:
         self.pm.unregister(name=plugin_name)
         self.pm.skipped[plugin_name] = reason
         self._report(f"plugin {plugin_name!r} disabled: {reason}")
-        for attr in ("commands", "tools", "reflectance_models", "shaders", "exporters", "_providers"):
+        for attr in ("commands", "tools", "reflectance_models", "shaders", "exporters", "qt_panels", "_providers",
+                     "_ambiguous", *(f"_solvers_{k}" for k in SOLVER_KINDS)):
             self.__dict__.pop(attr, None)
 
     def _collect(self, hookname: str, what: str, check=None) -> dict:
         """Call every plugin's registry hook one by one, so a hook that raises disables its
         own plugin only. ``check(item, plugin)`` validates one contribution (raises
-        PluginError); a refused item is reported and left out, the plugin's others stay."""
+        PluginError); a refused item is reported and left out, the plugin's others stay.
+
+        Names: a plugin cannot take a name the core registered (refused); two plugins
+        registering one name is an error naming both, and the name is left out of the
+        registry (a lookup says why: :attr:`_ambiguous`) until one of them goes. Which one
+        would win must never depend on registration order."""
         while True:
             out: dict = {}
             owner: dict = {}
+            clashes: dict = {}
             broken = None
-            # Registration order (core first), so a later plugin cannot silently shadow an
-            # earlier name: the clash is reported and the first one kept.
             for impl in getattr(self.pm.hook, hookname).get_hookimpls():
-                if getattr(impl, "hookwrapper", False) or getattr(impl, "wrapper", False):
-                    continue
                 plugin = impl.plugin_name
                 try:
                     items = impl.function()
@@ -180,28 +340,45 @@ class PluginHost:
                 for item in items:
                     name = getattr(item, "name", None)
                     if not name or not isinstance(name, str):
-                        self._report(f"plugin {plugin!r}: a {what} without a name was registered: {item!r} (ignored)")
+                        self._report(f"plugin {plugin!r}: a {what} without a name was registered: {_short(item)} (ignored)")
                         continue
-                    if name in out:
-                        if out[name] is not item:
-                            self._report(
-                                f"plugins {owner[name]!r} and {plugin!r} both register the {what} {name!r}; "
-                                f"the one from {owner[name]!r} is used"
-                            )
-                        continue
+                    if name in out and out[name] is item:
+                        continue  # the same value twice (one module registered under two names)
                     if check is not None:
                         try:
                             check(item, plugin)
                         except PluginError as exc:
                             self._report(str(exc))
                             continue
+                    if name in clashes:
+                        clashes[name].append(plugin)
+                        self._report(f"plugin {plugin!r} also registers the {what} {name!r} (registered by "
+                                     f"{' and '.join(map(repr, clashes[name][:-1]))}): error, the name is not usable")
+                        continue
+                    if name in out:
+                        first = owner[name]
+                        if first == CORE:
+                            self._report(f"plugin {plugin!r}: the {what} {name!r} is sketchforge's own; a plugin cannot "
+                                         "replace it (refused: register it under another name)")
+                            continue
+                        clashes[name] = [first, plugin]
+                        del out[name], owner[name]
+                        self._report(f"plugins {first!r} and {plugin!r} both register the {what} {name!r}: error, neither "
+                                     f"is used until one of them is uninstalled (or left out with {ALLOWLIST_ENV})")
+                        continue
                     out[name] = item
                     owner[name] = plugin
             if broken is None:
                 for name, plugin in owner.items():
                     self._providers[(what, name)] = plugin
+                self._ambiguous[what] = clashes
                 return out
             self.disable(*broken)
+
+    @cached_property
+    def _ambiguous(self) -> dict:
+        """{what: {name: [plugins]}}: names two or more plugins registered (none is used)."""
+        return {}
 
     @cached_property
     def _providers(self) -> dict:
@@ -210,7 +387,10 @@ class PluginHost:
     def provider_of(self, item) -> str | None:
         """The name of the plugin that registered ``item`` (a command or tool class, a model,
         shader or exporter), None when it is not registered."""
-        for kind, attr in (("command", "commands"), ("tool", "tools"), ("reflectance model", "reflectance_models"), ("shader", "shaders"), ("exporter", "exporters")):
+        kinds = [("command", "commands"), ("tool", "tools"), ("reflectance model", "reflectance_models"),
+                 ("shader", "shaders"), ("exporter", "exporters"), ("panel", "qt_panels"),
+                 *((spec.what, f"_solvers_{k}") for k, spec in SOLVER_KINDS.items())]
+        for kind, attr in kinds:
             if kind == "reflectance model" and (kind, getattr(item, "name", None)) not in self._providers:
                 continue  # probing models imports JAX: only when one was asked for
             reg = getattr(self, attr)
@@ -239,7 +419,8 @@ class PluginHost:
     def commands(self):
         from sketchforge.document.commands import CommandRegistry
 
-        return CommandRegistry(self._collect("sketchforge_commands", "command", contracts.check_command).values())
+        classes = self._collect("sketchforge_commands", "command", contracts.check_command).values()
+        return CommandRegistry(classes, ambiguous=self._ambiguous.get("command", {}))
 
     def command_class(self, name: str):
         return self.commands.get(name)
@@ -255,6 +436,11 @@ class PluginHost:
     @cached_property
     def shaders(self) -> dict:
         return self._collect("sketchforge_shaders", "shader", contracts.check_shader)
+
+    @cached_property
+    def qt_panels(self) -> dict:
+        """Panels for the desktop app ({name: Panel}); only the app calls their ``create``."""
+        return self._collect("sketchforge_qt_panels", "panel", contracts.check_panel)
 
     @cached_property
     def exporters(self) -> dict:
@@ -280,8 +466,14 @@ class PluginHost:
     def validate(self) -> list[str]:
         """Build every registry now (the app at start-up), so a broken plugin is disabled
         before any document uses it. Returns :attr:`problems`."""
-        for attr in ("commands", "tools", "shaders", "exporters", "reflectance_models"):
+        for attr in ("commands", "tools", "shaders", "exporters", "reflectance_models", "qt_panels"):
             getattr(self, attr)
+        for kind in SOLVER_KINDS:
+            self.solvers(kind)
+        impls = self.pm.hook.sketchforge_pose.get_hookimpls()
+        if len(impls) > 1:
+            self._report(f"plugins {' and '.join(repr(i.plugin_name) for i in impls)} both implement sketchforge_pose: "
+                         "error, posing is refused until one of them is uninstalled")
         return self.problems
 
     def export(self, path, mesh=None, doc=None, progress=None) -> str:
@@ -334,8 +526,11 @@ _default: PluginHost | None = None
 
 
 def default_host() -> PluginHost:
-    """The process-wide host with every installed plugin (built on first use)."""
+    """The process-wide host with every installed plugin (built on first use). A plugin that
+    cannot be loaded (a missing dependency, a broken hook) is left out with one line in
+    ``problems`` (and the log) naming it, never a traceback: the CLI prints that line, the app
+    shows it in its status bar, ``Document()`` works with the rest."""
     global _default
     if _default is None:
-        _default = PluginHost.create()
+        _default = PluginHost.create(skip_broken=True)
     return _default

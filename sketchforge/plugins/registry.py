@@ -9,7 +9,7 @@ from typing import Callable
 # historical path.
 from sketchforge.geometry.reflectance_model import ReflectanceModel, Shader
 
-__all__ = ["Exporter", "ReflectanceModel", "Shader"]
+__all__ = ["Exporter", "Panel", "ReflectanceModel", "Shader"]
 
 
 @dataclass(frozen=True)
@@ -26,3 +26,28 @@ class Exporter:
     description: str = ""
     write_document: Callable | None = None
     handles: Callable | None = None
+
+
+#: Where a panel shows: the right-hand controls of one of the app's states.
+PANEL_PLACES = ("creation", "sculpture", "observation")
+
+
+@dataclass(frozen=True)
+class Panel:
+    """A panel of the desktop app contributed by a plugin (``sketchforge_qt_panels``).
+
+    ``create(app)`` builds and returns the widget (a ``QWidget``); it is called once, by the
+    app, after its canvas and 3D view exist, with ``app`` a
+    :class:`sketchforge.qt.panel_api.AppContext` (the document, the host, the canvas and 3D
+    view, a worker to run commands on, the status line). Import Qt inside ``create`` (or in
+    a module it imports): the rest of the plugin stays importable without Qt. ``place`` is
+    where it shows (:data:`PANEL_PLACES`); ``order`` sorts panels of one place (lower first).
+    ``available(host)`` (optional) says whether to build it at all (e.g. only when the
+    plugin's commands are registered)."""
+
+    name: str
+    place: str
+    create: Callable
+    label: str = ""
+    order: int = 100
+    available: Callable | None = None

@@ -14,6 +14,7 @@ from sketchforge.geometry.contour import signed_area
 from sketchforge.geometry.mesh import Mesh
 from sketchforge.plugins.hookspecs import hookimpl
 from sketchforge.plugins.manager import PluginHost
+from sketchforge.plugins.solvers import Inflater, number, validate_params
 
 
 def make_test_host(*plugins, entry_points: bool = False, allowlist=None) -> PluginHost:
@@ -21,12 +22,31 @@ def make_test_host(*plugins, entry_points: bool = False, allowlist=None) -> Plug
     return PluginHost.create(plugins, load_entry_points=entry_points, allowlist=allowlist)
 
 
+#: The fan's parameters: the built-in's names, so a document written for it replays with the
+#: fan (``resolution`` is accepted and unused).
+FAN_DEFAULTS = {"resolution": 0.03, "inflation": 1.0, "smoothing": 0.5}
+FAN_CHECKS = {
+    "resolution": number("resolution", 0.0, lo_open=True),
+    "inflation": number("inflation", 0.0),
+    "smoothing": number("smoothing", 0.0, 1.0, hi_open=True),
+}
+
+
+def fan_params(params) -> dict:
+    return validate_params(params, FAN_DEFAULTS, FAN_CHECKS)
+
+
 class FanInflater:
-    """Inflates a polygon into a fan around its vertex centroid: z = inflation * params-dependent
-    bump at the centre, 0 on the outline. Not a real inflation; fast and exact to compare."""
+    """The inflater ``"fan"``: a polygon becomes a fan around its vertex centroid, z =
+    inflation * params-dependent bump at the centre, 0 on the outline. Not a real inflation;
+    fast and exact to compare. It cannot cut holes."""
 
     @hookimpl
-    def sketchforge_inflate(self, points, closed, params):
+    def sketchforge_inflaters(self):
+        return [Inflater("fan", self.inflate, check_params=fan_params, holes=False,
+                         description="a fan around the centroid (tests)")]
+
+    def inflate(self, points, closed, params, holes=()):
         P = np.asarray(points, dtype=np.float64)
         if len(P) < 3 or not np.all(np.isfinite(P)):
             raise ContourError("a contour needs at least 3 finite points")

@@ -296,7 +296,9 @@ class View3D(QWidget):
             self._job = None
             self._show([(l.mesh, CLAY) for l in layers], f"assembly failed: {error_text(exc)}")
 
-        self._job = self.jobs.start(lambda: host.assemble(layers, {}), done, failed, label="Assembling")
+        choice = self.doc.assembly  # the document's assembler and its parameters (set_assembly)
+        self._job = self.jobs.start(lambda: host.assemble(layers, dict(choice.params), choice.solver), done, failed,
+                                    label="Assembling")
         self._job.revision = revision
 
     def _show_assembled(self, mesh, layers) -> None:

@@ -68,7 +68,9 @@ def make_window(qtbot, host, tmp_path, dialogs):
 
     def make(doc=None, size=(1100, 750)):
         settings = QSettings(str(tmp_path / "settings.ini"), QSettings.Format.IniFormat)
-        w = MainWindow(doc if doc is not None else Document(host=host), host=host, settings=settings)
+        # A window on a given document uses that document's plugins (files it opens need them).
+        w = MainWindow(doc if doc is not None else Document(host=host), host=host if doc is None else doc.host,
+                       settings=settings)
         qtbot.addWidget(w)
         w.resize(*size)
         w.show()

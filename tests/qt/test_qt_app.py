@@ -162,11 +162,16 @@ def test_observation_assembles_an_unchanged_document_once(qtbot):
 
     calls = []
 
+    from sketchforge.plugin_api import Assembler
+
+    def counting(layers, params):
+        calls.append(len(layers))
+        return layers[0].mesh
+
     class CountingAssembler:
         @hookimpl
-        def sketchforge_assemble(self, layers, params):
-            calls.append(len(layers))
-            return layers[0].mesh
+        def sketchforge_assemblers(self):
+            return [Assembler("counting", counting)]
 
     host = make_test_host(FanInflater(), CountingAssembler())
     doc = Document(host=host)

@@ -161,11 +161,16 @@ def test_the_assembly_in_observation_is_guarded(make_window, qtbot, monkeypatch,
     monkeypatch.setenv("SKETCHFORGE_DATA_DIR", str(tmp_path / "data"))
     seen = []
 
+    from sketchforge.plugin_api import Assembler
+
+    def peeking(layers, params):
+        seen.extend(r.running[-1]["text"] for r in find_recoverable())
+        return layers[0].mesh
+
     class PeekingAssembler:
         @hookimpl
-        def sketchforge_assemble(self, layers, params):
-            seen.extend(r.running[-1]["text"] for r in find_recoverable())
-            return layers[0].mesh
+        def sketchforge_assemblers(self):
+            return [Assembler("peeking", peeking)]
 
     host = make_test_host(FanInflater(), PeekingAssembler())
     w = make_window(Document(host=host))

@@ -49,7 +49,7 @@ DEFAULT_PARAMS: Mapping[str, object] = {
     "gap": 0.1,
     "reg": 1.0,
     "stiffness": 20.0,
-    "solver": "osqp",
+    "qp_solver": "osqp",
     "on_bad_junction": "raise",
     "fillet": 4.0,
     "fair": 12,
@@ -108,6 +108,12 @@ def _sheet(cache: AssemblyCache | None, k: int, name: str, mesh: Mesh, free: boo
 
 
 def _params(params) -> dict:
+    """The assembly's complete parameters: defaults filled in, unknown keys refused (the
+    ``check_params`` of the ``depth_qp`` assembler)."""
+    known = set(DEFAULT_PARAMS)
+    unknown = sorted(str(k) for k in (params or {}) if k not in known)
+    if unknown:
+        raise ParameterError(f"unknown assembly parameter {unknown[0][:60]!r} (known: {', '.join(sorted(known))})")
     p = dict(DEFAULT_PARAMS)
     p.update(params or {})
     if not (isinstance(p["fillet"], (int, float)) and np.isfinite(p["fillet"]) and p["fillet"] >= 0):
@@ -117,8 +123,8 @@ def _params(params) -> dict:
     for key in ("margin", "gap", "reg", "stiffness"):
         if not (isinstance(p[key], (int, float)) and np.isfinite(p[key]) and p[key] > 0):
             raise ParameterError(f"assembly parameter '{key}' must be a positive number, got {p[key]!r}")
-    if p["solver"] not in ("osqp", "active_set"):
-        raise ParameterError(f"assembly parameter 'solver' must be 'osqp' or 'active_set', got {p['solver']!r}")
+    if p["qp_solver"] not in ("osqp", "active_set"):
+        raise ParameterError(f"assembly parameter 'qp_solver' must be 'osqp' or 'active_set', got {p['qp_solver']!r}")
     if p["on_bad_junction"] not in ("raise", "free"):
         raise ParameterError("assembly parameter 'on_bad_junction' must be 'raise' or 'free'")
     return p
@@ -205,7 +211,7 @@ def assemble_detailed(meshes: Sequence[Mesh | None], closed: Sequence[bool] | No
     in_att = {a.upper for a in attachments} | {a.lower for a in attachments}
     free = [i for i in range(len(sheets)) if i not in in_att]
     x, sinfo = solve_without_free_parts(P, q, Aeq, beq, Ain, bin_, offsets, free, pinfo["rest_depth"],
-                                        method=p["solver"], pad=pad, cache=cache)
+                                        method=p["qp_solver"], pad=pad, cache=cache)
     sinfo = dict(sinfo)  # the cached solve's info is shared
     sinfo.update(pinfo)
     sinfo["gap"] = gap

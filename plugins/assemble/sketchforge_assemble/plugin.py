@@ -1,19 +1,21 @@
-"""The assemble plugin's hook implementation (registered by the entry point ``assemble``)."""
+"""The assemble plugin's registration (entry point ``assemble``): the ``depth_qp`` assembler."""
 
 from __future__ import annotations
 
-from sketchforge.plugins.hookspecs import hookimpl
+from sketchforge.plugin_api import Assembler, hookimpl
 
-from .assemble import assemble_detailed
+from .assemble import _params, assemble_detailed
 from .cache import AssemblyCache
 
 #: Shared by every assembly through the hook (the app's assembled view, ``replay``): a
 #: re-assembly after one layer changed redoes only what depends on that layer.
 CACHE = AssemblyCache()
 
+#: Bumped when the same layers and parameters would assemble differently.
+VERSION = "1"
 
-@hookimpl
-def sketchforge_assemble(layers, params):
+
+def assemble_layers(layers, params):
     """Assemble the given layers (back to front) into one closed mesh; layers without a mesh
     are skipped. See :func:`sketchforge_assemble.assemble_detailed`."""
     layers = [layer for layer in layers if getattr(layer, "mesh", None) is not None]
@@ -25,3 +27,18 @@ def sketchforge_assemble(layers, params):
         cache=CACHE,
     )
     return result.mesh
+
+
+DEPTH_QP = Assembler(
+    "depth_qp",
+    assemble_layers,
+    check_params=_params,
+    version=VERSION,
+    description="Monster Mash assembly (thesis 4.7): front and back sheets, junctions cut and glued, "
+                "depth order as a QP on per-vertex offsets, junctions blended and faired",
+)
+
+
+@hookimpl
+def sketchforge_assemblers():
+    return [DEPTH_QP]

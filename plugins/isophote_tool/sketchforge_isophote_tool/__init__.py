@@ -2,9 +2,10 @@
 
 Public API
 ----------
-sculpt(mesh, light, pick, band, stroke, model=LAMBERTIAN, options=None) -> SculptResult
-    The numerical edit as a pure function (see :mod:`.pipeline`).
-SculptResult, DEFAULT_OPTIONS
+sculpt(mesh, light, pick, band, stroke, model=LAMBERTIAN, solver=None, params=None) -> SculptResult
+    The numerical edit as a pure function (see :mod:`.pipeline`); ``solver`` a SculptSolver
+    (default :data:`GAUSS_NEWTON`, the built-in), ``params`` its parameters.
+SculptResult, DEFAULT_OPTIONS (``gauss_newton``'s default parameters), GAUSS_NEWTON
 warm_up()
     Compile the JAX solvers ahead of the first edit (background thread).
 SculptIsophote, SculptIsophoteTool
@@ -17,10 +18,14 @@ from __future__ import annotations
 
 
 def __getattr__(name):
-    if name in ("sculpt", "SculptResult", "DEFAULT_OPTIONS"):
+    if name in ("sculpt", "SculptResult"):
         from . import pipeline as _s
 
         return getattr(_s, name)
+    if name in ("DEFAULT_OPTIONS", "GAUSS_NEWTON"):
+        from . import gauss_newton as _g
+
+        return _g.DEFAULT_PARAMS if name == "DEFAULT_OPTIONS" else _g.GAUSS_NEWTON
     if name == "warm_up":
         from .warmup import warm_up
 
@@ -36,4 +41,4 @@ def __getattr__(name):
     raise AttributeError(name)
 
 
-__all__ = ["sculpt", "SculptResult", "DEFAULT_OPTIONS", "warm_up", "SculptIsophote", "SculptIsophoteTool"]
+__all__ = ["sculpt", "SculptResult", "DEFAULT_OPTIONS", "GAUSS_NEWTON", "warm_up", "SculptIsophote", "SculptIsophoteTool"]

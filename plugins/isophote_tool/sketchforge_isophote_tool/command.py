@@ -1,9 +1,13 @@
 """The ``sculpt_isophote`` command: one isophote edit as a journal entry.
 
 ``{"command": "sculpt_isophote", "layer": "body", "pick": [0.2, 0.1], "band": 0.3,
-"stroke": [[0.1, -0.3], ...]}`` (optional ``"model"``: a registered reflectance model name,
-default "lambertian"). It acts with the document's current light; it keeps the replaced layer
-so undo is instant and exact, and the new one so redo is too.
+"stroke": [[0.1, -0.3], ...]}``, optional ``"model"`` (a registered reflectance model name,
+default "lambertian"), ``"solver"`` (a registered sculpt solver, default the built-in
+"gauss_newton") and ``"params"`` (that solver's parameters, which it checks: an unknown key is
+refused, naming the solver and the key). It acts with the document's current light; it keeps
+the replaced layer so undo is instant and exact, and the new one so redo is too. The edit
+recorded in the layer (re-applied after a parameter change) names the solver that made it and
+the light it used.
 """
 
 from __future__ import annotations
@@ -13,7 +17,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from sketchforge.document.commands import ReplaceLayerCommand, parse_field, parse_points, parse_vector
+from sketchforge.document.commands import ReplaceLayerCommand, parse_field, parse_params, parse_points, parse_vector
 from sketchforge.document.layer import Layer
 from sketchforge.errors import DocumentFormatError, NothingToDoError, SculptError
 from sketchforge.geometry.contour import MAX_COORDINATE
@@ -30,13 +34,29 @@ def _model(doc, name: str):
     raise SculptError(f"no reflectance model named {name!r} is installed")
 
 
-def _apply(doc, layer: Layer, pick, band, stroke, model_name: str, light=None):
+def _solver(doc, name: str | None):
+    """The sculpt solver ``name`` (None: the default) of the document's host; a host that
+    predates the registries (a bare test host) gets the built-in."""
+    host = getattr(doc, "host", None)
+    if host is None or not hasattr(host, "solver"):
+        from .gauss_newton import GAUSS_NEWTON
+
+        if name not in (None, GAUSS_NEWTON.name):
+            raise SculptError(f"no sculpt solver named {name!r} is installed")
+        return GAUSS_NEWTON, None
+    solver = host.solver("sculpt", name)
+    return solver, host.provider_of(solver)
+
+
+def _apply(doc, layer: Layer, pick, band, stroke, model_name: str, light=None, solver_name=None, params=None):
     from .pipeline import sculpt  # imports jax: only when an edit actually runs
 
     if layer.mesh is None:
         raise SculptError(f"layer {layer.id!r} has no surface to sculpt yet (draw its contour first)")
+    solver, provider = _solver(doc, solver_name)
     direction = doc.light.direction if light is None else np.asarray(light, dtype=np.float64)
-    return sculpt(layer.mesh, direction, pick, band, stroke, _model(doc, model_name))
+    return sculpt(layer.mesh, direction, pick, band, stroke, _model(doc, model_name), solver=solver,
+                  params=params, provider=provider)
 
 
 @dataclass
@@ -44,10 +64,14 @@ class SculptIsophote(ReplaceLayerCommand):
     """Redraw the isophote through ``pick`` as ``stroke`` (thesis 4.3-4.6)."""
 
     name: ClassVar[str] = "sculpt_isophote"
+    solver_kind: ClassVar[str | None] = "sculpt"
     pick: list = field(default_factory=list)
     band: float = 0.3
     stroke: list = field(default_factory=list)
     model: str = "lambertian"
+    #: The sculpt solver (None: the default) and its parameters.
+    solver: str | None = None
+    params: dict = field(default_factory=dict)
     #: The last SculptResult (edit zone, fidelity, timings) for display; not saved.
     result: object = field(default=None, repr=False, compare=False)
 
@@ -55,10 +79,11 @@ class SculptIsophote(ReplaceLayerCommand):
         return "Sculpt isophote"
 
     def compute(self, doc, old: Layer) -> Layer:
-        self.result = _apply(doc, old, self.pick, self.band, self.stroke, self.model)
-        # The layer remembers the light this edit used, so re-applying it after a parameter
-        # change gives the same edit even if the light has moved since.
-        entry = {**self.to_dict(), "light": [float(v) for v in doc.light.direction]}
+        self.result = _apply(doc, old, self.pick, self.band, self.stroke, self.model, None, self.solver, self.params)
+        # The layer remembers the light this edit used and the solver that made it, so
+        # re-applying it after a parameter change gives the same edit even if the light has
+        # moved since or another solver has become the default.
+        entry = {**self.to_dict(), "light": [float(v) for v in doc.light.direction], "solver": self.result.solver}
         return old.evolve(mesh=self.result.mesh, edits=tuple(old.edits) + (entry,))
 
     def to_dict(self) -> dict:
@@ -71,6 +96,10 @@ class SculptIsophote(ReplaceLayerCommand):
         }
         if self.model != "lambertian":
             d["model"] = self.model
+        if self.solver is not None:
+            d["solver"] = self.solver
+        if self.params:
+            d["params"] = dict(self.params)
         return d
 
     @classmethod
@@ -88,6 +117,8 @@ class SculptIsophote(ReplaceLayerCommand):
             band=band,
             stroke=parse_points(d, cls.name, "stroke").tolist(),
             model=parse_field(d, "model", str, cls.name, "lambertian"),
+            solver=parse_field(d, "solver", str, cls.name, None),
+            params=parse_params(d, cls.name),
         )
 
     @classmethod
@@ -97,7 +128,7 @@ class SculptIsophote(ReplaceLayerCommand):
         why (silently dropping an edit would lose the user's work)."""
         cmd = cls.from_dict(entry)
         try:
-            res = _apply(doc, layer, cmd.pick, cmd.band, cmd.stroke, cmd.model, entry.get("light"))
+            res = _apply(doc, layer, cmd.pick, cmd.band, cmd.stroke, cmd.model, entry.get("light"), cmd.solver, cmd.params)
         except (NothingToDoError, SculptError) as exc:
             n = len(layer.edits) + 1
             raise SculptError(

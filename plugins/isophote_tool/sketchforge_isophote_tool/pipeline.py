@@ -1,19 +1,18 @@
 """The isophote edit as a pure function: ``sculpt(mesh, light, pick, band, stroke) -> SculptResult``.
 
-Pipeline (thesis 4.3–4.6; what differs from the thesis and why is said in each module):
+This module is the sculpt *host*: it does what every sculpt solver shares and hands the rest
+to the named solver (``sketchforge_sculpt_solvers``; the built-in ``gauss_newton`` in
+:mod:`.gauss_newton`, the thesis' ``strips`` in the ``strips`` plugin).
 
 1. pick -> isovalue c (0 in shadow), the isophote through the pick, band = isophote ⊕ disk
    (:mod:`.isophote`)
 2. stroke: loops, hooks and back-tracking removed, smoothed, resampled, clipped to the band
-   (:mod:`.stroke`, :mod:`sketchforge.geometry.strokes`)
-3. zones, all by distance to the stroke d_s (continuous in every input):
-   edit zone   band ∩ {d_s < band radius}: where the shading may change (4.3's B•*);
-   support U   {d_s < band radius + ring}: the vertices whose height may change; ring = rim
-               margin + 2 edge lengths, so no vertex farther than band + margin + 2h from the
-               stroke ever moves (4.3's M•, kept local: see :mod:`.heights`)
-4. the shading change δE in the edit zone, E = c on the stroke (:mod:`.shading`, 4.4)
-5. heights: Gauss–Newton on R(p, q) = E_old + δE over U (:mod:`.heights`, 4.5–4.6)
-6. never worse: if the isophote ends farther from the stroke than it started, the best
+   (:mod:`.stroke`, :mod:`sketchforge.geometry.strokes`); where an isophote is promised (the
+   stroke inside the band and outside the rim margin) and how far it is now
+3. the solver: a :class:`~sketchforge.plugins.sculpt_problem.SculptProblem` in, the height
+   change δz out (the thesis' 4.3–4.6: regions, shading, heights)
+4. the host's checks, the same for every solver: heights >= 0 and 0 on the rim, finite, and
+   never worse: if the isophote ends farther from the stroke than it started, the best
    partial edit is kept (half, a quarter of the change); if none is closer, the edit is
    refused with what to draw instead (:mod:`.fidelity`).
 """
@@ -28,29 +27,18 @@ import numpy as np
 import shapely
 from scipy.spatial import cKDTree
 
-from sketchforge.errors import NothingToDoError, SculptError, SolverError
+from sketchforge.errors import NothingToDoError, ParameterError, PluginError, SculptError, SketchforgeError, SolverError
 from sketchforge.geometry.band import band_radius
 from sketchforge.geometry.mesh import Mesh
 from sketchforge.geometry.reflectance import LAMBERTIAN
 from sketchforge.plugins.registry import ReflectanceModel
+from sketchforge.plugins.sculpt_problem import SculptProblem, SculptSolution
 
 from .fidelity import honoured_samples, isophote_lines, mean_distance
-from .heights import GN_STEPS, solve_heights
 from .isophote import band_around, picked_isophote
 from .layerdata import LayerData, cached, layer_data, vertex_shading
 from .shading import bary_rows, shading_change
 from .stroke import clip_to_band, prepare_stroke, resample_polyline, stroke_samples
-
-#: Options of :func:`sculpt`; lengths "in edge lengths" are multiples of the mean edge length h.
-DEFAULT_OPTIONS = {
-    "smoothness": 1.0,  # α: weight of the squared Laplacian of the height change, in units of h²
-    "ring": None,  # width of the ring around the edit zone where heights return to the old ones; None: rim margin + 2h
-    "ring_weight": 0.1,  # data weight at the outer edge of the ring (1 in the edit zone)
-    "rim_margin": None,  # drawing units; None: max(3h, 0.12·size), less where the layer is thin
-    "steps": GN_STEPS,  # Gauss–Newton steps
-    "stroke_weight": 20.0,  # weight of E = c along the stroke in the height solve, against a band of width h
-    "never_worse": True,  # fall back to a partial edit, or refuse, rather than end farther from the stroke
-}
 
 #: Partial edits tried, in order, when the full one would leave the isophote farther from the
 #: stroke than before.
@@ -78,19 +66,27 @@ class SculptResult:
     stroke : shapely (Multi)LineString
         The cleaned stroke clipped to the band.
     dE : (n,) float64
-        The shading change at the vertices (the target of the height solve is E + dE).
+        The shading change the solver aimed at (zeros if it reports none).
     before, after : float
         Mean distance from the stroke to the isophote before and after, in drawing units.
     fraction : float
         1 for the full edit; 0.5 or 0.25 when only part of it brought the isophote closer.
     timings : dict[str, float]
         Seconds per step.
-    options : dict
+    params : dict
+        The solver's complete parameters.
     layer : LayerData
         The layer before the edit (for :meth:`characteristics`).
     band_radius : float
     reach : float
-        Band radius plus ring: the farthest a changed vertex can be from the stroke.
+        How far from the stroke heights could change (the solver's answer; the band radius
+        plus the ring for ``gauss_newton``).
+    solver : str
+        The sculpt solver that made it.
+    solution : SculptSolution
+        What the solver returned (its regions, curves and numbers).
+    ignored_length : float
+        Length of the drawn stroke that fell outside the band (drawing units): ignored.
     """
 
     mesh: Mesh
@@ -104,21 +100,36 @@ class SculptResult:
     after: float
     fraction: float = 1.0
     timings: dict = field(default_factory=dict)
-    options: dict = field(default_factory=dict)
+    params: dict = field(default_factory=dict)
     layer: object = field(default=None, repr=False)
     band_radius: float = 0.0
     reach: float = 0.0
+    solver: str = "gauss_newton"
+    solution: object = field(default=None, repr=False)
+    ignored_length: float = 0.0
+
+    @property
+    def options(self) -> dict:
+        """The solver's parameters (the name before solvers were named)."""
+        return self.params
+
+    def _region(self, name: str):
+        got = getattr(self.solution, name, None) if self.solution is not None else None
+        return got() if callable(got) else got
 
     @property
     def edit_zone(self):
-        """Where the shading changes: the band within one band radius of the stroke (shapely;
-        built on request, for display)."""
-        return self.band.intersection(self.stroke.buffer(self.band_radius))
+        """Where the shading changes (shapely; built on request, for display): the solver's
+        own region, or the band within one band radius of the stroke."""
+        own = self._region("shading_region")
+        return own if own is not None else self.band.intersection(self.stroke.buffer(self.band_radius))
 
     @property
     def support(self):
-        """Where heights may change: the edit zone and its ring, inside the layer (shapely)."""
-        return self.stroke.buffer(self.reach).intersection(self.layer.outline)
+        """Where heights may change, inside the layer (shapely): the solver's own region, or
+        the stroke's neighbourhood of radius :attr:`reach`."""
+        own = self._region("height_region")
+        return own if own is not None else self.stroke.buffer(self.reach).intersection(self.layer.outline)
 
     def new_isophotes(self) -> list:
         """The isophote E = c on the edited surface (polylines (k, 2) within the support), for
@@ -129,9 +140,15 @@ class SculptResult:
         return [np.asarray(g.coords) for g in getattr(near, "geoms", [near]) if g.geom_type == "LineString" and not g.is_empty]
 
     def describe(self) -> str:
-        """One line for the person: how far the isophote was and is from the stroke."""
+        """One line for the person: how far the isophote was and is from the stroke, and what
+        of the stroke was ignored."""
         part = "" if self.fraction == 1.0 else f" ({self.fraction:.0%} of the change: the whole of it overshot)"
-        return f"isophote {self.before / self.h:.1f} → {self.after / self.h:.1f} edge lengths from the stroke{part}"
+        ignored = ""
+        if self.ignored_length > 0.5 * self.h:
+            total = self.ignored_length + self.stroke.length
+            ignored = (f"; {self.ignored_length / self.h:.0f} edge lengths of the stroke ({self.ignored_length / total:.0%}) "
+                       "ran outside the band and were ignored")
+        return f"isophote {self.before / self.h:.1f} → {self.after / self.h:.1f} edge lengths from the stroke{part}{ignored}"
 
     @property
     def h(self) -> float:
@@ -139,36 +156,16 @@ class SculptResult:
         return self.layer.h
 
     def characteristics(self, n: int = 15) -> list:
-        """Base characteristics through the stroke (polylines (k, 2)), for display; traced on
-        request, not during the edit (see :mod:`.characteristics`)."""
+        """Curves to show with "show characteristics" (polylines (k, 2)): the solver's own
+        (the strips it integrated), or base characteristics through the stroke, traced on
+        request (see :mod:`.characteristics`)."""
+        own = getattr(self.solution, "curves", None)
+        if own:
+            return [np.asarray(c, dtype=np.float64) for c in own]
         from .characteristics import base_characteristics
 
         pieces = [np.asarray(g.coords) for g in getattr(self.stroke, "geoms", [self.stroke])]
         return base_characteristics(self.layer, pieces, self.reach, n)
-
-
-def _options(options: dict | None) -> dict:
-    opts = dict(DEFAULT_OPTIONS)
-    if options:
-        unknown = set(options) - set(DEFAULT_OPTIONS)
-        if unknown:
-            raise SculptError(f"unknown sculpt options: {sorted(unknown)}; known: {sorted(DEFAULT_OPTIONS)}")
-        opts.update(options)
-    for key in ("smoothness", "ring_weight", "stroke_weight"):
-        v = float(opts[key])
-        if not (np.isfinite(v) and v >= 0):
-            raise SculptError(f"the sculpt option {key!r} must be a number >= 0, got {opts[key]!r}")
-    for key in ("ring", "rim_margin"):
-        if opts[key] is not None:
-            try:
-                v = float(opts[key])
-            except (TypeError, ValueError, OverflowError):
-                v = float("nan")
-            if not (np.isfinite(v) and v >= 0):
-                raise SculptError(f"the sculpt option {key!r} must be a number >= 0 (drawing units) or None, got {opts[key]!r}")
-    if not (isinstance(opts["steps"], (int, np.integer)) and 1 <= opts["steps"] <= 50):
-        raise SculptError(f"the sculpt option 'steps' must be an integer in 1..50, got {opts['steps']!r}")
-    return opts
 
 
 _PICKS: "OrderedDict[tuple, tuple]" = OrderedDict()
@@ -192,18 +189,93 @@ def _pick(ld: LayerData, pick, r: float):
     return hit[1:]
 
 
-def _smoothstep(t: np.ndarray) -> np.ndarray:
+def smoothstep(t: np.ndarray) -> np.ndarray:
     t = np.clip(t, 0.0, 1.0)
     return t * t * (3.0 - 2.0 * t)
 
 
-def _distance_to(pieces: list[np.ndarray], P: np.ndarray, h: float, upper: float) -> np.ndarray:
+def distance_to(pieces: list[np.ndarray], P: np.ndarray, h: float, upper: float) -> np.ndarray:
     """Distance (k,) from points P (k, 2) to the stroke pieces, capped at ``upper``: the nearest
     of samples every h/8 along them (within h/64 of the exact distance; a minimum of
     continuous functions, so continuous in the stroke)."""
     S = np.concatenate([resample_polyline(p, 0.125 * h) for p in pieces])
     d, _ = cKDTree(S).query(P, distance_upper_bound=upper)
     return np.minimum(d, upper)
+
+
+@dataclass
+class HostData:
+    """What the built-in solvers read beyond the :class:`SculptProblem` (``host_data``): the
+    layer's cached operators and the stroke's quadrature, so nothing is computed twice."""
+
+    layer: LayerData
+    pieces: list
+    samples: object  # StrokeSamples
+    B: object  # (k, n) barycentric rows of the samples
+    sample_rim_weight: np.ndarray  # (k,) the rim fade of the samples with the layer's margin
+    honoured: np.ndarray
+
+
+def _slopes(ld: LayerData):
+    """(p, q, E, R_p, R_q) at the vertices of a layer, once per LayerData."""
+    got = getattr(ld, "_slopes_cache", None)
+    if got is None:
+        from sketchforge.geometry.heightfield import slopes_from_heights
+        from sketchforge.geometry.reflectance import evaluate_pq
+
+        pd = ld.planar
+        p, q = slopes_from_heights(pd.Gp, pd.Gq, ld.z)
+        E, Rp, Rq = evaluate_pq(ld.model, p, q, ld.light)
+        got = (p, q, E, Rp, Rq)
+        ld._slopes_cache = got
+    return got
+
+
+def build_problem(ld: LayerData, c: float, pick, band_geom, r: float, pieces: list, honoured: np.ndarray,
+                  before: float) -> SculptProblem:
+    """The :class:`SculptProblem` of an edit on layer ``ld`` (services bound to its data)."""
+    pd, h = ld.planar, ld.h
+    samples = stroke_samples(pieces)
+    ds_rim = pd.rim_distance(samples.P)
+    m_s = np.minimum(pd.margin_at(samples.P), pd.margin)
+    w_rim = smoothstep(ds_rim / np.maximum(m_s, 1e-300)) if pd.margin > 0 else np.ones(len(ds_rim))
+    B = bary_rows(pd, samples.P)
+    p, q, _, Rp, Rq = _slopes(ld)
+    in_band = shapely.contains_xy(band_geom, pd.V2[:, 0], pd.V2[:, 1])
+
+    def shading(z):
+        return vertex_shading(pd, z, ld.light, ld.model)
+
+    def change(free, weights):
+        return shading_change(pd, ld.E, free, B, weights, c)
+
+    def after(z):
+        E, _, _ = vertex_shading(pd, z, ld.light, ld.model)
+        return mean_distance(honoured, isophote_lines(pd, E, c))
+
+    return SculptProblem(
+        V=ld.mesh.V, F=pd.F, is_rim=pd.is_contour, light=ld.light, model=ld.model, E=ld.E, Rp=Rp, Rq=Rq, p=p, q=q,
+        h=h, c=float(c), pick=np.asarray(pick, np.float64).reshape(2), band=band_geom, band_radius=r, in_band=in_band,
+        stroke=pieces, samples=samples.P, sample_weights=samples.w * w_rim, d_rim=pd.d_rim,
+        rim_margin=np.minimum(pd.margin_v, pd.margin), outline=pd.outline, before=before,
+        _shading=shading, _shading_change=change, _distance_after=after,
+        _locate=lambda P: pd.locator.locate(P), _distance_to_stroke=lambda P, u: distance_to(pieces, P, h, u),
+        host_data=HostData(ld, pieces, samples, B, w_rim, honoured),
+    )
+
+
+def _default_solver():
+    from .gauss_newton import GAUSS_NEWTON
+
+    return GAUSS_NEWTON
+
+
+def solver_params(solver, params) -> dict:
+    """``solver``'s complete parameters for ``params``, its own check's error named."""
+    try:
+        return solver.check_params(dict(params or {}))
+    except SketchforgeError as exc:
+        raise ParameterError(f"sculpt solver {solver.name!r}: {exc}") from None
 
 
 def sculpt(
@@ -213,7 +285,10 @@ def sculpt(
     band: float,
     stroke,
     model: ReflectanceModel = LAMBERTIAN,
-    options: dict | None = None,
+    solver=None,
+    params: dict | None = None,
+    never_worse: bool = True,
+    provider: str | None = None,
 ) -> SculptResult:
     """Redraw the isophote through ``pick`` along ``stroke``; recompute the heights it affects.
 
@@ -228,11 +303,17 @@ def sculpt(
     band : float
         Radius of the band around the isophote (drawing units, > 0).
     stroke : (k, 2) float64
-        The redrawn isophote; parts outside the band are ignored.
+        The redrawn isophote; parts outside the band are ignored (and reported).
     model : ReflectanceModel
         Solver-side reflectance (any registered model).
-    options : dict or None
-        Overrides of :data:`DEFAULT_OPTIONS`.
+    solver : SculptSolver or None
+        The sculpt solver (None: the built-in ``gauss_newton``).
+    params : dict or None
+        The solver's parameters (it checks them: unknown keys are refused).
+    never_worse : bool
+        Keep a partial edit, or refuse, rather than end farther from the stroke.
+    provider : str or None
+        The solver's plugin, for the message if it fails.
 
     Returns
     -------
@@ -243,77 +324,75 @@ def sculpt(
     SculptError
         Invalid pick, band or stroke, or a stroke the surface cannot follow (the message says
         what to draw instead).
+    ParameterError
+        A parameter the solver refuses (named).
     NothingToDoError
         The stroke lies on the isophote already.
     SolverError
         A solver produced non-finite values.
+    PluginError
+        The solver failed with an error that is not a SketchforgeError (a bug).
     """
-    opts = _options(options)
+    solver = _default_solver() if solver is None else solver
+    full = solver_params(solver, params)
     r = band_radius(band)
     light = np.asarray(light, np.float64).reshape(3)
     T: dict = {}
     t0 = time.perf_counter()
     ld = layer_data(mesh, light, model)
     pd, h = ld.planar, ld.h
-    margin = pd.margin if opts["rim_margin"] is None else float(opts["rim_margin"])
     T["layer"] = time.perf_counter() - t0
 
     t = time.perf_counter()
     c, iso, band_geom = _pick(ld, pick, r)
-    pieces = clip_to_band(prepare_stroke(stroke, h), band_geom, h)
+    cleaned = prepare_stroke(stroke, h)
+    pieces = clip_to_band(cleaned, band_geom, h)
+    ignored = max(0.0, float(np.linalg.norm(np.diff(cleaned, axis=0), axis=1).sum())
+                  - sum(float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum()) for p in pieces))
     stroke_geom = shapely.MultiLineString(pieces) if len(pieces) > 1 else shapely.LineString(pieces[0])
     honoured = honoured_samples(pd, pieces, band_geom)
     if len(honoured) == 0:
-        local = float(np.max(np.minimum(pd.margin_at(np.concatenate(pieces)), margin)))
+        local = float(np.max(np.minimum(pd.margin_at(np.concatenate(pieces)), pd.margin)))
         raise SculptError(
             f"the stroke runs within the rim margin ({local:.2g} from the outline here), where the surface "
             "turns vertical and cannot follow a redrawn isophote: draw it further inside the shape"
         )
     before = mean_distance(honoured, iso)
+    problem = build_problem(ld, c, pick, band_geom, r, pieces, honoured, before)
     T["stroke"] = time.perf_counter() - t
 
     t = time.perf_counter()
-    ring = margin + 2.0 * h if opts["ring"] is None else float(opts["ring"])
-    interior = ~pd.is_contour
-    d_s = _distance_to(pieces, pd.V2, h, r + ring)
-    in_band = shapely.contains_xy(band_geom, pd.V2[:, 0], pd.V2[:, 1])
-    free_E = in_band & (d_s < r) & interior
-    U = (d_s < r + ring) & interior
-    margin_v = np.minimum(pd.margin_v, margin)
-    rim = _smoothstep(pd.d_rim / np.maximum(margin_v, 1e-300)) if margin > 0 else np.ones(len(pd.V2))
-    w0 = float(opts["ring_weight"])
-    w = rim * (w0 + (1.0 - w0) * (1.0 - _smoothstep((d_s - r) / max(ring, 1e-300))))
-    samples = stroke_samples(pieces)
-    ds_rim = pd.rim_distance(samples.P)
-    m_s = np.minimum(pd.margin_at(samples.P), margin)
-    w_s = _smoothstep(ds_rim / np.maximum(m_s, 1e-300)) if margin > 0 else np.ones(len(ds_rim))
-    T["zones"] = time.perf_counter() - t
-
-    t = time.perf_counter()
-    B = bary_rows(pd, samples.P)
-    dE = shading_change(pd, ld.E, free_E, B, samples.w * w_s, c)
-    T["shading"] = time.perf_counter() - t
-
-    t = time.perf_counter()
-    dz = solve_heights(
-        ld, ld.E + dE, U, w, float(opts["smoothness"]), int(opts["steps"]),
-        (B, samples.w * w_s), c, float(opts["stroke_weight"]),
-    )
-    T["heights"] = time.perf_counter() - t
+    try:
+        answer = solver.solve(problem, full)
+    except SketchforgeError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - a solver's bug: named, never a crash of the app
+        who = f" of plugin {provider!r}" if provider else ""
+        raise PluginError(f"the sculpt solver {solver.name!r}{who} failed: {type(exc).__name__}: {exc}") from exc
+    solution = answer if isinstance(answer, SculptSolution) else SculptSolution(np.asarray(answer))
+    dz = np.asarray(solution.dz, dtype=np.float64)
+    if dz.shape != (len(pd.V2),):
+        raise PluginError(f"the sculpt solver {solver.name!r} returned heights of shape {dz.shape}; the layer has "
+                          f"{len(pd.V2)} vertices")
+    if not np.isfinite(dz).all():
+        raise SolverError(f"the sculpt solver {solver.name!r} produced non-finite heights; the layer was left unchanged")
+    # The solver's own stages (zones, shading, heights...) beside the host's.
+    T.update({(k if k not in ("layer", "stroke", "solve", "check", "total") else f"solver.{k}"): float(v)
+              for k, v in solution.info.get("timings", {}).items()})
+    T["solve"] = time.perf_counter() - t
 
     t = time.perf_counter()
     fraction, z, after = 1.0, None, np.inf
-    for frac in (1.0,) + (FALLBACK_FRACTIONS if opts["never_worse"] else ()):
+    for frac in (1.0,) + (FALLBACK_FRACTIONS if never_worse else ()):
         zf = np.maximum(ld.z + frac * dz, 0.0)  # heights >= 0 by contract
         zf[pd.is_contour] = 0.0
-        Ef, _, _ = vertex_shading(pd, zf, light, model)
-        af = mean_distance(honoured, isophote_lines(pd, Ef, c))
+        af = problem.distance_after(zf)
         if z is None or af < after:
             fraction, z, after = frac, zf, af
-        if not opts["never_worse"] or af <= max(before, RESOLUTION_EDGES * h):
+        if not never_worse or af <= max(before, RESOLUTION_EDGES * h):
             break
     T["check"] = time.perf_counter() - t
-    if opts["never_worse"] and after > max(before, RESOLUTION_EDGES * h):
+    if never_worse and after > max(before, RESOLUTION_EDGES * h):
         raise SculptError(
             f"the surface cannot take this shading here: every version of the edit left the isophote farther "
             f"from the stroke ({after / h:.1f} edge lengths) than it was ({before / h:.1f}); draw the new "
@@ -326,6 +405,9 @@ def sculpt(
         raise NothingToDoError("the stroke lies on the isophote already: nothing to change")
     new_mesh = mesh.with_heights(z)
     T["total"] = time.perf_counter() - t0
+    dE = np.zeros(len(z)) if solution.dE is None else np.asarray(solution.dE, dtype=np.float64)
+    reach = float(solution.info.get("reach", r))
     return SculptResult(
-        new_mesh, changed, c, iso, band_geom, stroke_geom, dE, before, after, fraction, T, opts, ld, r, r + ring
+        new_mesh, changed, c, iso, band_geom, stroke_geom, dE, before, after, fraction, T, full, ld, r, reach,
+        solver.name, solution, ignored,
     )

@@ -13,6 +13,13 @@ def sketchforge_commands():
 
 
 @hookimpl
+def sketchforge_sculpt_solvers():
+    from .gauss_newton import GAUSS_NEWTON
+
+    return [GAUSS_NEWTON]
+
+
+@hookimpl
 def sketchforge_tools():
     from .tool import SculptIsophoteTool
 

@@ -17,9 +17,11 @@ API (what a front end calls)
     positive number, or beyond the drawing's range (1e9, what the command accepts), keeps the
     old one, sets :attr:`message` and returns False.
 ``set_options(options)``
-    Extra command fields, e.g. ``{"model": "oren_nayar"}`` (a registered reflectance model;
-    ``{}`` is Lambertian). The pick uses this model too, so a current pick is recomputed.
-    Raises SculptError for an unknown key or model.
+    Extra command fields: ``"model"`` (a registered reflectance model, e.g. ``"oren_nayar"``;
+    absent is Lambertian), ``"solver"`` (a registered sculpt solver, e.g. ``"strips"``;
+    absent is the default) and ``"params"`` (that solver's parameters). The pick uses the model
+    too, so a current pick is recomputed. Raises SculptError for an unknown key, model or
+    solver, ParameterError for parameters the solver refuses.
 ``command_for(stroke) -> SculptIsophote``
     The ``sculpt_isophote`` command for the current pick, band and options and a redrawn
     ``stroke`` (k, 2), *not* pushed: a front end may run ``cmd.prepare(doc)`` on a worker
@@ -59,7 +61,7 @@ from .command import SculptIsophote
 
 COMMAND_NAME = SculptIsophote.name
 #: Keys :meth:`SculptIsophoteTool.set_options` accepts (extra fields of the command dict).
-OPTION_KEYS = ("model",)
+OPTION_KEYS = ("model", "solver", "params")
 NOT_ON_A_SHAPE = "the pick is not on a visible shape: click on a shape to choose an isophote"
 PICK_FIRST = "pick an isophote first (click on the shape), then redraw it"
 
@@ -114,15 +116,29 @@ class SculptIsophoteTool(Tool):
             raise SculptError(f"unknown sculpt tool options {sorted(unknown)}; known: {list(OPTION_KEYS)}")
         if options.get("model") == "lambertian":
             options.pop("model")
+        if options.get("solver") is None:
+            options.pop("solver", None)
+        if not options.get("params"):
+            options.pop("params", None)
         old = self.options
         self.options = options
         try:
             self.model()  # an unknown model name raises here, not at the first stroke
-        except SculptError:
+            self._check_solver()  # and an unknown solver or a parameter it refuses
+        except SketchforgeError:
             self.options = old
             raise
         if self.pick is not None and options != old:
             self.pick_at(self.pick)  # the isophote through the pick depends on the model
+
+    def _check_solver(self) -> None:
+        from .command import _solver
+        from .pipeline import solver_params
+
+        if "solver" not in self.options and "params" not in self.options:
+            return
+        solver, _ = _solver(self.doc, self.options.get("solver"))
+        solver_params(solver, self.options.get("params"))
 
     # --- pick ---------------------------------------------------------------------------------
     def _candidates(self):
@@ -235,11 +251,15 @@ class SculptIsophoteTool(Tool):
             raise SculptError(PICK_FIRST)
         from .pipeline import sculpt
 
+        from .command import _solver
+
         mesh = self.doc.layer(self.layer_id).mesh if mesh is None else mesh
         light = np.array(self.doc.light.direction, dtype=np.float64)
         pick, band, model = self.pick.copy(), float(self.band), self.model()
+        solver, provider = _solver(self.doc, self.options.get("solver"))
+        params = dict(self.options.get("params") or {})
         points = np.array(stroke, dtype=np.float64).reshape(-1, 2)
-        return lambda: sculpt(mesh, light, pick, band, points, model)
+        return lambda: sculpt(mesh, light, pick, band, points, model, solver=solver, params=params, provider=provider)
 
     # --- headless gesture ---------------------------------------------------------------------
     def _add(self, p: np.ndarray) -> None:

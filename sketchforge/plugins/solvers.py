@@ -1,0 +1,254 @@
+"""Named solvers: the value types the solver registries return, and the parameter contract.
+
+Three kinds of solver, each a registry hook (:mod:`sketchforge.plugins.hookspecs`):
+
+=========  ===============================  ==========================================  ================
+kind       hook                             value                                       built-in
+=========  ===============================  ==========================================  ================
+inflate    ``sketchforge_inflaters()``      :class:`Inflater` (contour -> front mesh)   ``"poisson"``
+sculpt     ``sketchforge_sculpt_solvers()`` :class:`SculptSolver` (shading -> heights)  ``"gauss_newton"``
+assemble   ``sketchforge_assemblers()``     :class:`Assembler` (layers -> one mesh)     ``"depth_qp"``
+=========  ===============================  ==========================================  ================
+
+A layer names its inflater (``set_inflate_params`` with ``"solver"``), a sculpt edit its sculpt
+solver (``sculpt_isophote`` with ``"solver"``), the document its assembler (``set_assembly``);
+each passes that solver's own ``params``, which the solver validates itself with
+``check_params`` (unknown keys refused: the host probes this when it registers the solver).
+Without a name, the built-in is used (on a host without it, the only one of that kind
+installed). The name, plugin and version of every solver a document used are saved in its
+``providers``, so a replay elsewhere names a missing solver instead of reporting "mesh differs".
+
+``check_params(params: dict) -> dict`` returns the complete parameter set, defaults filled in,
+with JSON values only (they are saved in the journal); it raises
+:class:`~sketchforge.errors.ParameterError` (one line, naming the key) for an unknown key or a
+bad value. :func:`validate_params` does the usual work for a solver with a flat set of
+parameters. The host puts the solver's name in front of the message.
+"""
+
+from __future__ import annotations
+
+import math
+import numbers
+from dataclasses import dataclass, field
+from typing import Any, Callable, Mapping
+
+from sketchforge.errors import ParameterError
+
+
+@dataclass(frozen=True)
+class SolverKind:
+    """What the host needs to know about one kind of solver."""
+
+    kind: str
+    hook: str
+    #: "inflater", "sculpt solver", "assembler": how messages name one.
+    what: str
+    #: The built-in solver's name (the default).
+    default: str
+    #: The name of the function field on the value type.
+    call: str
+
+
+SOLVER_KINDS: dict[str, SolverKind] = {
+    "inflate": SolverKind("inflate", "sketchforge_inflaters", "inflater", "poisson", "inflate"),
+    "sculpt": SolverKind("sculpt", "sketchforge_sculpt_solvers", "sculpt solver", "gauss_newton", "solve"),
+    "assemble": SolverKind("assemble", "sketchforge_assemblers", "assembler", "depth_qp", "assemble"),
+}
+
+
+def no_params(params: Mapping) -> dict:
+    """``check_params`` of a solver without parameters: every key is unknown."""
+    return validate_params(params, {})
+
+
+@dataclass(frozen=True)
+class Inflater:
+    """Turns a drawn stroke into a layer's front surface.
+
+    ``inflate(points, closed, params, holes) -> Mesh``: points (n, 2) float64 as drawn (either
+    orientation); closed bool (False: an open stroke's closing segment is the junction);
+    params the dict ``check_params`` returned; holes a list of (k_i, 2) float64 inner rings.
+    The mesh: V (n, 3) float64 with z >= 0 and z = 0 on every rim, F (m, 3) int64
+    counter-clockwise seen from +z, its ``boundary``, ``junction`` and ``holes`` loops. Raise
+    :class:`~sketchforge.errors.ContourError` for a stroke that cannot be inflated.
+    ``holes=False`` declares that it cannot cut holes (the host refuses a layer with holes
+    rather than fill them)."""
+
+    name: str
+    inflate: Callable
+    check_params: Callable = no_params
+    version: str = "1"
+    description: str = ""
+    holes: bool = True
+
+
+@dataclass(frozen=True)
+class SculptSolver:
+    """Turns a wanted shading into heights: ``solve(problem, params) -> SculptSolution`` (or
+    the height change δz (n,) float64 alone). ``problem`` is a
+    :class:`~sketchforge.plugins.sculpt_problem.SculptProblem` (the layer, the pick, the band,
+    the cleaned stroke and services such as the shading of candidate heights); the host clamps
+    heights at 0, keeps the rim at 0, refuses non-finite values and, unless switched off,
+    keeps the edit only if the isophote ends no farther from the stroke (trying half and a
+    quarter of δz)."""
+
+    name: str
+    solve: Callable
+    check_params: Callable = no_params
+    version: str = "1"
+    description: str = ""
+    #: Shown in the app's sculpt panel ("" : the name).
+    label: str = ""
+
+
+@dataclass(frozen=True)
+class Assembler:
+    """Assembles layers into one closed mesh: ``assemble(layers, params) -> Mesh`` (layers back
+    to front, read-only ``Layer`` values; one outward-oriented mesh, ``boundary`` and
+    ``junction`` empty)."""
+
+    name: str
+    assemble: Callable
+    check_params: Callable = no_params
+    version: str = "1"
+    description: str = ""
+
+
+SOLVER_TYPES = {"inflate": Inflater, "sculpt": SculptSolver, "assemble": Assembler}
+
+
+# --- parameters -------------------------------------------------------------------------------
+
+
+def validate_params(params: Mapping | None, defaults: Mapping, checks: Mapping[str, Callable] | None = None) -> dict:
+    """``defaults`` updated by ``params``, every key known and every value checked.
+
+    Parameters
+    ----------
+    params : Mapping or None
+        What the document gave.
+    defaults : Mapping
+        Every parameter the solver takes, with its default.
+    checks : Mapping[str, Callable] or None
+        ``checks[key](value) -> value`` for the keys that need one (see :func:`number`); it
+        raises ParameterError with a message that starts with the key.
+
+    Raises
+    ------
+    ParameterError
+        "unknown parameter 'x' (known: a, b)", or the check's message.
+    """
+    if params is None:
+        params = {}
+    if not isinstance(params, Mapping):
+        raise ParameterError(f"parameters must be an object of name: value, got {type(params).__name__}")
+    unknown = sorted(k for k in params if k not in defaults)
+    if unknown:
+        known = ", ".join(sorted(defaults)) or "none"
+        key = unknown[0] if isinstance(unknown[0], str) else repr(unknown[0])
+        raise ParameterError(f"unknown parameter {_quote(key)} (known: {known})")
+    out = dict(defaults)
+    out.update(params)
+    for key, check in (checks or {}).items():
+        if key in out:
+            out[key] = check(out[key])
+    return out
+
+
+def _quote(key: str, n: int = 60) -> str:
+    text = repr(key)
+    return text if len(text) <= n else text[: n - 1] + "…"
+
+
+def number(key: str, lo: float | None = None, hi: float | None = None, *, lo_open: bool = False,
+           hi_open: bool = False, integer: bool = False, optional: bool = False) -> Callable:
+    """A ``checks`` entry: the value must be a (finite) number in the range, an integer if
+    ``integer``, or None if ``optional``. Returns float (int for an integer parameter)."""
+
+    def check(v):
+        if v is None and optional:
+            return None
+        if isinstance(v, bool) or not isinstance(v, numbers.Real):
+            raise ParameterError(f"{key!r} must be a number{' or null' if optional else ''}, got {_short(v)}")
+        if integer:
+            if isinstance(v, float) and not v.is_integer():
+                raise ParameterError(f"{key!r} must be a whole number, got {v!r}")
+            try:
+                x = int(v)
+            except (OverflowError, ValueError):
+                raise ParameterError(f"{key!r} must be a whole number, got {_short(v)}") from None
+        else:
+            try:
+                x = float(v)
+            except OverflowError:
+                raise ParameterError(f"{key!r} is too large for a number") from None
+            if not math.isfinite(x):
+                raise ParameterError(f"{key!r} must be a finite number, got {x}")
+        if lo is not None and (x < lo or (lo_open and x == lo)):
+            raise ParameterError(f"{key!r} must be {'>' if lo_open else '>='} {lo:g}, got {x:g}")
+        if hi is not None and (x > hi or (hi_open and x == hi)):
+            raise ParameterError(f"{key!r} must be {'<' if hi_open else '<='} {hi:g}, got {x:g}")
+        return x
+
+    return check
+
+
+def choice(key: str, options) -> Callable:
+    """A ``checks`` entry: the value must be one of ``options`` (strings)."""
+    options = tuple(options)
+
+    def check(v):
+        if v not in options:
+            raise ParameterError(f"{key!r} must be one of {', '.join(map(repr, options))}, got {_short(v)}")
+        return v
+
+    return check
+
+
+def flag(key: str) -> Callable:
+    """A ``checks`` entry: the value must be true or false."""
+
+    def check(v):
+        if not isinstance(v, bool):
+            raise ParameterError(f"{key!r} must be true or false, got {_short(v)}")
+        return v
+
+    return check
+
+
+def _short(v: Any, n: int = 40) -> str:
+    text = repr(v)
+    return text if len(text) <= n else text[: n - 1] + "…"
+
+
+def json_value(v: Any, depth: int = 0) -> bool:
+    """Whether ``v`` is a value a journal can hold: None, bool, finite number, string, or a
+    list / string-keyed object of those (at most 8 levels)."""
+    if v is None or isinstance(v, (bool, str)):
+        return True
+    if isinstance(v, numbers.Real):
+        return isinstance(v, int) or math.isfinite(float(v))
+    if depth >= 8:
+        return False
+    if isinstance(v, (list, tuple)):
+        return all(json_value(x, depth + 1) for x in v)
+    if isinstance(v, Mapping):
+        return all(isinstance(k, str) and json_value(x, depth + 1) for k, x in v.items())
+    return False
+
+
+@dataclass(frozen=True)
+class SolverChoice:
+    """A document's choice of solver for one job: a name (None: the default) and its own
+    parameters, as the document stores them (read-only)."""
+
+    solver: str | None = None
+    params: Mapping = field(default_factory=dict)
+
+    def to_dict(self) -> dict:
+        d: dict = {}
+        if self.solver is not None:
+            d["solver"] = self.solver
+        if self.params:
+            d["params"] = dict(self.params)
+        return d
