@@ -4,7 +4,7 @@ VENV := .venv
 BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 EXAMPLE ?= examples/creature.json
-PLUGINS := plugins/inflate plugins/isophote_tool plugins/assemble plugins/animate
+PLUGINS := plugins/inflate plugins/isophote_tool plugins/assemble plugins/animate plugins/strips
 # Example plugin packages (a BRDF, a brush, an exporter): installed like any plugin so that
 # `make test` runs their own tests (pyproject's testpaths) against sketchforge's fixtures.
 EXAMPLE_PLUGINS := examples/plugins/soft_brdf examples/plugins/bump_brush examples/plugins/off_exporter

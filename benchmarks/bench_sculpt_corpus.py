@@ -1,23 +1,28 @@
-"""The isophote edit on a randomized corpus nobody here drew (issue 16, point 7).
+"""The isophote edit on a randomized corpus nobody here drew, both sculpt solvers side by side
+(issue 16, point 7; issue 29, point 3).
 
-Run: ``.venv/bin/python benchmarks/bench_sculpt_corpus.py [layers_per_shape] [edits_per_layer]``
-(default 10 and 8: 320 edits on 40 layers). Shapes and edits: see
+Run: ``.venv/bin/python benchmarks/bench_sculpt_corpus.py [layers_per_shape] [edits_per_layer] [seed]``
+(default 10, 8 and 2026: 320 edits on 40 layers). Shapes and edits: see
 ``sketchforge_isophote_tool.corpus`` (random blobs, stars, thin limbs 0.2–0.3 wide, letter
 shapes; strokes = the isophote shifted or bumped by 1–5 edge lengths, with a small loop, or
-partly outside the band). Fixed seeds: the same corpus on every run.
+partly outside the band). Fixed seeds: the same corpus on every run, and the very same edits
+for both solvers (``gauss_newton``, the built-in, and ``strips``, the thesis' method).
 
 Each shape kind runs in its own child process, so a native crash (a segfault in a solver)
-is counted instead of ending the benchmark. Prints:
+is counted instead of ending the benchmark. Prints, per solver:
 
-- crashes (must be 0), refusals by reason, success rate;
-- fidelity: the mean distance from the stroke to the new isophote, in edge lengths (median,
-  p95) and against the distance before (after/before, median); edits that land (after ≤
-  max(2, 0.3·before) edge lengths), over valid edits (the stroke has a part inside the band
-  and outside the rim margin) and over all;
-- edits that ended farther from the stroke than they started (must be 0);
-- null drift: a stroke drawn on the isophote itself, on every fresh layer, and after 10 edits;
-- the largest height change of each edit (fraction of the peak): median, p95, max;
-- warm time per edit, p50 / p95, and the layers' vertex counts.
+- crashes (target 0), refusals by reason, applied edits;
+- lands: the mean distance from the stroke to the new isophote ≤ max(2, 0.3 × before) edge
+  lengths, over the valid edits (the stroke has a part inside the band and outside the rim
+  margin) and over the applied ones (target for ``strips``: ≥ 90% of applied);
+- fidelity after (edge lengths: median, p95), after/before;
+- worse: edits that ended farther from the stroke than they started (target 0);
+- null drift: a stroke drawn on the isophote itself, on every fresh layer and after 10 edits
+  (largest height change / peak; target ≤ 1%);
+- locality: the share of the layer's vertices that moved and the distance from the stroke of
+  the farthest one that did (edge lengths);
+- the largest height change per edit, time per edit (p50 / p95; the first edits of a process
+  include JAX compilations, reported apart for ``strips``).
 """
 
 from __future__ import annotations
@@ -30,16 +35,34 @@ from collections import Counter
 import numpy as np
 
 SEED = 2026
+SOLVERS = ("gauss_newton", "strips")
 
 
-def _shape_worker(shape: str, layers: int, edits: int, queue) -> None:
-    from sketchforge_isophote_tool.corpus import corpus_layers, run_edits
+def _solver(name):
+    if name == "strips":
+        from sketchforge_strips.solver import STRIPS
+
+        return STRIPS
+    from sketchforge_isophote_tool.gauss_newton import GAUSS_NEWTON
+
+    return GAUSS_NEWTON
+
+
+def _shape_worker(shape: str, layers: int, edits: int, seed: int, queue) -> None:
+    from sketchforge_isophote_tool.corpus import corpus_layers, draw_edits, run_edit
     from sketchforge_isophote_tool.testing import LIGHT
 
-    for _, i, mesh, rng in corpus_layers((shape,), per_shape=layers, seed=SEED):
-        outcomes = run_edits(shape, mesh, rng, LIGHT, edits)
-        queue.put(("edits", shape, i, outcomes, _null_drift(mesh, rng, LIGHT), _accumulated_drift(shape, mesh, rng, LIGHT) if i < 3 else None))
-    queue.put(("done", shape, None, None, None, None))
+    for _, i, mesh, rng in corpus_layers((shape,), per_shape=layers, seed=seed):
+        drawn = draw_edits(shape, mesh, rng, LIGHT, edits)
+        state = rng.bit_generator.state
+        for name in SOLVERS:
+            solver = _solver(name)
+            outcomes = [run_edit(mesh, LIGHT, e, solver) for e in drawn]
+            rng.bit_generator.state = state  # both solvers: the same null stroke and later edits
+            null = _null_drift(mesh, rng, LIGHT, solver)
+            acc = _accumulated_drift(shape, mesh, rng, LIGHT, solver) if i < 3 else None
+            queue.put(("edits", name, shape, outcomes, null, acc))
+    queue.put(("done", None, shape, None, None, None))
 
 
 def _null_stroke(mesh, rng, light):
@@ -64,7 +87,7 @@ def _null_stroke(mesh, rng, light):
     return pick, band, np.asarray(seg.coords)
 
 
-def _null_drift(mesh, rng, light):
+def _null_drift(mesh, rng, light, solver):
     """Largest height change (fraction of the peak) of a stroke drawn on the isophote; 0 when
     the edit reports there is nothing to change."""
     from sketchforge.errors import SketchforgeError
@@ -75,20 +98,35 @@ def _null_drift(mesh, rng, light):
         return None
     pick, band, stroke = drawn
     try:
-        r = sculpt(mesh, light, pick, band, stroke)
+        r = sculpt(mesh, light, pick, band, stroke, solver=solver)
     except SketchforgeError:
         return 0.0
     return float(np.abs(r.mesh.V[:, 2] - mesh.V[:, 2]).max() / mesh.V[:, 2].max())
 
 
-def _accumulated_drift(shape, mesh, rng, light):
-    """Null drift after 10 accepted random edits on the same layer."""
+def _crease(mesh, light) -> float:
+    """The largest jump of shading across an interior edge: a seam an edit left shows here (the
+    strip pipeline's null drift came from those: 1.27 after 6 edits against 0.12 fresh)."""
+    from sketchforge.geometry.reflectance import LAMBERTIAN
+    from sketchforge_isophote_tool.layerdata import layer_data
+
+    ld = layer_data(mesh, light, LAMBERTIAN)
+    F = mesh.F
+    e = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
+    inner = ~(ld.planar.is_contour[e[:, 0]] | ld.planar.is_contour[e[:, 1]])
+    return float(np.abs(ld.E[e[inner, 0]] - ld.E[e[inner, 1]]).max())
+
+
+def _accumulated_drift(shape, mesh, rng, light, solver):
+    """Null drift after 10 accepted random edits on the same layer, and the crease (largest
+    shading jump across an interior edge) fresh and after them."""
     from sketchforge.errors import SketchforgeError
     from sketchforge.geometry.reflectance import LAMBERTIAN
     from sketchforge_isophote_tool.corpus import random_edit
     from sketchforge_isophote_tool.layerdata import layer_data
     from sketchforge_isophote_tool.pipeline import sculpt
 
+    fresh_crease = _crease(mesh, light)
     done = tries = 0
     while done < 10 and tries < 60:
         tries += 1
@@ -96,46 +134,21 @@ def _accumulated_drift(shape, mesh, rng, light):
         if e is None:
             continue
         try:
-            mesh = sculpt(mesh, light, e.pick, e.band, e.stroke).mesh
+            mesh = sculpt(mesh, light, e.pick, e.band, e.stroke, solver=solver).mesh
             done += 1
         except SketchforgeError:
             continue
-    return _null_drift(mesh, rng, light) if done == 10 else None
+    if done < 10:
+        return None
+    return _null_drift(mesh, rng, light, solver), fresh_crease, _crease(mesh, light)
 
 
-def main(layers: int = 10, edits: int = 8) -> None:
-    from sketchforge_isophote_tool.corpus import SHAPES, Outcome, refusal_reason
+def _pct(a, q):
+    return float(np.percentile(a, q)) if len(a) else float("nan")
 
-    t0 = time.perf_counter()
-    ctx = mp.get_context("fork")
-    outcomes: list[Outcome] = []
-    nulls, accum, crashed_shapes = [], [], []
-    for shape in SHAPES:
-        q = ctx.Queue()
-        p = ctx.Process(target=_shape_worker, args=(shape, layers, edits, q))
-        p.start()
-        got_layers, finished = 0, False
-        while not finished:
-            try:
-                kind, _, _, outs, null, acc = q.get(timeout=5)
-            except Exception:  # noqa: BLE001  (queue.Empty: is the child still alive?)
-                if not p.is_alive():
-                    break
-                continue
-            if kind == "done":
-                finished = True
-                continue
-            got_layers += 1
-            outcomes.extend(outs)
-            if null is not None:
-                nulls.append(null)
-            if acc is not None:
-                accum.append(acc)
-        p.join()
-        if p.exitcode != 0:
-            crashed_shapes.append((shape, p.exitcode))
-            missing = (layers - got_layers) * edits
-            outcomes.extend(Outcome(shape, "?", np.nan, "crash", f"process died ({p.exitcode})", *[np.nan] * 3, 0.0, 0) for _ in range(missing))
+
+def report(name: str, outcomes, nulls, accum, crashed) -> None:
+    from sketchforge_isophote_tool.corpus import SHAPES, refusal_reason
 
     n = len(outcomes)
     ok = [o for o in outcomes if o.status == "ok"]
@@ -148,42 +161,90 @@ def main(layers: int = 10, edits: int = 8) -> None:
     after = np.array([o.after for o in ok])
     ratio = np.array([o.after / o.before for o in ok if o.before > 0])
     times = np.array([o.seconds for o in outcomes if o.status != "crash"])
-    verts = np.array([o.vertices for o in outcomes if o.vertices])
-
-    print(f"corpus: {len(SHAPES)} shape kinds x {layers} layers x {edits} edits = {n} edits, seed {SEED} "
-          f"({verts.min()}-{verts.max()} vertices, median {int(np.median(verts))}); {time.perf_counter() - t0:.0f} s")
-    print(f"crashes: {len(crashes)}" + (f"  (processes died: {crashed_shapes})" if crashed_shapes else ""))
+    print(f"\n== {name} ==")
+    print(f"crashes: {len(crashes)}" + (f"  (processes died: {crashed})" if crashed else ""))
     print(f"refusals: {len(refused)}")
     for reason, k in Counter(refusal_reason(o.reason) for o in refused).most_common():
         print(f"  {k:4d}  {reason}")
-    print(f"success (applied): {len(ok)}/{n} = {len(ok) / n:.1%}")
-    print(f"lands (after <= max(2h, 0.3 before)): {len(landed)}/{len(valid)} valid edits = {len(landed) / max(len(valid), 1):.1%};"
-          f" {len(landed)}/{n} of all = {len(landed) / n:.1%}")
+    print(f"applied: {len(ok)}/{n} = {len(ok) / max(n, 1):.1%}")
+    print(f"lands (after <= max(2h, 0.3 before)): {len(landed)}/{len(ok)} applied = {len(landed) / max(len(ok), 1):.1%}; "
+          f"{len(landed)}/{len(valid)} valid = {len(landed) / max(len(valid), 1):.1%}")
     moved = [o for o in outcomes if o.moved]
-    print(f"moved (lands, and the isophote beside the stroke is within the same bound): {len(moved)}/{len(valid)} valid edits = {len(moved) / max(len(valid), 1):.1%}")
-    print(f"fidelity after (edge lengths): median {np.median(after):.2f}, p95 {np.percentile(after, 95):.2f}, max {after.max():.2f};"
-          f" after/before median {np.median(ratio):.2f}, p95 {np.percentile(ratio, 95):.2f}")
+    print(f"moved (lands, and the isophote beside the stroke too): {len(moved)}/{len(ok)} applied = {len(moved) / max(len(ok), 1):.1%}")
+    if len(after):
+        print(f"fidelity after (edge lengths): median {np.median(after):.2f}, p95 {_pct(after, 95):.2f}, max {after.max():.2f};"
+              f" after/before median {np.median(ratio):.2f}, p95 {_pct(ratio, 95):.2f}")
     print(f"partial edits (the full change overshot): {sum(o.fraction < 1 for o in ok)}")
-    mdz = np.array([o.max_dz for o in ok])
-    print(f"largest height change per edit (fraction of the peak): median {np.median(mdz):.1%}, p95 {np.percentile(mdz, 95):.1%}, max {mdz.max():.1%}")
     print(f"worse than before: {len(worse)}")
-    print("by shape:")
+    if ok:
+        mdz = np.array([o.max_dz for o in ok])
+        ch = np.array([o.changed for o in ok])
+        reach = np.array([o.reach for o in ok])
+        print(f"largest height change per edit (fraction of the peak): median {np.median(mdz):.1%}, p95 {_pct(mdz, 95):.1%}, max {mdz.max():.1%}")
+        print(f"locality: vertices moved {np.median(ch):.1%} of the layer median, p95 {_pct(ch, 95):.1%}; farthest moved "
+              f"vertex from the stroke {np.median(reach):.1f}h median, p95 {_pct(reach, 95):.1f}h")
     for shape in SHAPES:
         s_all = [o for o in outcomes if o.shape == shape]
         s_ok = [o for o in s_all if o.status == "ok"]
         a = np.array([o.after for o in s_ok]) if s_ok else np.array([np.nan])
-        print(f"  {shape:8s} applied {len(s_ok):3d}/{len(s_all)}  lands {sum(o.lands for o in s_all):3d}  after median {np.nanmedian(a):.2f}h p95 {np.nanpercentile(a, 95):.2f}h")
-    print("by stroke kind:")
-    for kind in sorted({o.kind for o in outcomes}):
-        k_all = [o for o in outcomes if o.kind == kind]
-        print(f"  {kind:8s} applied {sum(o.status == 'ok' for o in k_all):3d}/{len(k_all)}  lands {sum(o.lands for o in k_all):3d}")
+        print(f"  {shape:8s} applied {len(s_ok):3d}/{len(s_all)}  lands {sum(o.lands for o in s_all):3d}  "
+              f"after median {np.nanmedian(a):.2f}h p95 {np.nanpercentile(a, 95):.2f}h")
     if nulls:
         nd = np.array(nulls)
-        print(f"null drift on fresh layers (max |dz| / peak): median {np.median(nd):.3%}, p95 {np.percentile(nd, 95):.3%}, max {nd.max():.3%} ({len(nd)} layers)")
+        print(f"null drift, fresh layers (max |dz| / peak): median {np.median(nd):.3%}, p95 {_pct(nd, 95):.3%}, max {nd.max():.3%} ({len(nd)} layers)")
     if accum:
-        ad = np.array(accum)
+        ad = np.array([a[0] for a in accum])
+        cr = np.array([a[2] / a[1] for a in accum])
         print(f"null drift after 10 edits: median {np.median(ad):.3%}, max {ad.max():.3%} ({len(ad)} layers)")
-    print(f"time per edit: p50 {1e3 * np.median(times):.0f} ms, p95 {1e3 * np.percentile(times, 95):.0f} ms")
+        print(f"crease after 10 edits (largest shading jump across an edge, against the fresh layer's): median "
+              f"{np.median(cr):.2f}x, max {cr.max():.2f}x")
+    if len(times):
+        print(f"time per edit: p50 {1e3 * np.median(times):.0f} ms, p95 {1e3 * _pct(times, 95):.0f} ms, max {1e3 * times.max():.0f} ms")
+
+
+def main(layers: int = 10, edits: int = 8, seed: int = SEED) -> None:
+    from sketchforge_isophote_tool.corpus import SHAPES, Outcome
+
+    t0 = time.perf_counter()
+    ctx = mp.get_context("fork")
+    outcomes: dict = {s: [] for s in SOLVERS}
+    nulls: dict = {s: [] for s in SOLVERS}
+    accum: dict = {s: [] for s in SOLVERS}
+    crashed = []
+    for shape in SHAPES:
+        q = ctx.Queue()
+        p = ctx.Process(target=_shape_worker, args=(shape, layers, edits, seed, q))
+        p.start()
+        got = {s: 0 for s in SOLVERS}
+        finished = False
+        while not finished:
+            try:
+                kind, name, _, outs, null, acc = q.get(timeout=5)
+            except Exception:  # noqa: BLE001  (queue.Empty: is the child still alive?)
+                if not p.is_alive():
+                    break
+                continue
+            if kind == "done":
+                finished = True
+                continue
+            got[name] += 1
+            outcomes[name].extend(outs)
+            if null is not None:
+                nulls[name].append(null)
+            if acc is not None:
+                accum[name].append(acc)
+        p.join()
+        if p.exitcode != 0:
+            crashed.append((shape, p.exitcode))
+            for name in SOLVERS:
+                missing = (layers - got[name]) * edits
+                outcomes[name].extend(Outcome(shape, "?", np.nan, "crash", f"process died ({p.exitcode})", *[np.nan] * 3, 0.0, 0)
+                                      for _ in range(missing))
+    verts = np.array([o.vertices for o in outcomes[SOLVERS[0]] if o.vertices])
+    print(f"corpus: {len(SHAPES)} shape kinds x {layers} layers x {edits} edits = {len(outcomes[SOLVERS[0]])} edits per solver, "
+          f"seed {seed} ({verts.min()}-{verts.max()} vertices, median {int(np.median(verts))}); {time.perf_counter() - t0:.0f} s")
+    for name in SOLVERS:
+        report(name, outcomes[name], nulls[name], accum[name], crashed)
 
 
 if __name__ == "__main__":

@@ -72,6 +72,8 @@ def used_solvers(host, journal: Iterable, layers: Iterable = (), assembly=None, 
     choice = assembly.get("solver") if isinstance(assembly, dict) else getattr(assembly, "solver", None)
     if isinstance(choice, str):
         out["assemble"].add(choice)
+    elif "inflate" in unnamed or out["inflate"]:
+        unnamed.add("assemble")  # a document with meshes is assembled with the default
     if defaults:
         for kind in unnamed:
             name = host.default_solver_name(kind) if hasattr(host, "default_solver_name") else None
@@ -144,7 +146,9 @@ def missing_solvers(data: dict, host) -> list[str]:
     used = used_solvers(host, journal if isinstance(journal, list) else [], [l for l in layers if isinstance(l, dict)],
                         snap.get("assembly"), defaults=False)
     for kind, table in recorded.items():
-        if kind in used:
+        # The default assembler a document was shown with is recorded, but a document does not
+        # need it (without one, the layers are exported as they are); one it names, it needs.
+        if kind in used and kind != "assemble":
             used[kind] |= {n for n in table if isinstance(n, str)}
     out = []
     for kind in SOLVER_KINDS:

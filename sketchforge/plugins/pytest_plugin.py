@@ -6,9 +6,10 @@ napari ships ``make_napari_viewer``: installing sketchforge makes them available
   (e.g. ``("inflate",)`` for real meshes); nothing else that happens to be installed. With
   ``strict`` a contribution the host refuses (a broken contract, a hook that raised) fails
   the test with the host's message.
-- ``make_sketchforge_document(host=None, contour=ELLIPSE, layer="a")``: a document with one
-  layer inflated from ``contour`` (needs an inflater in the host: ``installed=("inflate",)``
-  or :class:`~sketchforge.plugins.testing.FanInflater`).
+- ``make_sketchforge_document(host=None, contour=ELLIPSE, layer="a", inflater=None, **params)``:
+  a document with one layer inflated from ``contour`` by the inflater named ``inflater``
+  (None: the host's default) with ``params`` (checked by that inflater); needs an inflater in
+  the host: ``installed=("inflate",)`` or :class:`~sketchforge.plugins.testing.FanInflater`.
 - ``assert_replays(doc)``: replays the document's journal headlessly, and reloads it from the
   saved file, and asserts both are bit-identical to ``doc`` (layers, meshes, light, plugin
   data); returns the replayed document. The check every command must pass.
@@ -47,7 +48,7 @@ def make_sketchforge_host():
 
 @pytest.fixture
 def make_sketchforge_document(make_sketchforge_host):
-    def make(host=None, contour=None, layer: str = "a", closed: bool = True, **params):
+    def make(host=None, contour=None, layer: str = "a", closed: bool = True, inflater: str | None = None, **params):
         from sketchforge.document import Document
 
         host = make_sketchforge_host(installed=("inflate",)) if host is None else host
@@ -55,8 +56,10 @@ def make_sketchforge_document(make_sketchforge_host):
         if contour is not False:
             pts = _ellipse() if contour is None else contour
             doc.execute({"command": "add_layer", "id": layer})
+            if inflater is not None:  # chosen before the first inflation: its own parameters only
+                doc.execute({"command": "set_inflate_params", "layer": layer, "solver": inflater, "params": params})
             doc.execute({"command": "set_contour", "layer": layer, "points": [list(map(float, p)) for p in pts], "closed": closed})
-            if params:
+            if params and inflater is None:
                 doc.execute({"command": "set_inflate_params", "layer": layer, "params": params})
         return doc
 

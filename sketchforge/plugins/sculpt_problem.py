@@ -48,6 +48,8 @@ class SculptProblem:
     c : float
         The isovalue: the redrawn stroke is where E should become c.
     pick : (2,) float64
+    isophote : (j, 2) float64
+        The picked isophote (the component of E = c through the pick), as a polyline.
     band : shapely (Multi)Polygon
         Where the shading may change (the picked isophote ⊕ a disk of ``band_radius``,
         clipped to the layer).
@@ -67,6 +69,9 @@ class SculptProblem:
         strip along the rim where the surface turns vertical and no isophote is promised.
     outline : shapely Polygon
         The layer, holes cut out.
+    Q : (n, n) scipy.sparse.csr_matrix float64
+        The layer's squared Laplacian Lᵀ M⁻¹ L (cotangent L, lumped M): minimising xᵀ Q x
+        over some vertices with the others fixed is a smooth (C¹) fill.
     before : float
         Mean distance from the stroke (where an isophote is promised) to the isophote now.
     host_data : object
@@ -86,6 +91,7 @@ class SculptProblem:
     h: float
     c: float
     pick: np.ndarray
+    isophote: np.ndarray
     band: Any
     band_radius: float
     in_band: np.ndarray
@@ -95,6 +101,7 @@ class SculptProblem:
     d_rim: np.ndarray
     rim_margin: np.ndarray
     outline: Any
+    Q: Any
     before: float
     _shading: Callable = field(repr=False, default=None)
     _shading_change: Callable = field(repr=False, default=None)

@@ -232,6 +232,11 @@ class Outcome:
     beside : float
         Mean distance from the new isophote beside the stroke to the stroke, in edge lengths
         (:func:`.fidelity.beside_distance`; nan unless ok).
+    changed : float
+        Share of the layer's vertices whose height changed (nan unless ok).
+    reach : float
+        Distance from the stroke to the farthest vertex whose height changed, in edge lengths
+        (nan unless ok): how local the edit stayed.
     """
 
     shape: str
@@ -246,6 +251,8 @@ class Outcome:
     vertices: int
     max_dz: float = np.nan
     beside: float = np.nan
+    changed: float = np.nan
+    reach: float = np.nan
 
     @property
     def lands(self) -> bool:
@@ -272,9 +279,29 @@ def corpus_layers(shapes=SHAPES, per_shape: int = 4, seed: int = 0, resolution: 
             yield shape, i, mesh, rng
 
 
-def run_edits(shape: str, mesh, rng, light, edits: int, kinds=KINDS) -> list[Outcome]:
-    """Draw ``edits`` random edits on one layer (kinds in turn) and run each through ``sculpt``."""
+def draw_edits(shape: str, mesh, rng, light, edits: int, kinds=KINDS) -> list[Edit]:  # pragma: no mutate block
+    """``edits`` random edits on one layer (kinds in turn), drawn before any runs: so two
+    solvers can be given the very same edits."""
+    from sketchforge.geometry.reflectance import LAMBERTIAN
+
+    from .layerdata import layer_data
+
+    ld = layer_data(mesh, light, LAMBERTIAN)
+    out: list[Edit] = []
+    tries = 0
+    while len(out) < edits and tries < 20 * edits:
+        tries += 1
+        e = random_edit(shape, ld, rng, kind=kinds[len(out) % len(kinds)])
+        if e is not None:
+            out.append(e)
+    return out
+
+
+def run_edit(mesh, light, e: Edit, solver=None, params=None) -> Outcome:
+    """Run one corpus edit through ``sculpt`` with ``solver`` (None: the built-in) and measure it."""
     import time
+
+    import shapely
 
     from sketchforge.errors import SketchforgeError
     from sketchforge.geometry.reflectance import LAMBERTIAN
@@ -284,29 +311,27 @@ def run_edits(shape: str, mesh, rng, light, edits: int, kinds=KINDS) -> list[Out
     from .pipeline import sculpt
 
     ld = layer_data(mesh, light, LAMBERTIAN)
-    out: list[Outcome] = []
-    tries = 0
-    while len(out) < edits and tries < 20 * edits:
-        tries += 1
-        e = random_edit(shape, ld, rng, kind=kinds[len(out) % len(kinds)])
-        if e is None:
-            continue
-        t = time.perf_counter()
-        try:
-            r = sculpt(mesh, light, e.pick, e.band, e.stroke)
-        except SketchforgeError as exc:
-            out.append(Outcome(shape, e.kind, e.move, "refused", str(exc), np.nan, np.nan, np.nan, time.perf_counter() - t, mesh.n_vertices))
-            continue
-        except Exception as exc:  # noqa: BLE001  (what the corpus is for: finding these)
-            out.append(Outcome(shape, e.kind, e.move, "crash", repr(exc), np.nan, np.nan, np.nan, time.perf_counter() - t, mesh.n_vertices))
-            continue
-        seconds = time.perf_counter() - t
-        max_dz = float(np.abs(r.mesh.V[:, 2] - mesh.V[:, 2]).max() / mesh.V[:, 2].max())
-        E_new, _, _ = vertex_shading(ld.planar, r.mesh.V[:, 2], light, LAMBERTIAN)
-        beside = beside_distance(isophote_lines(ld.planar, E_new, r.c), r.stroke, 0.5 * e.band, ld.h) / ld.h
-        out.append(Outcome(shape, e.kind, e.move, "ok", "", r.before / ld.h, r.after / ld.h, r.fraction, seconds,
-                           mesh.n_vertices, max_dz, beside))
-    return out
+    t = time.perf_counter()
+    try:
+        r = sculpt(mesh, light, e.pick, e.band, e.stroke, solver=solver, params=params)
+    except SketchforgeError as exc:
+        return Outcome(e.shape, e.kind, e.move, "refused", str(exc), np.nan, np.nan, np.nan, time.perf_counter() - t, mesh.n_vertices)
+    except Exception as exc:  # noqa: BLE001  (what the corpus is for: finding these)
+        return Outcome(e.shape, e.kind, e.move, "crash", repr(exc), np.nan, np.nan, np.nan, time.perf_counter() - t, mesh.n_vertices)
+    seconds = time.perf_counter() - t
+    max_dz = float(np.abs(r.mesh.V[:, 2] - mesh.V[:, 2]).max() / mesh.V[:, 2].max())
+    E_new, _, _ = vertex_shading(ld.planar, r.mesh.V[:, 2], light, LAMBERTIAN)
+    beside = beside_distance(isophote_lines(ld.planar, E_new, r.c), r.stroke, 0.5 * e.band, ld.h) / ld.h
+    moved = np.nonzero(r.changed)[0]
+    reach = float(shapely.distance(shapely.points(ld.V2[moved]), r.stroke).max()) / ld.h if len(moved) else 0.0
+    return Outcome(e.shape, e.kind, e.move, "ok", "", r.before / ld.h, r.after / ld.h, r.fraction, seconds,
+                   mesh.n_vertices, max_dz, beside, float(r.changed.mean()), reach)
+
+
+def run_edits(shape: str, mesh, rng, light, edits: int, kinds=KINDS, solver=None, params=None) -> list[Outcome]:
+    """Draw ``edits`` random edits on one layer (kinds in turn) and run each through ``sculpt``
+    with ``solver`` (None: the built-in ``gauss_newton``) and its ``params``."""
+    return [run_edit(mesh, light, e, solver, params) for e in draw_edits(shape, mesh, rng, light, edits, kinds)]
 
 
 def refusal_reason(message: str) -> str:

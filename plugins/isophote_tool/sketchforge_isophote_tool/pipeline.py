@@ -231,7 +231,7 @@ def _slopes(ld: LayerData):
     return got
 
 
-def build_problem(ld: LayerData, c: float, pick, band_geom, r: float, pieces: list, honoured: np.ndarray,
+def build_problem(ld: LayerData, c: float, pick, iso, band_geom, r: float, pieces: list, honoured: np.ndarray,
                   before: float) -> SculptProblem:
     """The :class:`SculptProblem` of an edit on layer ``ld`` (services bound to its data)."""
     pd, h = ld.planar, ld.h
@@ -255,9 +255,10 @@ def build_problem(ld: LayerData, c: float, pick, band_geom, r: float, pieces: li
 
     return SculptProblem(
         V=ld.mesh.V, F=pd.F, is_rim=pd.is_contour, light=ld.light, model=ld.model, E=ld.E, Rp=Rp, Rq=Rq, p=p, q=q,
-        h=h, c=float(c), pick=np.asarray(pick, np.float64).reshape(2), band=band_geom, band_radius=r, in_band=in_band,
+        h=h, c=float(c), pick=np.asarray(pick, np.float64).reshape(2), isophote=np.asarray(iso.coords, np.float64)[:, :2],
+        band=band_geom, band_radius=r, in_band=in_band,
         stroke=pieces, samples=samples.P, sample_weights=samples.w * w_rim, d_rim=pd.d_rim,
-        rim_margin=np.minimum(pd.margin_v, pd.margin), outline=pd.outline, before=before,
+        rim_margin=np.minimum(pd.margin_v, pd.margin), outline=pd.outline, Q=pd.Q, before=before,
         _shading=shading, _shading_change=change, _distance_after=after,
         _locate=lambda P: pd.locator.locate(P), _distance_to_stroke=lambda P, u: distance_to(pieces, P, h, u),
         host_data=HostData(ld, pieces, samples, B, w_rim, honoured),
@@ -358,7 +359,7 @@ def sculpt(
             "turns vertical and cannot follow a redrawn isophote: draw it further inside the shape"
         )
     before = mean_distance(honoured, iso)
-    problem = build_problem(ld, c, pick, band_geom, r, pieces, honoured, before)
+    problem = build_problem(ld, c, pick, iso, band_geom, r, pieces, honoured, before)
     T["stroke"] = time.perf_counter() - t
 
     t = time.perf_counter()
