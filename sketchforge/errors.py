@@ -62,6 +62,12 @@ class EditsDoNotApplyError(SketchforgeError):
     """A redrawn outline's sculpt edits do not apply to its new surface (nothing changed)."""
 
 
+class EditNotMovableError(SketchforgeError):
+    """A layer cannot be moved, scaled or rotated because one of its edits cannot follow it
+    (its command does not implement ``Command.transform_edit``, or refuses this transform);
+    nothing changed."""
+
+
 class PluginError(SketchforgeError):
     """A plugin misbehaved (a hook raised, returned the wrong type, broke a contract); the
     message names the plugin. The document is left as it was before."""

@@ -18,7 +18,10 @@ The README's *Plugin guide* documents each contract with a complete brush exampl
   ``Layer.edits`` and implements the classmethod ``reapply(doc, layer, entry) -> Layer``;
   :func:`inflate_layer` / :func:`reapply_edits` call it when the outline or the inflation
   parameters change. A brush that leaves ``edits`` alone loses its edit on the next
-  ``set_inflate_params``.
+  ``set_inflate_params``. It also implements ``transform_edit(entry, matrix, scale) -> dict``
+  (positions through :func:`transform_points`), so that the edit follows its layer when the
+  layer is moved, scaled or rotated; without it such a transform is refused
+  (:class:`EditNotMovableError`).
 - **Tools** (:class:`Tool`) turn press/move/release in document coordinates into commands
   and keep what to draw in ``overlay`` ((k, 2) polylines). Class attributes ``name``,
   ``label``, optional ``shortcut`` (``"Shift+B"``) and ``icon`` (an image path). In the app,
@@ -50,11 +53,13 @@ from sketchforge.document.commands import (
     parse_points,
     parse_vector,
     reapply_edits,
+    transform_points,
 )
 from sketchforge.document.layer import Layer, Light
 from sketchforge.errors import (
     ContourError,
     DocumentFormatError,
+    EditNotMovableError,
     ExportError,
     NothingToDoError,
     ParameterError,
@@ -86,6 +91,7 @@ __all__ = [
     "Command",
     "ContourError",
     "DocumentFormatError",
+    "EditNotMovableError",
     "ExportError",
     "Exporter",
     "Inflater",
@@ -119,5 +125,6 @@ __all__ = [
     "parse_points",
     "parse_vector",
     "reapply_edits",
+    "transform_points",
     "validate_params",
 ]

@@ -113,10 +113,13 @@ def test_core_imports_without_qt():
         "import sketchforge.tools, sketchforge.geometry, sketchforge.cli\n"
         "import pkgutil, importlib, sketchforge.geometry as g\n"
         "for m in pkgutil.iter_modules(g.__path__): importlib.import_module('sketchforge.geometry.' + m.name)\n"
-        "import sketchforge_inflate, sketchforge_isophote_tool, sketchforge_assemble\n"
+        "import sketchforge_inflate, sketchforge_isophote_tool, sketchforge_assemble, sketchforge_animate\n"
         "import sketchforge_inflate.plugin, sketchforge_isophote_tool.plugin, sketchforge_assemble.plugin\n"
+        "import sketchforge_animate.plugin\n"
         "from sketchforge.plugins.manager import default_host\n"
         "h = default_host(); h.commands; h.tools; h.exporters; h.shaders; h.reflectance_models\n"
+        # the panels are listed headless: only the app's call to create imports Qt
+        "assert {'animation', 'isophote_sculpt'} <= set(h.qt_panels), sorted(h.qt_panels)\n"
         "bad = [m for m in sys.modules if m.startswith(('PySide6', 'pyqtgraph', 'sketchforge.qt', 'shiboken6'))]\n"
         "assert not bad, bad\n"
     )
@@ -138,4 +141,28 @@ def test_geometry_core_does_not_import_the_document_or_front_ends():
                 [node.module or ""] if isinstance(node, ast.ImportFrom) else [])
             offenders += [f"{path.name}: {n}" for n in names
                           if n.startswith(("sketchforge.document", "sketchforge.qt", "sketchforge.tools", "PySide6"))]
+    assert offenders == []
+
+
+def test_the_qt_front_end_knows_no_built_in_plugin():
+    """Panels, tools and exporters come through hooks: sketchforge/qt imports no plugin package
+    and names none of their commands or tools (issue 29: the core stops knowing the built-ins)."""
+    import ast
+    from pathlib import Path
+
+    import sketchforge
+
+    root = Path(sketchforge.__file__).parent / "qt"
+    plugin_packages = ("sketchforge_inflate", "sketchforge_isophote_tool", "sketchforge_assemble", "sketchforge_animate")
+    names = ("add_pin", "sculpt_isophote", "gauss_newton", "record_motion")
+    offenders = []
+    for path in sorted(root.rglob("*.py")):
+        tree = ast.parse(path.read_text())
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Import):
+                offenders += [f"{path.name}: import {a.name}" for a in node.names if a.name.startswith(plugin_packages)]
+            elif isinstance(node, ast.ImportFrom) and (node.module or "").startswith(plugin_packages):
+                offenders.append(f"{path.name}: from {node.module}")
+            elif isinstance(node, ast.Constant) and isinstance(node.value, str):
+                offenders += [f"{path.name}: {n!r}" for n in names if n in node.value]
     assert offenders == []

@@ -8,7 +8,9 @@ redo is instant and bit-identical.
 
 Plugins add commands through the ``sketchforge_commands`` hook; a command that edits a
 layer's mesh after inflation (a sculpt edit) also implements :meth:`Command.reapply` so that
-changing the inflation parameters can re-apply it.
+changing the inflation parameters can re-apply it, and :meth:`Command.transform_edit` so that
+its edit follows the layer when the layer is moved, scaled or rotated. The core never reads
+an edit's fields: only the edit's own command knows what they mean.
 """
 
 from __future__ import annotations
@@ -25,8 +27,10 @@ import numpy as np
 from sketchforge.document.layer import Layer, Light
 from sketchforge.errors import (
     DocumentFormatError,
+    EditNotMovableError,
     EditsDoNotApplyError,
     ParameterError,
+    PluginError,
     SketchforgeError,
     SolverError,
 )
@@ -87,6 +91,24 @@ class Command:
     def reapply(cls, doc, layer: Layer, entry: dict) -> Layer:
         """For edit commands: return ``layer`` with the edit ``entry`` applied to its mesh."""
         raise NotImplementedError(f"command {cls.name!r} cannot be re-applied")
+
+    @classmethod
+    def transform_edit(cls, entry: dict, matrix: np.ndarray, scale: float) -> dict:
+        """For edit commands: the edit ``entry`` (its dict in ``Layer.edits``) as it must read
+        after its layer was mapped by the affine ``matrix`` (2, 3) float64 [[a, b, tx],
+        [c, d, ty]] (x' = a x + b y + tx; det > 0), so that re-applying it later (after a
+        parameter change) edits the moved surface where the edit now lies. ``scale`` is
+        sqrt(det), the part's linear size factor: the layer's heights were multiplied by it
+        (1.0 for a rotation or a move). Return a new dict (same ``"command"``); positions go
+        through :func:`transform_points` (a pure move adds the offset only, bit for bit).
+
+        ``transform_layer``, ``translate_layer`` and ``duplicate_layer`` with an offset call it
+        for every edit of the layer. The default refuses the transform
+        (:class:`~sketchforge.errors.EditNotMovableError`, naming the layer and this command):
+        leaving the edit's positions where they were drawn would re-apply it off the moved
+        part at the next parameter change. Raise a SketchforgeError to refuse a transform the
+        edit cannot follow."""
+        raise EditNotMovableError("its plugin does not say how to move its edits (Command.transform_edit)")
 
 
 # --- parsing helpers (journal entries are user-writable, so every field is checked) ---------
@@ -643,8 +665,8 @@ class DuplicateLayer(Command):
     """Copy a layer (mesh and edits included), by default just in front of it. ``index``
     places the copy elsewhere in the back-to-front list (after the copy is inserted: 0 = at
     the very back); ``offset`` (dx, dy) moves the copy in the drawing plane: its stroke, its
-    mesh and the positions its sculpt edits were drawn at (``pick``, ``stroke``) move
-    together, so a later parameter change re-applies the edits where they now are."""
+    mesh and its edits (each by its command's ``transform_edit``) move together, so a later
+    parameter change re-applies the edits where they now are."""
 
     name: ClassVar[str] = "duplicate_layer"
     layer: str = ""
@@ -676,9 +698,9 @@ class DuplicateLayer(Command):
         if self.new_name is None:
             self.new_name = src.name + " copy"
         if self._copy is None or self._src is not src:
-            copy = src.evolve(id=self.new_id, name=self.new_name)
-            if self.offset is not None:
-                copy = _translated(copy, off)
+            # Moved before it is renamed, so a refusal names the layer the person sees.
+            moved = src if self.offset is None else _translated(doc, src, off)
+            copy = moved.evolve(id=self.new_id, name=self.new_name)
             self._copy, self._src = copy, src
         doc._insert_layer(idx, self._copy)
 
@@ -707,9 +729,9 @@ class DuplicateLayer(Command):
         )
 
 
-def _translated(layer: Layer, off: np.ndarray) -> Layer:
-    """``layer`` moved by ``off`` (2,) in the drawing plane: stroke, holes, mesh and edit positions."""
-    return _transformed(layer, np.array([[1.0, 0.0, off[0]], [0.0, 1.0, off[1]]]))
+def _translated(doc, layer: Layer, off: np.ndarray) -> Layer:
+    """``layer`` moved by ``off`` (2,) in the drawing plane: stroke, holes, mesh and edits."""
+    return _transformed(doc, layer, np.array([[1.0, 0.0, off[0]], [0.0, 1.0, off[1]]]))
 
 
 def check_affine(matrix) -> np.ndarray:
@@ -733,19 +755,29 @@ def check_affine(matrix) -> np.ndarray:
     return A
 
 
-def _transformed(layer: Layer, A: np.ndarray) -> Layer:
-    """``layer`` under the affine map A (2, 3): its stroke, holes, mesh and the positions its
-    sculpt edits were drawn at (``pick``, ``stroke``; a ``band`` radius scales with the part)
+def transform_points(matrix, points) -> np.ndarray:
+    """``points`` (k, 2) (or one point (2,)) under the affine ``matrix`` (2, 3), as (k, 2)
+    float64. A pure move (linear part exactly the identity) adds the offset only, so moving
+    and moving back restores the bits a ``translate_layer`` always gave."""
+    A = np.asarray(matrix, dtype=np.float64)
+    L, t = A[:, :2], A[:, 2]
+    P = np.asarray(points, dtype=np.float64).reshape(-1, 2)
+    return P + t if np.array_equal(L, np.eye(2)) else P @ L.T + t
+
+
+def _transformed(doc, layer: Layer, A: np.ndarray) -> Layer:
+    """``layer`` under the affine map A (2, 3): its stroke, holes, mesh and its edits
     together. Heights scale by sqrt(det), the linear size of the part, so a scaled blob keeps
     its shape (a rotation or a move leaves them untouched). A pure move adds the offset only,
-    bit for bit what ``translate_layer`` always did."""
-    L, t = A[:, :2], A[:, 2]
+    bit for bit what ``translate_layer`` always did. Each edit is moved by its own command
+    (:meth:`Command.transform_edit`): what its fields mean is its plugin's business."""
+    L = A[:, :2]
     moved_only = bool(np.array_equal(L, np.eye(2)))
     s = float(np.sqrt(L[0, 0] * L[1, 1] - L[0, 1] * L[1, 0]))
+    edits = transformed_edits(doc, layer, A, s)  # first: a refusal leaves nothing half-done
 
     def f(P) -> np.ndarray:
-        P = np.asarray(P, dtype=np.float64).reshape(-1, 2)
-        return P + t if moved_only else P @ L.T + t
+        return transform_points(A, P)
 
     changes: dict[str, Any] = {}
     if layer.points is not None:
@@ -757,26 +789,44 @@ def _transformed(layer: Layer, A: np.ndarray) -> Layer:
         if not moved_only:
             V[:, 2] *= s
         changes["mesh"] = replace(layer.mesh, V=V)
-    edits = []
-    for entry in layer.edits:
-        e = dict(entry)
-        if isinstance(e.get("pick"), list) and len(e["pick"]) >= 2:
-            q = f(np.asarray(e["pick"][:2], dtype=np.float64))[0]
-            e["pick"] = [float(q[0]), float(q[1]), *e["pick"][2:]]
-        if isinstance(e.get("stroke"), list):
-            e["stroke"] = f(e["stroke"]).tolist()
-        if not moved_only and isinstance(e.get("band"), (int, float)) and not isinstance(e.get("band"), bool):
-            e["band"] = float(e["band"]) * s
-        light = e.get("light")
-        if not moved_only and isinstance(light, list) and len(light) >= 2:
-            # The edit was shaped by that light: it turns with the part (a direction, so
-            # by the linear part, renormalised).
-            v = L @ np.asarray(light[:2], dtype=np.float64)
-            v = v / max(float(np.hypot(v[0], v[1])), 1e-300)
-            e["light"] = [float(v[0]), float(v[1]), *light[2:]]
-        edits.append(e)
-    changes["edits"] = tuple(edits)
+    changes["edits"] = edits
     return layer.evolve(**changes)
+
+
+def transformed_edits(doc, layer: Layer, A: np.ndarray, scale: float) -> tuple:
+    """``layer.edits``, each moved by its command's :meth:`Command.transform_edit`.
+
+    Raises
+    ------
+    EditNotMovableError
+        An edit's command does not say how to move it, or refuses this transform (the
+        message names the layer, the edit's command and its plugin).
+    PluginError
+        A ``transform_edit`` failed with a bug or returned something other than a dict for
+        the same command.
+        An edit of a command no installed plugin provides is refused the same way.
+    """
+    out = []
+    for entry in layer.edits:
+        name = entry.get("command", "")
+        try:
+            cls = doc.host.command_class(name)
+        except SketchforgeError as exc:
+            raise EditNotMovableError(f"layer {layer.id!r} cannot be moved: its edit {name!r} cannot follow it: {exc}") from None
+        who = doc.host.provider_of(cls)
+        try:
+            moved = cls.transform_edit(dict(entry), np.array(A, dtype=np.float64), float(scale))
+        except SketchforgeError as exc:
+            raise EditNotMovableError(f"layer {layer.id!r} cannot be moved: its edit {name!r} (plugin {who!r}) "
+                                      f"cannot follow it: {exc}") from None
+        except Exception as exc:  # noqa: BLE001 - foreign code: named, not hidden
+            raise PluginError(f"layer {layer.id!r} cannot be moved: transform_edit of command {name!r} (plugin {who!r}) "
+                              f"failed: {type(exc).__name__}: {exc}") from exc
+        if not isinstance(moved, dict) or moved.get("command") != name:
+            raise PluginError(f"layer {layer.id!r} cannot be moved: transform_edit of command {name!r} (plugin {who!r}) "
+                              f"must return the edit's dict with \"command\": {name!r}, got {type(moved).__name__}")
+        out.append(moved)
+    return tuple(out)
 
 
 def compose_affine(*matrices) -> np.ndarray:
@@ -807,9 +857,10 @@ def rotate_about(center, radians: float) -> np.ndarray:
 class TransformLayer(ReplaceLayerCommand):
     """Move, scale and rotate a layer in the drawing plane: ``matrix`` is a 2x3 affine
     [[a, b, tx], [c, d, ty]] (x' = a x + b y + tx, y' = c x + d y + ty) applied to its stroke,
-    holes, mesh and sculpt-edit positions together, without re-inflation (heights scale by
-    sqrt(det), so a scaled part keeps its shape). One command per gesture: a drag of the app's
-    handles is one ``transform_layer`` with the matrix of the whole drag.
+    holes, mesh and edits together (each edit by its command's ``transform_edit``; a layer
+    with an edit whose plugin does not say how to move it is refused), without re-inflation
+    (heights scale by sqrt(det), so a scaled part keeps its shape). One command per gesture:
+    a drag of the app's handles is one ``transform_layer`` with the matrix of the whole drag.
 
     Attached parts are re-attached, not pinned: the junction is part of the layer's own
     stroke, so it moves with the part, and the assembly glues it to whichever layer it then
@@ -838,7 +889,7 @@ class TransformLayer(ReplaceLayerCommand):
         return "Transform layer"
 
     def compute(self, doc, old: Layer) -> Layer:
-        return _transformed(old, np.asarray(self.matrix, dtype=np.float64))
+        return _transformed(doc, old, np.asarray(self.matrix, dtype=np.float64))
 
     def to_dict(self) -> dict:
         return {"command": self.name, "layer": self.layer, "matrix": [list(map(float, r)) for r in self.matrix]}
@@ -855,8 +906,8 @@ class TransformLayer(ReplaceLayerCommand):
 
 @dataclass
 class TranslateLayer(ReplaceLayerCommand):
-    """Move a layer in the drawing plane by ``offset`` (dx, dy): its stroke, mesh and sculpt
-    edit positions together (no re-inflation: the same surface, moved). Kept so that files
+    """Move a layer in the drawing plane by ``offset`` (dx, dy): its stroke, mesh and edits
+    together (no re-inflation: the same surface, moved). Kept so that files
     written before ``transform_layer`` load; the app now writes ``transform_layer`` (a pure
     move there is bit for bit the same). Each nudge is its own step."""
 
@@ -873,7 +924,7 @@ class TranslateLayer(ReplaceLayerCommand):
         return "Move layer"
 
     def compute(self, doc, old: Layer) -> Layer:
-        return _translated(old, np.asarray(self.offset, dtype=np.float64))
+        return _translated(doc, old, np.asarray(self.offset, dtype=np.float64))
 
     def to_dict(self) -> dict:
         return {"command": self.name, "layer": self.layer, "offset": list(self.offset)}

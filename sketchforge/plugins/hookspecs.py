@@ -193,7 +193,10 @@ def sketchforge_qt_panels():
     The app builds each panel's widget with ``create(app)`` once, when its window is made,
     and shows it in the controls of its ``place`` ("creation", "sculpture", "observation");
     ``app`` is a :class:`sketchforge.qt.panel_api.AppContext`. Only the app calls ``create``,
-    so a plugin imports Qt inside it and stays usable headless. The animation panel (plugin
-    ``animate``) and the sculpt panel (plugin ``isophote_tool``) come through this hook.
+    so a plugin imports Qt inside it and stays usable headless. Panels of one place are shown
+    in ``order``; ``available(host)`` false leaves one out; a ``create`` that raises (or returns
+    no QWidget) is named with its plugin in the status bar and the log and left out, and the
+    app starts without it. The animation panel (plugin ``animate``) and the isophote tool's
+    SCULPTURE controls (plugin ``isophote_tool``) come through this hook.
     """
 

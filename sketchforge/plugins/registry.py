@@ -43,7 +43,8 @@ class Panel:
     a module it imports): the rest of the plugin stays importable without Qt. ``place`` is
     where it shows (:data:`PANEL_PLACES`); ``order`` sorts panels of one place (lower first).
     ``available(host)`` (optional) says whether to build it at all (e.g. only when the
-    plugin's commands are registered)."""
+    plugin's commands are registered). A ``create`` that raises, or returns something that is
+    not a QWidget, is named with its plugin in the status bar and left out."""
 
     name: str
     place: str

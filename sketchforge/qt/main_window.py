@@ -13,6 +13,7 @@ says which step was running and recovers the work without it.
 
 from __future__ import annotations
 
+import logging
 from pathlib import Path
 
 import numpy as np
@@ -50,12 +51,15 @@ from sketchforge.qt.panels.layers_panel import LayersPanel
 from sketchforge.qt.panels.light_panel import LightPanel
 from sketchforge.qt.panels.mode_panel import ModePanel
 from sketchforge.qt.panels.sculpt_panel import SculptPanel
+from sketchforge.qt.panel_api import AppContext
 from sketchforge.qt.sculpt import SculptController
 from sketchforge.qt.shortcuts import HelpOverlay
 from sketchforge.qt.view3d import View3D
 from sketchforge.qt.workers import JobRunner
 from sketchforge.tools import DrawContourTool
 from sketchforge.tools.draw import closes, layer_outlines, plan_stroke
+
+log = logging.getLogger("sketchforge.qt")
 
 FILE_FILTER = "sketchforge documents (*.json *.sketchforge);;All files (*)"
 MAX_RECENT = 8
@@ -115,6 +119,7 @@ class MainWindow(QMainWindow):
         self._pending_strokes: list[tuple] = []
 
         self._build_widgets()
+        self._build_plugin_panels()
         self._build_menus()
         self._build_tool_palette()
         self._build_status_bar()
@@ -137,9 +142,13 @@ class MainWindow(QMainWindow):
         status-bar line naming them; the details went to the log and stderr."""
         skipped = dict(getattr(self.host, "skipped", {}) or {})
         problems = list(getattr(self.host, "problems", []) or [])
+        lines = []
         if skipped or problems:
             names = ", ".join(sorted(skipped)) or "none disabled"
-            self.show_message(f"plugin problems ({names}): {problems[0] if problems else next(iter(skipped.values()))}")
+            lines.append(f"plugin problems ({names}): {problems[0] if problems else next(iter(skipped.values()))}")
+        lines += self.panel_problems
+        if lines:
+            self.show_message("; ".join(lines))
 
     def _autosave(self) -> None:
         """Timer tick. A failure (full disk, a file where the data folder should be) is shown
@@ -212,26 +221,6 @@ class MainWindow(QMainWindow):
         return True
 
     # --- construction ---------------------------------------------------------------------------
-    def _build_animation(self, layout):
-        """Pins, posing and playback (sketchforge.qt.animation), when the animate plugin is
-        installed; None otherwise."""
-        if "add_pin" not in self.host.commands.names():
-            return None
-        from sketchforge.qt.animation import AnimationController, AnimationPanel, PinInteraction
-
-        ctl = AnimationController(self.doc, lambda cmd: self.runner.run(cmd, label="Animating"), self)
-        panel = AnimationPanel(ctl)
-        layout.addWidget(panel)
-        pins = PinInteraction(self.view3d, ctl, panel)
-        ctl.message.connect(self.show_message)
-
-        def shown(mesh):
-            ctl.set_mesh(mesh)
-            pins.install()
-
-        self.view3d.assembled_shown.connect(shown)
-        return ctl
-
     def _build_widgets(self) -> None:
         doc = self.doc
         self.canvas = Canvas(doc, self.host)
@@ -245,10 +234,13 @@ class MainWindow(QMainWindow):
         self.creation_panel = CreationPanel()
         self.creation_panel.set_shaders(self.host.shaders.keys(), self.canvas.shader_name)
         self.sculpt_panel = SculptPanel()
-        self.sculpt_panel.set_models(self.host.reflectance_models.keys())
         self.light_panel = LightPanel()
+        self.creation_page = QWidget()
+        creation_lay = QVBoxLayout(self.creation_page)
+        creation_lay.setContentsMargins(0, 0, 0, 0)
+        creation_lay.addWidget(self.creation_panel)
         self.controls = QStackedWidget()
-        self.controls.addWidget(self.creation_panel)
+        self.controls.addWidget(self.creation_page)
         self.controls.addWidget(self.sculpt_panel)
         self.observe_note = QLabel("OBSERVATION: drag to orbit, wheel to zoom.\nThe left menu switches between the assembled model and each layer's mesh.")
         self.observe_note.setWordWrap(True)
@@ -257,8 +249,7 @@ class MainWindow(QMainWindow):
         observe_lay = QVBoxLayout(self.observe_page)
         observe_lay.setContentsMargins(0, 0, 0, 0)
         observe_lay.addWidget(self.observe_note)
-        self.animation = self._build_animation(observe_lay)
-        observe_lay.addStretch(1)
+        observe_lay.addStretch(1)  # plugin panels go above it (_build_plugin_panels)
         self.controls.addWidget(self.observe_page)
         top = QWidget()
         top_lay = QVBoxLayout(top)
@@ -300,6 +291,46 @@ class MainWindow(QMainWindow):
         self.sculpt = SculptController(doc, self.host, self.canvas, self.runner)
         self.canvas.sculpt = self.sculpt
         self.help_overlay = HelpOverlay(self.center)
+
+    def _build_plugin_panels(self) -> None:
+        """The plugins' panels (``host.qt_panels``), each built once with the window's
+        :class:`AppContext` and shown in the controls of its place, sorted by ``order``. One
+        whose ``available(host)`` is false is left out; one whose ``available`` or ``create``
+        raises (or whose ``create`` returns no widget) is named with its plugin in the status
+        bar and the log and left out: the window starts without it."""
+        self.app_context = AppContext(doc=self.doc, host=self.host, canvas=self.canvas, view3d=self.view3d,
+                                      sculpt=self.sculpt, runner=self.runner, show_message=self.show_message,
+                                      parent=self)
+        #: {panel name: its widget}
+        self.plugin_panels: dict[str, QWidget] = {}
+        #: one line per panel left out because it failed
+        self.panel_problems: list[str] = []
+        observe = self.observe_page.layout()
+        places = {
+            "creation": self.creation_page.layout().addWidget,
+            "sculpture": self.sculpt_panel.add_panel,
+            "observation": lambda w: observe.insertWidget(observe.count() - 1, w),  # above the stretch
+        }
+        for panel in sorted(self.host.qt_panels.values(), key=lambda p: (p.order, p.name)):
+            who = self.host.provider_of(panel)
+            try:
+                if panel.available is not None and not panel.available(self.host):
+                    continue
+                widget = panel.create(self.app_context)
+                if not isinstance(widget, QWidget):
+                    raise TypeError(f"create must return a QWidget, got {type(widget).__name__}")
+            except Exception as exc:  # noqa: BLE001 - a plugin's code must not stop the app
+                text = f"panel {panel.name!r} (plugin {who!r}) left out: {type(exc).__name__}: {exc}"
+                log.warning("%s", text, exc_info=True)
+                self.panel_problems.append(text)
+                continue
+            places[panel.place](widget)
+            self.plugin_panels[panel.name] = widget
+        # The pages are hidden: without this the splitter would size the controls column
+        # from their size before the panels were added.
+        for page in (self.creation_page, self.sculpt_panel, self.observe_page):
+            page.layout().activate()
+        self.controls.updateGeometry()
 
     def _action(self, menu, text, slot, shortcut=None, checkable=False) -> QAction:
         act = QAction(text, self)
@@ -458,10 +489,6 @@ class MainWindow(QMainWindow):
         self.creation_panel.isolines_changed.connect(
             lambda k: self.view3d.set_style(self.view3d.style, k) if k > 0 else None
         )
-        self.sculpt_panel.radius_changed.connect(self.sculpt.set_radius)
-        self.sculpt_panel.show_changed.connect(lambda s, r: self.sculpt.set_show(s, r))
-        self.sculpt_panel.preview_changed.connect(self.sculpt.set_preview)
-        self.sculpt_panel.model_changed.connect(self._model_changed)
         self.sculpt_panel.tool_selected.connect(self.select_tool)
         self.light_panel.angle_edited.connect(self.set_light_angle)
 
@@ -566,6 +593,7 @@ class MainWindow(QMainWindow):
             self.view3d.deactivate()
             self.center.setCurrentWidget(self.canvas)
             self.set_state(self.state)
+        self.app_context._set_mode(self.mode, self.state)
         self._focus_center()
 
     def _focus_center(self) -> None:
@@ -583,21 +611,19 @@ class MainWindow(QMainWindow):
 
     def set_state(self, state: str) -> None:
         self.state = state
+        self.app_context._set_mode(self.mode, self.state)
         for b, on in ((self.modes.creation, state == "creation"), (self.modes.sculpture, state == "sculpture")):
             b.blockSignals(True)
             b.setChecked(on)
             b.blockSignals(False)
         if self.mode != "editing":
             return
-        self.controls.setCurrentWidget(self.creation_panel if state == "creation" else self.sculpt_panel)
+        self.controls.setCurrentWidget(self.creation_page if state == "creation" else self.sculpt_panel)
         self._apply_interaction()
         if state == "sculpture":
             self.sculpt.reset()
             self.sculpt_panel.show_state(self.sculpt)
         self._focus_center()
-
-    def _model_changed(self, name: str) -> None:
-        self.sculpt.set_options({} if name == "lambertian" else {"model": name})
 
     def _light_toggled(self, on: bool) -> None:
         self.act_light.setChecked(on)
@@ -999,8 +1025,8 @@ class MainWindow(QMainWindow):
         try:
             refuse_input_as_output(path, [self.path], "export")  # never over the open document
             exporter = self.host.exporter_for(path, self.doc)
-            if exporter.write_document is not None:  # an animation: seconds of solving
-                from sketchforge.qt.animation import export_document_in_background
+            if exporter.write_document is not None:  # a whole document (an animation): seconds of solving
+                from sketchforge.qt.document_export import export_document_in_background
 
                 return export_document_in_background(self, exporter, path)
             summary = self.host.export(path, mesh=self.doc.export_mesh())  # atomic, errors name the plugin
@@ -1058,21 +1084,18 @@ class MainWindow(QMainWindow):
 
     # --- background warm-up and closing ---------------------------------------------------------
     def start_warm_up(self) -> None:
-        """Compile the sculpt solver in the background, if the plugin offers ``warm_up``."""
-        try:
-            import sketchforge_isophote_tool as tool
-        except ImportError:
-            return
-        warm = getattr(tool, "warm_up", None)
-        if warm is None:
-            return
-        self.jobs.start(warm, lambda _r: self.show_message("sculpt solver ready"), lambda e, tb: None, label="Warming up", background=True)
+        """Run each tool's ``warm_up`` (compiling its solver) in the background."""
+        for cls in self.host.tools.values():
+            warm = getattr(cls, "warm_up", None)
+            if callable(warm):
+                label = getattr(cls, "label", "") or cls.name
+                self.jobs.start(warm, lambda _r, label=label: self.show_message(f"“{label}” is ready"),
+                                lambda e, tb: None, label="Warming up", background=True)
 
     def closeEvent(self, event) -> None:
         if getattr(self, "_closing_now", False) or self.maybe_save():
             self.runner.cancel()
-            if self.animation is not None:
-                self.animation.shutdown()
+            self.app_context.closing.emit()
             self._autosave_timer.stop()
             self.autosaver.discard()  # a normal close: nothing to recover next time
             event.accept()

@@ -43,9 +43,8 @@ def stage_sculpt(window, app) -> None:
         sc.stroke_release(stroke[-1])
         settle(window, app, timeout_s=300)
     # where the shading changed and where heights could change (dashed), and the
-    # characteristics through the stroke (the panel's two "show" boxes)
-    window.sculpt_panel.regions.setChecked(True)
-    window.sculpt_panel.strips.setChecked(True)
+    # characteristics through the stroke (the tool panel's two "show" boxes follow)
+    sc.set_show(strips=True, regions=True)
     settle(window, app)
 
 

@@ -1,4 +1,4 @@
-"""The SCULPTURE state's interaction (thesis figure 4.3), driving the isophote tool plugin.
+"""The SCULPTURE state's interaction (thesis figure 4.3), driving the chosen tool plugin.
 
 Click: pick the isophote under the mouse on the front-most visible layer there (white), and
 show the band around it (orange, dashed). Wheel or the panel's slider: band radius. Drag: the
@@ -7,16 +7,18 @@ preview of the edit is computed off the GUI thread (one at a time, always for th
 stroke: throttled by the solve itself, ~50 ms at 5k vertices) and the picked layer is shown
 with the previewed surface; Esc or a new pick drops it. A preview starts from the surface the
 release will edit (before the last attempt, when that is replaced), and one crash record
-covers a whole gesture's previews (not one disk write per mouse move). Release: a ``sculpt_isophote`` command
+covers a whole gesture's previews (not one disk write per mouse move). Release: the tool's command
 is built from (layer, pick, band radius, stroke), prepared off the GUI thread (progress +
 cancel in the status bar) and pushed. Drawing again after an attempt replaces it: the attempt
 is undone first, and redone if the new one fails. An edit that changes nothing reports the
 plugin's reason.
 
-The gesture's logic (pick, isophote, band, options, building the command) is the plugin's
-``SculptIsophoteTool`` (``host.tools["sculpt_isophote"]``); this controller only draws its
+The gesture's logic (pick, isophote, band, options, building the command) is the tool
+plugin's (the isophote tool's ``SculptIsophoteTool``); this controller only draws its
 ``overlay`` on the canvas, runs the command on a worker thread, replaces the last attempt and
-reports status. Without the plugin the panel says the tool is not installed.
+reports status. The tool's own controls (model, solver, band radius...) are the plugin's
+panel (``sketchforge_qt_panels``), which drives this controller. Without any tool plugin the
+panel says so.
 
 Any other registered tool (``host.tools``, chosen in the panel's tool palette or by its
 shortcut) is driven through the same plumbing: press/move/release in document coordinates,
@@ -36,8 +38,7 @@ from sketchforge.errors import SketchforgeError
 from sketchforge.qt.command_runner import end_guard
 from sketchforge.qt.render2d import polygon_rings
 
-TOOL_NAME = "sculpt_isophote"
-PLUGIN_MISSING = "isophote tool plugin not installed: isophotes cannot be picked or redrawn"
+PLUGIN_MISSING = "no sculpt tool is installed (no tool plugin): shapes cannot be sculpted here"
 #: Band radius limits, drawing units.
 MIN_RADIUS, MAX_RADIUS = 0.005, 2.0
 
@@ -94,7 +95,10 @@ class SculptController(QObject):
         self.last_info: dict = {}
         self._options: dict = {}
         tools = self._tools()
-        self.tool_name = TOOL_NAME if TOOL_NAME in tools or not tools else next(iter(tools))
+        # The first picking tool is the default (the richer protocol is what SCULPTURE is
+        # laid out for: pick, band, redraw); else the first tool; None without any.
+        picking = [name for name, cls in tools.items() if is_picking_tool(cls)]
+        self.tool_name = (picking or list(tools) or [None])[0]
         self._proxy = None
         self.tool = self._make_tool()
         self._preview_job = None  # the job in flight (never cancelled: its native code runs on)
@@ -318,6 +322,7 @@ class SculptController(QObject):
         self.live_preview = bool(on)
         if not on:
             self.stop_preview()
+        self.changed.emit()
 
     def _base_mesh(self):
         """The surface a release will edit: before the last attempt when that is replaced."""
@@ -497,6 +502,7 @@ class SculptController(QObject):
         if regions is not None:
             self.show_regions = regions
         self._show_debug()
+        self.changed.emit()
 
     def _show_debug(self) -> None:
         """Characteristics and regions of the last edit, from the plugin command's ``result``

@@ -16,6 +16,9 @@ class Tool:
     #: Unique registry name and menu label.
     name: ClassVar[str] = ""
     label: ClassVar[str] = ""
+    #: Optional zero-argument callable doing slow one-time work ahead of the first gesture
+    #: (compiling a solver); the app runs it on a background thread at start.
+    warm_up: ClassVar = None
 
     def __init__(self, doc) -> None:
         self.doc = doc

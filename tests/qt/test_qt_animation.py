@@ -26,7 +26,7 @@ def settle(ctl, qtbot):
 
 @pytest.fixture
 def ctl(qtbot, host):
-    from sketchforge.qt.animation import AnimationController
+    from sketchforge_animate.qt import AnimationController
 
     doc = Document(host=host)
     doc.execute({"command": "add_layer", "id": "body", "name": "Body"})
@@ -101,7 +101,7 @@ def test_window_exports_the_animation_off_the_gui_thread(make_window, host, qtbo
     wave = [(right + [0.0, 0.2 * np.sin(2 * np.pi * k / 12), 0.0]).tolist() for k in range(12)]
     doc.execute({"command": "record_motion", "pin": "b", "start": 0, "samples": wave})
     w = make_window(doc)
-    assert w.animation is not None  # the panel is there when the plugin is installed
+    assert "animation" in w.plugin_panels  # the panel is there when the plugin is installed
     out = tmp_path / "a.glb"
     assert w.export_to(out)
     qtbot.waitUntil(lambda: not w.jobs.running(), timeout=60000)
@@ -137,7 +137,8 @@ from sketchforge_animate import Animation
 from sketchforge_animate.picking import project
 w.set_mode("observation")
 settle(w, app)
-ctl = w.animation
+panel = w.plugin_panels["animation"]
+ctl = panel.c
 
 def wait_pose(timeout=90):
     t = time.monotonic()
@@ -154,7 +155,6 @@ def wait_pose(timeout=90):
 
 wait_pose()
 assert w.view3d.model_item is not None
-panel = [c for c in w.observe_page.children() if type(c).__name__ == "AnimationPanel"][0]
 inter = [c for c in w.view3d.children() if type(c).__name__ == "PinInteraction"][0]
 panel.pins.setChecked(True)
 gl = w.view3d.gl

@@ -46,7 +46,7 @@ def test_pick_shows_the_isophote_and_band_and_the_wheel_changes_the_radius(make_
     r = w.sculpt.radius
     m.wheel((0.35, 0.1), 2)
     assert w.sculpt.radius > r
-    assert abs(w.sculpt_panel.spin.value() - w.sculpt.radius) < 1e-3
+    assert abs(w.plugin_panels["isophote_sculpt"].spin.value() - w.sculpt.radius) < 1e-3
     assert w.doc.undo_stack.count() == 0  # picking edits nothing
 
 
@@ -58,7 +58,7 @@ def test_pick_and_stroke_equal_the_headless_command(make_window, mouse, qtbot, h
     w = make_window(doc)
     w.canvas.fit()
     w.modes.sculpture.setChecked(True)
-    w.sculpt_panel.spin.setValue(0.15)
+    w.plugin_panels["isophote_sculpt"].spin.setValue(0.15)
     m = mouse(w.canvas)
     pick_px, pick = m.aim((0.3, 0.05))
     m.click_pixel(pick_px)
@@ -93,7 +93,7 @@ def _picked(make_window, mouse, host):
     w = make_window(ellipse_doc(host))
     w.canvas.fit()
     w.modes.sculpture.setChecked(True)
-    w.sculpt_panel.spin.setValue(0.15)
+    w.plugin_panels["isophote_sculpt"].spin.setValue(0.15)
     m = mouse(w.canvas)
     m.click_pixel(m.aim((0.3, 0.05))[0])
     return w, m

@@ -33,7 +33,7 @@ def test_plugin_brush_runs_through_the_sculpt_plumbing(make_window, mouse, qtbot
     w.canvas.fit()
     w.tool_actions["bump_brush"].trigger()  # the Tools menu / Shift+B
     assert w.state == "sculpture" and w.sculpt.tool_name == "bump_brush" and not w.sculpt.picking
-    assert w.sculpt_panel.tool.currentData() == "bump_brush" and not w.sculpt_panel.spin.isEnabled()
+    assert w.sculpt_panel.tool.currentData() == "bump_brush" and not w.plugin_panels["isophote_sculpt"].spin.isEnabled()
 
     busy = []
     w.runner.busy_changed.connect(busy.append)
@@ -150,3 +150,42 @@ def test_a_plugin_command_that_fails_on_the_worker_names_its_plugin(qtbot, tmp_p
     wait_idle(qtbot, w)
     assert "command 'crash_brush' (from plugin 'plugin-1-CrashPlugin') failed: ZeroDivisionError" in w.sculpt.status
     assert doc.layer("a") is before and doc.undo_stack.count() == 2
+
+
+def test_each_tool_with_a_warm_up_is_warmed_up_in_the_background(qtbot, tmp_path, dialogs):
+    """What the isophote tool's JAX compilation uses: the window runs a tool's ``warm_up`` on a
+    worker at start (the app calls start_warm_up) and says when it is done."""
+    import threading
+
+    from PySide6.QtCore import QSettings
+
+    from sketchforge.document.document import Document
+    from sketchforge.plugin_api import Tool, hookimpl
+    from sketchforge.plugins.testing import FanInflater, make_test_host
+    from sketchforge.qt.main_window import MainWindow
+
+    threads = []
+
+    class SlowTool(Tool):
+        name, label = "slow_brush", "Slow brush"
+
+        @staticmethod
+        def warm_up():
+            threads.append(threading.current_thread() is threading.main_thread())
+
+    class ColdTool(Tool):
+        name, label = "cold_brush", "Cold brush"  # no warm_up: nothing to run
+
+    class Tools:
+        @hookimpl
+        def sketchforge_tools(self):
+            return [SlowTool, ColdTool]
+
+    host = make_test_host(FanInflater(), Tools())
+    w = MainWindow(Document(host=host), host=host, settings=QSettings(str(tmp_path / "s.ini"), QSettings.Format.IniFormat))
+    qtbot.addWidget(w)
+    w.start_warm_up()
+    wait_idle(qtbot, w)
+    assert threads == [False]  # once, off the GUI thread
+    assert w.statusBar().currentMessage() == "“Slow brush” is ready"
+    w.close_now()

@@ -24,3 +24,16 @@ def sketchforge_pose(doc, frame):
     from .export import pose_document
 
     return pose_document(doc, frame)
+
+
+@hookimpl
+def sketchforge_qt_panels():
+    from sketchforge.plugins.registry import Panel
+
+    return [Panel("animation", "observation", _create_panel, label="Animation")]
+
+
+def _create_panel(app):
+    from .qt import create_panel  # Qt: imported only by the app, when it builds its panels
+
+    return create_panel(app)

@@ -17,7 +17,14 @@ from typing import ClassVar
 
 import numpy as np
 
-from sketchforge.document.commands import ReplaceLayerCommand, parse_field, parse_params, parse_points, parse_vector
+from sketchforge.document.commands import (
+    ReplaceLayerCommand,
+    parse_field,
+    parse_params,
+    parse_points,
+    parse_vector,
+    transform_points,
+)
 from sketchforge.document.layer import Layer
 from sketchforge.errors import DocumentFormatError, NothingToDoError, SculptError
 from sketchforge.geometry.contour import MAX_COORDINATE
@@ -120,6 +127,32 @@ class SculptIsophote(ReplaceLayerCommand):
             solver=parse_field(d, "solver", str, cls.name, None),
             params=parse_params(d, cls.name),
         )
+
+    @classmethod
+    def transform_edit(cls, entry: dict, matrix, scale: float) -> dict:
+        """The edit after its layer was mapped by ``matrix`` (2, 3): where it was drawn
+        (``pick``, ``stroke``) follows the part; the band radius scales with the part's size
+        (``scale``); the light the edit was shaped by turns with it. A pure move adds the
+        offset only (the band and light stay as they are, bit for bit)."""
+        A = np.asarray(matrix, dtype=np.float64)
+        L = A[:, :2]
+        moved_only = bool(np.array_equal(L, np.eye(2)))
+        e = dict(entry)
+        if isinstance(e.get("pick"), list) and len(e["pick"]) >= 2:
+            q = transform_points(A, np.asarray(e["pick"][:2], dtype=np.float64))[0]
+            e["pick"] = [float(q[0]), float(q[1]), *e["pick"][2:]]
+        if isinstance(e.get("stroke"), list):
+            e["stroke"] = transform_points(A, e["stroke"]).tolist()
+        if not moved_only and isinstance(e.get("band"), (int, float)) and not isinstance(e.get("band"), bool):
+            e["band"] = float(e["band"]) * scale
+        light = e.get("light")
+        if not moved_only and isinstance(light, list) and len(light) >= 2:
+            # A direction: turned by the linear part and renormalised (a scale or a shear
+            # must not change its length).
+            v = L @ np.asarray(light[:2], dtype=np.float64)
+            v = v / max(float(np.hypot(v[0], v[1])), 1e-300)
+            e["light"] = [float(v[0]), float(v[1]), *light[2:]]
+        return e
 
     @classmethod
     def reapply(cls, doc, layer: Layer, entry: dict) -> Layer:

@@ -24,3 +24,16 @@ def sketchforge_tools():
     from .tool import SculptIsophoteTool
 
     return [SculptIsophoteTool]
+
+
+@hookimpl
+def sketchforge_qt_panels():
+    from sketchforge.plugins.registry import Panel
+
+    return [Panel("isophote_sculpt", "sculpture", _create_panel, label="Isophote sculpt", order=10)]
+
+
+def _create_panel(app):
+    from .qt import create_panel  # Qt: imported only by the app, when it builds its panels
+
+    return create_panel(app)

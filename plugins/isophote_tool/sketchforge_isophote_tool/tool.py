@@ -84,6 +84,14 @@ class SculptIsophoteTool(Tool):
     name = "sculpt_isophote"
     label = "Redraw isophote"
 
+    @staticmethod
+    def warm_up() -> None:
+        """Compile the reflectance evaluation every edit calls (the app runs this in the
+        background at start, so the first stroke does not wait ~0.3 s for JAX)."""
+        from .warmup import warm_up
+
+        warm_up()
+
     def __init__(self, doc, layer: str | None = None, band: float = 0.3, options: dict | None = None) -> None:
         super().__init__(doc)
         #: Restrict picks to this layer id (None: the front-most visible layer under the point).

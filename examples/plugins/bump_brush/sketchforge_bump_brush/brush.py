@@ -19,6 +19,7 @@ from sketchforge.plugin_api import (
     SculptError,
     parse_field,
     parse_vector,
+    transform_points,
 )
 
 #: Largest |height| and radius accepted from a journal (drawing units).
@@ -79,6 +80,19 @@ class BumpBrush(ReplaceLayerCommand):
         cmd = cls.from_dict(entry)
         mesh = bump(layer.mesh, cmd.center, cmd.radius, cmd.height)
         return layer.evolve(mesh=mesh, edits=tuple(layer.edits) + (dict(entry),))
+
+    @classmethod
+    def transform_edit(cls, entry: dict, matrix, scale: float) -> dict:
+        # The layer was moved, scaled or rotated: the bump follows it (its centre mapped, its
+        # radius and height scaled like the part), so a later re-inflation re-applies it where
+        # it now is. A shear would make its footprint an ellipse; it stays round, of the mean
+        # radius.
+        e = dict(entry)
+        c = transform_points(matrix, np.asarray(e["center"], dtype=np.float64))[0]
+        e["center"] = [float(c[0]), float(c[1])]
+        e["radius"] = float(e["radius"]) * scale
+        e["height"] = float(e["height"]) * scale
+        return e
 
     def to_dict(self) -> dict:
         return {

@@ -76,3 +76,24 @@ def test_bad_journal_fields_are_one_line_errors(doc):
     with pytest.raises(NothingToDoError, match="brush over the shape"):
         doc.execute(bump_entry(center=[5.0, 5.0]))
     assert doc.undo_stack.index == 2  # nothing was recorded
+
+
+@pytest.mark.parametrize("matrix", [[[1.0, 0.0, 2.0], [0.0, 1.0, 0.5]], [[0.0, -2.0, 0.25], [2.0, 0.0, 0.0]]],
+                         ids=["move", "turn and double"])
+def test_a_moved_bump_is_reapplied_where_the_part_now_is(doc, make_sketchforge_document, matrix):
+    """Through transform_edit: after transform_layer a re-inflation puts the bump on the moved
+    part, exactly as on a part drawn there with the bump drawn there (scaled with it)."""
+    doc.execute(bump_entry())
+    doc.execute({"command": "transform_layer", "layer": "a", "matrix": matrix})
+    edit = doc.layer("a").edits[0]
+    A = np.array(matrix)
+    s = np.sqrt(np.linalg.det(A[:, :2]))
+    assert np.allclose(edit["center"], A[:, :2] @ [0.1, 0.0] + A[:, 2], rtol=0, atol=1e-15)
+    assert edit["radius"] == pytest.approx(0.4 * s) and edit["height"] == pytest.approx(0.2 * s)
+    doc.execute({"command": "set_inflate_params", "layer": "a", "params": {"inflation": 1.5}})
+
+    there = make_sketchforge_document(doc.host, contour=doc.layer("a").points)
+    there.execute({"command": "set_inflate_params", "layer": "a", "params": {"inflation": 1.5}})
+    there.execute(bump_entry(center=edit["center"], radius=edit["radius"], height=edit["height"]))
+    assert doc.layer("a").points.tobytes() == there.layer("a").points.tobytes()
+    assert doc.layer("a").mesh.identical(there.layer("a").mesh)
