@@ -99,6 +99,9 @@ class SculptSolver:
     description: str = ""
     #: Shown in the app's sculpt panel ("" : the name).
     label: str = ""
+    #: Optional ``warm_up()``: compile or build what the first solve would (the app calls it
+    #: on a worker thread when the person chooses the solver).
+    warm_up: Callable | None = None
 
 
 @dataclass(frozen=True)

@@ -20,7 +20,7 @@ Rules the rest of the app keeps too: a panel changes the document only through c
 
 from __future__ import annotations
 
-from typing import Callable
+from typing import Any, Callable
 
 from PySide6.QtCore import QObject, Signal
 
@@ -130,6 +130,17 @@ class AppContext(QObject):
             self.show_message(BUSY)
             return False
         return self._runner.run(command, label=label, on_done=on_done, on_error=on_error)
+
+    def background(self, fn: Callable[[], Any], label: str, on_done: Callable | None = None) -> None:
+        """Run ``fn()`` on a worker thread without progress indicator (a warm-up, such as a
+        solver compiling ahead of its first use); ``on_done(result)`` on the GUI thread. A
+        failure is only logged: nothing waits for it."""
+        import logging
+
+        def failed(exc, tb):
+            logging.getLogger("sketchforge.qt").warning("%s failed: %s", label, exc)
+
+        self._runner.jobs.start(fn, on_done or (lambda _r: None), failed, label=label, background=True)
 
     def show_message(self, text: str) -> None:
         """One line in the status bar (it fades after a few seconds)."""

@@ -140,14 +140,21 @@ def test_without_the_animate_plugin_there_is_no_animation_panel(qtbot, tmp_path,
 
 
 # --- the isophote tool's panel: the solver choice --------------------------------------------
+#: Threads a solver's warm-up ran on (the panel starts it when the solver is chosen).
+WARMED: list = []
+
+
 class FakeSolver:
-    """A second sculpt solver: Gauss-Newton's work under another name."""
+    """A second sculpt solver: Gauss-Newton's work under another name, with a warm-up."""
 
     @hookimpl
     def sketchforge_sculpt_solvers(self):
+        import threading
+
         from sketchforge_isophote_tool import GAUSS_NEWTON
 
-        return [SculptSolver("fake", GAUSS_NEWTON.solve, GAUSS_NEWTON.check_params, label="Fake (test)")]
+        return [SculptSolver("fake", GAUSS_NEWTON.solve, GAUSS_NEWTON.check_params, label="Fake (test)",
+                             warm_up=lambda: WARMED.append(threading.current_thread()))]
 
 
 def test_the_solver_chosen_in_the_sculpt_panel_is_in_the_next_sculpt_command(qtbot, tmp_path, dialogs):
@@ -169,6 +176,11 @@ def test_the_solver_chosen_in_the_sculpt_panel_is_in_the_next_sculpt_command(qtb
     panel.model.setCurrentText("soft_lambert")
     combo.setCurrentIndex(combo.findData("fake"))
     assert tool.options == {"model": "soft_lambert", "solver": "fake"}
+    # choosing it warmed it up, once, off the GUI thread
+    import threading
+
+    qtbot.waitUntil(lambda: len(WARMED) == 1, timeout=10_000)
+    assert WARMED[0] is not threading.main_thread()
     combo.setCurrentIndex(combo.findData("gauss_newton"))
     assert tool.options == {"model": "soft_lambert"}
     combo.setCurrentIndex(combo.findData("fake"))

@@ -128,3 +128,20 @@ def integrate_strips(seeds: np.ndarray, coeffs: np.ndarray, origin: np.ndarray, 
     ys = np.array(ys)
     ys[~np.isfinite(ys).all(axis=2)] = np.nan  # a strip cut off at MAX_STEPS: its later samples
     return ys[:k], ys[k:2 * k], np.asarray(steps)[:2 * k]
+
+
+#: The (strips, saved points) shapes a typical edit uses (a stroke up to ~120 edge lengths
+#: across the flow, a layer up to ~170 edge lengths across): compiled by :func:`warm_up`.
+WARM_SHAPES = ((32, 256), (128, 256), (128, 1024))
+
+
+def warm_up(integrator: str = "tsit5", rtol: float = 1e-6, atol: float = 1e-9) -> None:
+    """Compile the strip integration for :data:`WARM_SHAPES` (2–6 s each on first use), so the
+    first ``strips`` edit of a session does not wait for it. Any layer reuses them: the
+    field's size is fixed and its origin, spacing and the strips' length are arguments."""
+    from .field import GRID_SIZE
+
+    coeffs = np.zeros((GRID_SIZE, GRID_SIZE, 4))
+    coeffs[:, :, 0] = -1.0  # a uniform flow, mask 0: every strip stops at once
+    for strips, saved in WARM_SHAPES:
+        integrate_strips(np.zeros((strips, 2)), coeffs, np.zeros(2), 1.0 / GRID_SIZE, 1.0, saved, integrator, rtol, atol)

@@ -297,12 +297,21 @@ def _info(T: dict, seeds: np.ndarray, samples: int, steps0, steps) -> dict:
     }
 
 
+def warm_up() -> None:
+    """Compile the default integrator's strip functions ahead of the first edit."""
+    from .integrate import warm_up as compile_strips
+
+    d = DEFAULT_PARAMS
+    compile_strips(d["integrator"], d["rtol"], d["atol"])
+
+
 STRIPS = SculptSolver(
     "strips",
     solve,
     check_params=check_params,
     version=VERSION,
     label="Strips (thesis)",
+    warm_up=warm_up,
     description="the thesis' method: characteristic strips from the stroke integrated with diffrax, "
                 "heights by multiquadric RBF, the change carried downstream to the rim",
 )

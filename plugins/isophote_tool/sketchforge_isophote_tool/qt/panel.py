@@ -65,6 +65,7 @@ class IsophoteSculptPanel(QWidget):
         form.addRow(self.regions)
 
         self._updating = False
+        self._warmed: set = set()
         self._default_solver = self._fill_solvers()
         self._fill_models()
         c = app.sculpt
@@ -124,10 +125,23 @@ class IsophoteSculptPanel(QWidget):
             return
         c = self.app.sculpt
         wanted = self.options()
+        self._warm(self.solver.currentData())
         c.set_options(wanted)  # a refusal (an unknown model, say) goes to the status bar
         tool = c.tool if c.tool_name == SculptIsophoteTool.name else None
         if tool is not None and getattr(tool, "options", wanted) != wanted:
             self._show_options(tool.options)  # refused: show what the tool still uses
+
+    def _warm(self, name) -> None:
+        """A solver that compiles ahead (the strips' JAX functions: seconds on first use) does
+        it in the background as soon as it is chosen, once."""
+        if not name or name in self._warmed:
+            return
+        self._warmed.add(name)
+        solver = dict(self.app.host.solvers("sculpt")).get(name)
+        warm = getattr(solver, "warm_up", None)
+        if callable(warm):
+            label = getattr(solver, "label", "") or name
+            self.app.background(warm, f"Preparing {label}", lambda _r: self.app.show_message(f"“{label}” is ready"))
 
     def _show_options(self, options: dict) -> None:
         self._updating = True
