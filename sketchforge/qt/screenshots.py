@@ -1,6 +1,7 @@
 """Screenshots of the app for the docs: ``python -m sketchforge.qt.screenshots DOC OUTDIR``.
 
-Writes ``editing.png`` and ``sculpt.png`` (these need no OpenGL: run with
+Writes ``editing.png``, ``sculpt.png`` and, with the strips plugin installed,
+``sculpt-strips.png`` (the same edit by the ``strips`` solver; these need no OpenGL: run with
 ``QT_QPA_PLATFORM=offscreen``) and, where OpenGL works (``xvfb-run -a`` with
 ``QT_QPA_PLATFORM=xcb``), ``observation.png``. ``sketchforge --screenshot`` is the same path for
 one mode; the sculpt screenshot stages an isophote edit on the document's largest layer like a
@@ -93,6 +94,18 @@ def main(argv=None) -> int:
     grab_window(w, out / "sculpt.png")
     print(f"wrote {out / 'sculpt.png'}", file=sys.stderr)
     w.close_now()
+    if "strips" in host.solvers("sculpt"):
+        # The same edit with the thesis' solver, chosen in the panel as a person would.
+        w = window_on_doc()
+        w.set_mode("sculpture")
+        panel = w.plugin_panels.get("isophote_sculpt")
+        combo = getattr(panel, "solver", None)
+        if combo is not None and combo.findData("strips") >= 0:
+            combo.setCurrentIndex(combo.findData("strips"))
+            stage_sculpt(w, app)
+            grab_window(w, out / "sculpt-strips.png")
+            print(f"wrote {out / 'sculpt-strips.png'}", file=sys.stderr)
+        w.close_now()
     return 0
 
 

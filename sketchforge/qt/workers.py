@@ -50,9 +50,18 @@ class Job(QRunnable):
             else:
                 result = self.fn()
         except BaseException as exc:  # noqa: BLE001 - reported to the GUI thread
-            self.signals.failed.emit(exc, traceback.format_exc())
+            self._report(self.signals.failed, exc, traceback.format_exc())
         else:
-            self.signals.finished.emit(result)
+            self._report(self.signals.finished, result)
+
+    @staticmethod
+    def _report(signal, *args) -> None:
+        # A background job (a solver's warm-up) may outlive its window: its signals are then
+        # gone with it, and there is nobody left to tell.
+        try:
+            signal.emit(*args)
+        except RuntimeError:
+            pass
 
 
 class JobRunner(QObject):

@@ -224,7 +224,11 @@ def solve(problem: SculptProblem, params: dict) -> SculptSolution:
     # Laplacian there with everything else fixed, so the edit joins C¹ (failure analysis 2a,
     # 4a). Ramping the shift down across the rim margin, or scaling the old heights there,
     # left a fold: a shading jump across one edge 4–14× the fresh layer's after ten edits.
-    zone = interior & ((in_S & (problem.d_rim < problem.rim_margin + 3.0 * h)) | (ring & (d_S <= near + 2.0 * h)))
+    # The rim zone: the margin and as much again inside it (at most 2h): on a thin limb, whose
+    # margin is one edge length, a wider zone would take in the whole limb and fill away the
+    # strips' answer.
+    rim_zone = problem.d_rim < problem.rim_margin + np.minimum(2.0 * h, problem.rim_margin)
+    zone = interior & ((in_S & rim_zone) | (ring & (d_S <= near + 2.0 * h)))
     dz = _smooth_fill(problem.Q, dz, zone)
     dz[problem.is_rim] = 0.0
     T["rbf"] = time.perf_counter() - t
