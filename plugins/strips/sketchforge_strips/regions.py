@@ -70,11 +70,13 @@ def flux_seeds(curve: np.ndarray, flow_at, spacing: float, sample: float) -> np.
     return np.column_stack([np.interp(at, s, curve[:, 0]), np.interp(at, s, curve[:, 1])])
 
 
-def triangles_region(V2: np.ndarray, F: np.ndarray, mask: np.ndarray, touching: bool = False):
+def triangles_region(V2: np.ndarray, F: np.ndarray, mask: np.ndarray, touching: bool = False, smooth: float = 0.0):
     """The union (shapely) of the triangles with all three vertices in ``mask`` (n,) bool (with
-    ``touching``: any of them), for display ("show edit region"); empty geometry when none."""
+    ``touching``: any of them), for display ("show edit region"); empty geometry when none.
+    ``smooth`` > 0 closes and opens it by that distance, so its outline is not a staircase of
+    triangle edges."""
     keep = mask[F].any(axis=1) if touching else mask[F].all(axis=1)
     if not keep.any():
         return shapely.GeometryCollection()
-    tris = shapely.polygons(V2[F[keep]])
-    return shapely.union_all(tris).buffer(0)
+    region = shapely.union_all(shapely.polygons(V2[F[keep]])).buffer(0)
+    return region.buffer(smooth, quad_segs=4).buffer(-smooth, quad_segs=4) if smooth > 0 else region

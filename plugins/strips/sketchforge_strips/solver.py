@@ -237,8 +237,8 @@ def solve(problem: SculptProblem, params: dict) -> SculptSolution:
     changed = np.abs(dz) > 1e-9 * max(float(np.abs(problem.z).max()), 1e-300)
     return SculptSolution(
         dz, dE,
-        shading_region=lambda: triangles_region(V2, F, free),
-        height_region=lambda: triangles_region(V2, F, changed, touching=True),
+        shading_region=lambda: triangles_region(V2, F, free, smooth=h),
+        height_region=lambda: triangles_region(V2, F, changed, touching=True, smooth=h),
         curves=curves,
         info={**_info(T, seeds, len(X), steps0, steps), "reach": float(np.max(d_s[changed], initial=r))},
     )
