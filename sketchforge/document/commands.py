@@ -29,6 +29,7 @@ from sketchforge.errors import (
     ParameterError,
     SketchforgeError,
     SolverError,
+    quote,
 )
 
 _gesture_ids = itertools.count(1)
@@ -190,7 +191,10 @@ class AddLayer(Command):
         if self.id is None:
             self.id = doc.new_layer_id()
         if self.id in doc.layer_ids():
-            raise ParameterError(f"a layer with id {self.id!r} already exists")
+            raise ParameterError(f"a layer with id {quote(self.id)} already exists")
+        from sketchforge.document.document import check_layer_count
+
+        check_layer_count(doc)
         if self.layer_name is None:
             self.layer_name = self.id.replace("_", " ").capitalize()
         n = len(doc.layers)
@@ -577,7 +581,10 @@ class DuplicateLayer(Command):
         if self.new_id is None:
             self.new_id = doc.new_layer_id(src.id + "_copy")
         if self.new_id in doc.layer_ids():
-            raise ParameterError(f"a layer with id {self.new_id!r} already exists")
+            raise ParameterError(f"a layer with id {quote(self.new_id)} already exists")
+        from sketchforge.document.document import check_layer_count
+
+        check_layer_count(doc)
         if self.new_name is None:
             self.new_name = src.name + " copy"
         if self._copy is None or self._src is not src:
@@ -926,7 +933,7 @@ class CommandRegistry:
         except KeyError:
             known = ", ".join(self.names())
             raise UnknownCommandError(
-                f"unknown command {name!r} (is the plugin that provides it installed? known: {known})"
+                f"unknown command {quote(name)} (is the plugin that provides it installed? known: {known})"
             ) from None
 
     def from_dict(self, d, depth: int = 1) -> Command:
@@ -943,4 +950,4 @@ class CommandRegistry:
         except SketchforgeError:
             raise
         except (TypeError, ValueError, KeyError, OverflowError) as exc:
-            raise DocumentFormatError(f"command {name!r}: {exc}") from None
+            raise DocumentFormatError(f"command {quote(name)}: {exc}") from None
