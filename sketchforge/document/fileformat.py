@@ -323,6 +323,9 @@ def document_from_dict(data: Any, source: str = "document", host=None, use_snaps
     plugin_data = snap.get("plugin_data", {})
     if not isinstance(plugin_data, dict) or not all(isinstance(k, str) for k in plugin_data):
         raise DocumentFormatError(f"{source}: snapshot.plugin_data must be an object")
+    from sketchforge.plugins.plugin_data import validate_plugin_data
+
+    validate_plugin_data(doc.host, plugin_data, f"{source}: snapshot")  # the limits the plugins' commands keep
     doc.restore_state(layers, cur_light, light, journal, plugin_data)
     return doc
 

@@ -170,3 +170,21 @@ def sketchforge_exporters():
     (``host.export``) passes a path in a private temp folder and moves the finished file into
     place atomically; errors become one line naming the plugin.
     """
+
+
+# --- document data ----------------------------------------------------------------------------
+
+
+@hookspec
+def sketchforge_plugin_data_validators():
+    """Return ``{key: validate}`` for the document-level data this plugin keeps
+    (``doc.plugin_data(key)``, saved in ``snapshot.plugin_data``).
+
+    ``validate(value)`` is called with the stored JSON value when a document is opened, before
+    the document is built; it returns nothing for a value the plugin's own commands could have
+    made, and raises a :class:`~sketchforge.errors.SketchforgeError` with a one-line sentence
+    otherwise (use the same limits as the commands). The host then refuses the file with a
+    ``DocumentFormatError`` naming the key; nothing is loaded and the file is not changed.
+    A key no installed plugin validates is loaded as it is (see
+    :mod:`sketchforge.plugins.plugin_data`).
+    """

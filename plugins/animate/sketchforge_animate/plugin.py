@@ -24,3 +24,10 @@ def sketchforge_pose(doc, frame):
     from .export import pose_document
 
     return pose_document(doc, frame)
+
+
+@hookimpl
+def sketchforge_plugin_data_validators():
+    from .state import KEY, validate_json
+
+    return {KEY: validate_json}
