@@ -449,6 +449,41 @@ def host_of(doc, layer: Layer) -> Layer | None:
     return None
 
 
+def twin_source(doc, layer: Layer) -> Layer | None:
+    """The attached part ``layer`` is an unchanged copy of, moved aside (Ctrl+D: the same
+    stroke and holes shifted by one offset, the same kind and parameters); None if there is
+    none, or the copy lies in place (then :func:`host_of` looks past it already).
+
+    Mirroring such a copy about its host's axis is meant to give the original's twin (a
+    right leg from a left leg): its mirror image at the mirrored place, not the mirror of
+    wherever the copy was put aside. The nearest such layer behind ``layer`` wins, then the
+    nearest in front."""
+    P = None if layer.points is None else np.asarray(layer.points)
+    if P is None or not len(P):
+        return None
+    k = doc.index_of(layer.id)
+    others = list(reversed(doc.layers[:k])) + list(doc.layers[k + 1 :])
+    scale = max(1.0, float(np.abs(P).max()))
+    for other in others:
+        Q = None if other.points is None else np.asarray(other.points)
+        if Q is None or Q.shape != P.shape or other.closed != layer.closed or len(other.holes) != len(layer.holes):
+            continue
+        if dict(other.params) != dict(layer.params):
+            continue
+        d = P[0] - Q[0]
+        tol = 1e-9 * (scale + float(np.abs(d).max()))
+        if not np.abs(d).max() > tol:
+            continue  # in place: not moved aside
+        if np.abs(P - Q - d).max() > tol:
+            continue
+        if any(np.asarray(a).shape != np.asarray(b).shape or np.abs(np.asarray(a) - np.asarray(b) - d).max() > tol
+               for a, b in zip(layer.holes, other.holes)):
+            continue
+        if host_of(doc, other) is not None:
+            return other
+    return None
+
+
 def mirror_axis_x(doc, layer: Layer, axis) -> tuple[float, str]:
     """x of the vertical axis to mirror ``layer`` about, and which axis that is ("host",
     "own" or "x"). ``axis``: "host" (the host's bounding-box centre; a free part falls back
@@ -484,6 +519,14 @@ class MirrorLayer(ReplaceLayerCommand):
 
     name: ClassVar[str] = "mirror_layer"
     axis: Any = "host"
+    #: The layer whose mirror image this layer becomes (journal field ``of``): with
+    #: ``axis="host"``, an unchanged copy moved aside becomes its original's twin (see
+    #: :func:`twin_source`), found by the first ``do`` and journaled, so a replay does exactly
+    #: that. A journal entry without it mirrors the layer itself, as files written before.
+    of: str | None = None
+    #: Look for the original of a copy moved aside (commands made by the app or a script);
+    #: False for journal entries, which say with ``of`` what to mirror.
+    find_twin: bool = field(default=True, repr=False)
     #: Which axis the last ``do`` used ("host", "own" or "x"), for the app's message.
     used_axis: str = field(default="", repr=False)
 
@@ -492,21 +535,29 @@ class MirrorLayer(ReplaceLayerCommand):
 
     def compute(self, doc, old: Layer) -> Layer:
         if old.points is None:
-            raise ParameterError(f"layer {old.id!r} has no contour to mirror")
-        cx, self.used_axis = mirror_axis_x(doc, old, self.axis)
-        pts = np.array(old.points)
+            raise ParameterError(f"layer {quote(old.id)} has no contour to mirror")
+        if self.of is None and self.find_twin and self.axis == "host":
+            twin = twin_source(doc, old)
+            self.of = None if twin is None else twin.id
+        src = old if self.of is None else doc.layer(self.of)
+        if src.points is None:
+            raise ParameterError(f"layer {quote(src.id)} has no contour to mirror")
+        cx, self.used_axis = mirror_axis_x(doc, src, self.axis)
+        pts = np.array(src.points)
         pts[:, 0] = 2.0 * cx - pts[:, 0]
         holes = []
-        for h in old.holes:
+        for h in src.holes:
             h = np.array(h)
             h[:, 0] = 2.0 * cx - h[:, 0]
             holes.append(h)
-        return inflate_layer(doc, old.evolve(points=pts, holes=tuple(holes), edits=()))
+        return inflate_layer(doc, old.evolve(points=pts, holes=tuple(holes), closed=src.closed, edits=()))
 
     def to_dict(self) -> dict:
         d = {"command": self.name, "layer": self.layer}
         if self.axis != "own":
             d["axis"] = self.axis
+        if self.of is not None:
+            d["of"] = self.of
         return d
 
     @classmethod
@@ -514,7 +565,8 @@ class MirrorLayer(ReplaceLayerCommand):
         axis = d.get("axis", "own")  # files from before the option mirrored about the part's own axis
         if not (axis in MIRROR_AXES or (isinstance(axis, (int, float)) and not isinstance(axis, bool))):
             raise DocumentFormatError(f"command {cls.name!r}: 'axis' must be 'host', 'own' or a number")
-        return cls(layer=parse_field(d, "layer", str, cls.name), axis=float(axis) if not isinstance(axis, str) else axis)
+        return cls(layer=parse_field(d, "layer", str, cls.name), axis=float(axis) if not isinstance(axis, str) else axis,
+                   of=parse_field(d, "of", str, cls.name, None), find_twin=False)
 
 
 @dataclass
