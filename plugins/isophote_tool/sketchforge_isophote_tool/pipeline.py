@@ -91,6 +91,10 @@ class SculptResult:
     band_radius : float
     reach : float
         Band radius plus ring: the farthest a changed vertex can be from the stroke.
+    ignored_length, ignored_fraction : float
+        Length (drawing units) and share of the cleaned stroke that was not used: outside the
+        band, or in pieces inside it shorter than half an edge length. The person is told
+        (:meth:`describe`), since drawing outside the band changes nothing there.
     """
 
     mesh: Mesh
@@ -108,6 +112,8 @@ class SculptResult:
     layer: object = field(default=None, repr=False)
     band_radius: float = 0.0
     reach: float = 0.0
+    ignored_length: float = 0.0
+    ignored_fraction: float = 0.0
 
     @property
     def edit_zone(self):
@@ -131,7 +137,12 @@ class SculptResult:
     def describe(self) -> str:
         """One line for the person: how far the isophote was and is from the stroke."""
         part = "" if self.fraction == 1.0 else f" ({self.fraction:.0%} of the change: the whole of it overshot)"
-        return f"isophote {self.before / self.h:.1f} → {self.after / self.h:.1f} edge lengths from the stroke{part}"
+        text = f"isophote {self.before / self.h:.1f} → {self.after / self.h:.1f} edge lengths from the stroke{part}"
+        # Less than half an edge length left out is the clipping's own rounding at the ends.
+        if self.ignored_length >= 0.5 * self.h:
+            text += (f"; {self.ignored_fraction:.0%} of the stroke ({self.ignored_length:.3g} drawing units) lay outside "
+                     "the band and was ignored")
+        return text
 
     @property
     def h(self) -> float:
@@ -260,7 +271,11 @@ def sculpt(
 
     t = time.perf_counter()
     c, iso, band_geom = _pick(ld, pick, r)
-    pieces = clip_to_band(prepare_stroke(stroke, h), band_geom, h)
+    cleaned = prepare_stroke(stroke, h)
+    pieces = clip_to_band(cleaned, band_geom, h)
+    drawn = float(np.sum(np.linalg.norm(np.diff(cleaned, axis=0), axis=1)))
+    used = float(sum(np.sum(np.linalg.norm(np.diff(p, axis=0), axis=1)) for p in pieces))
+    ignored = max(0.0, drawn - used)
     stroke_geom = shapely.MultiLineString(pieces) if len(pieces) > 1 else shapely.LineString(pieces[0])
     honoured = honoured_samples(pd, pieces, band_geom)
     if len(honoured) == 0:
@@ -327,5 +342,6 @@ def sculpt(
     new_mesh = mesh.with_heights(z)
     T["total"] = time.perf_counter() - t0
     return SculptResult(
-        new_mesh, changed, c, iso, band_geom, stroke_geom, dE, before, after, fraction, T, opts, ld, r, r + ring
+        new_mesh, changed, c, iso, band_geom, stroke_geom, dE, before, after, fraction, T, opts, ld, r, r + ring,
+        ignored, ignored / drawn if drawn > 0 else 0.0,
     )
