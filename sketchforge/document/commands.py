@@ -414,10 +414,12 @@ MIRROR_AXES = ("host", "own")
 
 def host_of(doc, layer: Layer) -> Layer | None:
     """The layer an attached part hangs on: the nearest layer behind ``layer`` whose outline
-    (holes cut out) contains the midpoint of its junction Γ_conn, looking past a sibling
-    attached by the same junction (a copy duplicated in place, about to be mirrored); None
-    for a free part (no junction) or a junction over empty space. The assembly decides attachment by the same
-    rule (the junction over a layer below), so this is the host it will be glued to."""
+    (holes cut out) contains the midpoint of its junction Γ_conn, or failing that the nearest
+    such layer in front of it (a leg drawn behind the body hangs on the body's back face),
+    looking past a sibling attached by the same junction (a copy duplicated in place, about to
+    be mirrored); None for a free part (no junction) or a junction over empty space. The
+    assembly decides attachment by the same sides in the same order (see :func:`attachment`
+    for its whole rule), so this is the host it will be glued to."""
     mesh = layer.mesh
     if mesh is None or len(mesh.junction) < 2:
         return None
@@ -430,7 +432,8 @@ def host_of(doc, layer: Layer) -> Layer | None:
     ends = J[[0, -1]]
     tol = 1e-6 * max(1.0, float(np.ptp(mesh.V[:, :2], axis=0).max()))
     k = doc.index_of(layer.id)
-    for below in reversed(doc.layers[:k]):
+    # Behind first (the part on the host's front face), then in front (on its back face).
+    for below in list(reversed(doc.layers[:k])) + list(doc.layers[k + 1 :]):
         if below.points is None or below.mesh is None:
             continue
         bj = below.mesh.junction
@@ -447,6 +450,66 @@ def host_of(doc, layer: Layer) -> Layer | None:
         if region.contains(shapely.Point(mid)):
             return below
     return None
+
+
+def _region(layer: Layer):
+    """The layer's region in the drawing plane (holes cut out), or None if it has none."""
+    from sketchforge.geometry import guard
+
+    mesh = layer.mesh
+    if layer.points is None or mesh is None or not len(mesh.boundary):
+        return None
+    try:
+        region = guard.polygon(mesh.V[mesh.boundary, :2], f"the outline of layer {quote(layer.id)}")
+        for hole in mesh.holes:
+            region = region.difference(guard.polygon(mesh.V[hole, :2], "a hole"))
+    except SketchforgeError:
+        return None
+    return region
+
+
+def attachment(doc, layer: Layer) -> tuple[Layer | None, str | None]:
+    """Where the assembly glues ``layer`` (the rule of the assemble plugin's
+    ``find_attachments``, on the document): (host, None) for a part whose junction lies inside
+    the nearest layer behind it that it lies over, or else inside the nearest one in front;
+    (None, problem) when the nearest layer it lies over does not hold all of it (the junction
+    runs outside it, or spans two layers), the problem a sentence naming both; (None, None)
+    for a free part (closed, or a junction over empty space).
+
+    Cheap (shapely on the outlines), so the app can say at once why an assembly will fail and
+    check, after a redraw, whether the parts glued to a layer still are."""
+    import shapely
+
+    mesh = layer.mesh
+    if layer.closed or mesh is None or len(mesh.junction) < 2:
+        return None, None
+    J = mesh.V[mesh.junction, :2]
+    line = shapely.LineString(J)
+    if not line.length > 0:
+        return None, None
+    h = float(np.median(np.linalg.norm(np.diff(mesh.V[mesh.boundary, :2], axis=0), axis=1))) if len(mesh.boundary) > 1 else 0.0
+    tol = 1e-6 * max(line.length, h)
+    k = doc.index_of(layer.id)
+    layers = doc.layers
+    problem = None
+    for order in (range(k - 1, -1, -1), range(k + 1, len(layers))):
+        regions = [(layers[i], _region(layers[i])) for i in order if layers[i].visible]
+        hits = [(l, r) for l, r in regions if r is not None and line.intersection(r).length > tol]
+        if not hits:
+            continue
+        host, region = hits[0]
+        hb = host.mesh.V[host.mesh.boundary, :2]
+        hh = float(np.median(np.linalg.norm(np.diff(hb, axis=0), axis=1))) if len(hb) > 1 else 0.0
+        if line.difference(region.buffer(-0.05 * hh)).length <= tol:
+            return host, None
+        if problem is None:
+            name, other = quote(layer.name or layer.id), quote(host.name or host.id)
+            if len(hits) > 1 and any(line.difference(region).intersection(r).length > tol for _, r in hits[1:]):
+                problem = (f"the junction of layer {name} spans two layers ({other} and "
+                           f"{quote(hits[1][0].name or hits[1][0].id)}); redraw its ends so that both lie inside one layer")
+            else:
+                problem = f"the junction of layer {name} runs outside layer {other}; redraw its ends so that both lie inside {other}"
+    return None, problem
 
 
 def twin_source(doc, layer: Layer) -> Layer | None:
