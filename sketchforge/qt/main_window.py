@@ -97,10 +97,20 @@ class _AutosaveGuard:
 
 
 class MainWindow(QMainWindow):
-    def __init__(self, doc, host=None, settings: QSettings | None = None, parent=None) -> None:
+    def __init__(self, doc, host=None, settings: QSettings | None = None, parent=None,
+                 offload_inflation: bool = False) -> None:
         super().__init__(parent)
         self.doc = doc
         self.host = host or doc.host
+        #: With ``offload_inflation`` (the app), inflations run in a child process: their
+        #: native factorisation holds the GIL, which froze this window for up to 1.5 s even
+        #: though the solve runs on a worker thread (see sketchforge.offload).
+        self.offload = None
+        if offload_inflation:
+            from sketchforge.offload import OffloadedInflation
+
+            self.offload = OffloadedInflation(doc.host)
+            doc.host = self.offload
         self.settings = settings or QSettings()
         self.path: Path | None = None
         self.mode = "editing"
@@ -1117,6 +1127,8 @@ class MainWindow(QMainWindow):
                 self.animation.shutdown()
             self._autosave_timer.stop()
             self.autosaver.discard()  # a normal close: nothing to recover next time
+            if self.offload is not None:
+                self.offload.shutdown()
             event.accept()
         else:
             event.ignore()
@@ -1126,3 +1138,5 @@ class MainWindow(QMainWindow):
         self._closing_now = True
         self.runner.cancel()
         self.close()
+        if self.offload is not None:
+            self.offload.shutdown()
