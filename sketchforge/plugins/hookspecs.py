@@ -20,6 +20,10 @@ Registries (every implementation is called, results are collected; names must be
 - :func:`sketchforge_tools`, :func:`sketchforge_reflectance_models`,
   :func:`sketchforge_shaders`, :func:`sketchforge_commands`, :func:`sketchforge_exporters`
 
+Document data (returns a dict, collected when a document is opened):
+
+- :func:`sketchforge_plugin_data_validators`
+
 Each registry hook must return a list. The host calls them plugin by plugin: one that raises
 disables its plugin; each contribution is checked (:mod:`sketchforge.plugins.contracts`) and
 refused with a message naming the plugin if it breaks its contract (``host.problems``).
