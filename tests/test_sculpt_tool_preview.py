@@ -111,12 +111,16 @@ def test_the_result_describes_the_fidelity_in_edge_lengths(real_host):
     r = tool.preview_job(STROKE)()
     h = r.h
     full = r.describe()
-    assert full == f"isophote {r.before / h:.1f} → {r.after / h:.1f} edge lengths from the stroke"
+    base = f"isophote {r.before / h:.1f} → {r.after / h:.1f} edge lengths from the stroke"
+    # This stroke runs out of the band at one end (issue 30: the part left out is said).
+    ignored = f"; {r.ignored_fraction:.0%} of the stroke ({r.ignored_length:.3g} drawing units) lay outside the band and was ignored"
+    assert r.ignored_length >= 0.5 * h and full == base + ignored
+    assert dataclasses.replace(r, ignored_length=0.0, ignored_fraction=0.0).describe() == base
     numbers = [float(x) for x in re.findall(r"\d+\.\d", full)]
     assert numbers[0] > numbers[1] >= 0.0
     half = dataclasses.replace(r, fraction=0.5).describe()
-    assert half == full + " (50% of the change: the whole of it overshot)"
-    assert dataclasses.replace(r, fraction=0.25).describe().endswith("(25% of the change: the whole of it overshot)")
+    assert half == base + " (50% of the change: the whole of it overshot)" + ignored
+    assert "(25% of the change: the whole of it overshot)" in dataclasses.replace(r, fraction=0.25).describe()
 
 
 def test_warm_up_compiles_the_reflectance_evaluation_every_edit_calls():
