@@ -2,4 +2,6 @@ import sys
 
 from sketchforge.cli import main
 
-sys.exit(main())
+# Guarded: a spawned child process (sketchforge.offload) imports this module again.
+if __name__ == "__main__":
+    sys.exit(main())

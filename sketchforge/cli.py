@@ -11,7 +11,7 @@ import unicodedata
 from pathlib import Path
 
 from sketchforge.atomic import check_target, refuse_input_as_output, same_file
-from sketchforge.errors import SketchforgeError
+from sketchforge.errors import SketchforgeError, quote, shorten
 
 SUBCOMMANDS = ("replay", "info", "render")
 #: ``render --isophotes``: more lines than this are closer than a pixel apart at any size.
@@ -39,6 +39,29 @@ def _warn_plugin_problems() -> None:
 
     for text in default_host().problems:
         print(f"sketchforge: warning: {printable(text)}", file=sys.stderr)
+class _Parser(argparse.ArgumentParser):
+    """argparse quotes a bad argument whole ("invalid int value: '777…'"): its one error line
+    is cut like every other message (a subparser is made of the same class)."""
+
+    def error(self, message):
+        super().error(shorten(message, 500))
+
+
+def whole_number(text: str) -> int:
+    """An integer argument, also written as an integral float ("1e21"); anything else is
+    refused in one bounded line."""
+    t = text.strip()
+    try:
+        if len(t) > 40:
+            raise ValueError
+        if any(c in t for c in ".eE"):
+            v = float(t)
+            if not (v == v and abs(v) < float("inf") and v == int(v)):
+                raise ValueError
+            return int(v)
+        return int(t)
+    except (ValueError, OverflowError):
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {quote(text, 40)}") from None
 
 
 def cmd_replay(args) -> int:
@@ -59,7 +82,7 @@ def cmd_replay(args) -> int:
         if args.layer:
             raise SketchforgeError("--frame poses the assembled model; it cannot be combined with --layer")
         if args.frame < 0:
-            raise SketchforgeError(f"--frame must be 0 or more, got {args.frame}")
+            raise SketchforgeError(f"--frame must be 0 or more, got {quote(args.frame, 40)}")
     host = default_host()
     if args.export:
         host.exporter_for(Path(args.export))  # an unknown format, before the replay
@@ -90,7 +113,7 @@ def cmd_replay(args) -> int:
             if mesh is None:
                 raise SketchforgeError("--frame needs an animation plugin (sketchforge-animate) and none is installed")
             doc.host.export(out, mesh=mesh)  # atomic, one-line errors naming the plugin
-            print(f"wrote {printable(out)} (frame {args.frame}, {mesh.n_vertices} vertices, {mesh.n_faces} triangles)", file=sys.stderr)
+            print(f"wrote {printable(out)} (frame {quote(args.frame, 40)}, {mesh.n_vertices} vertices, {mesh.n_faces} triangles)", file=sys.stderr)
         else:
             if args.layer:
                 summary = doc.host.export(out, mesh=doc.export_mesh(args.layer))
@@ -140,13 +163,14 @@ def cmd_render(args) -> int:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="sketchforge", description="Sculpt 3D shapes by drawing.")
+    p = _Parser(prog="sketchforge", description="Sculpt 3D shapes by drawing.")
     sub = p.add_subparsers(dest="cmd", required=True)
     r = sub.add_parser("replay", help="recompute a document from its journal, headlessly")
     r.add_argument("doc", type=Path)
     r.add_argument("--export", help="write the result (.obj .ply .stl .glb .gltf; an animated document's .glb holds its animation)")
     r.add_argument("--layer", help="export this layer's own mesh instead of the assembled model")
-    r.add_argument("--frame", type=int, help="export the model posed at this animation frame (24 fps)")
+    r.add_argument("--frame", type=whole_number,
+                   help="export the model posed at this animation frame (24 fps; past the loop it wraps round)")
     r.add_argument("--check", action="store_true", help="compare the replay with the saved snapshot")
     r.add_argument("--save", help="save the replayed document (with a fresh snapshot)")
     r.add_argument("-v", "--verbose", action="store_true")
@@ -157,15 +181,15 @@ def build_parser() -> argparse.ArgumentParser:
     d = sub.add_parser("render", help="render the top view of the shaded layers to PNG (no OpenGL)")
     d.add_argument("doc", type=Path)
     d.add_argument("--png", required=True)
-    d.add_argument("--size", type=int, default=512)
-    d.add_argument("--isophotes", type=int, default=0, help="draw K isophote lines")
+    d.add_argument("--size", type=whole_number, default=512)
+    d.add_argument("--isophotes", type=whole_number, default=0, help="draw K isophote lines")
     d.add_argument("--cel", action="store_true", help="three-tone cel shading")
     d.set_defaults(func=cmd_render)
     return p
 
 
 def build_app_parser() -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(prog="sketchforge", description="Sculpt 3D shapes by drawing (desktop app).")
+    p = _Parser(prog="sketchforge", description="Sculpt 3D shapes by drawing (desktop app).")
     p.add_argument("doc", nargs="?", type=Path, help="document to open")
     p.add_argument("--screenshot", metavar="OUT.png", help="render the window to a PNG and exit")
     p.add_argument("--mode", choices=["editing", "observation"], default="editing")
@@ -186,7 +210,7 @@ def main(argv=None) -> int:
 
         return run_app(args.doc, screenshot=args.screenshot, mode=args.mode)
     except SketchforgeError as exc:
-        print(f"sketchforge: error: {printable(exc)}", file=sys.stderr)
+        print(f"sketchforge: error: {printable(shorten(str(exc)))}", file=sys.stderr)
         return 2
     except KeyboardInterrupt:
         print("sketchforge: interrupted", file=sys.stderr)

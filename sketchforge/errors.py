@@ -5,8 +5,38 @@ message on one line and the app shows it in a dialog. Anything else escaping is 
 """
 
 
+#: An error's sentence is cut to this many characters: every message is one readable line,
+#: whatever size of value a file or a script put in it (issue 30: a 5 MB layer id was echoed
+#: whole). Values quoted in messages are cut much shorter, by :func:`quote`.
+MAX_MESSAGE_CHARS = 2000
+#: Characters of a user's value (an id, a name, a command) quoted in a message.
+MAX_QUOTED_CHARS = 80
+
+
+def shorten(text: str, limit: int = MAX_MESSAGE_CHARS) -> str:
+    """``text`` cut to at most ``limit`` characters, saying how much was left out."""
+    text = str(text)
+    if len(text) <= limit:
+        return text
+    tail = f"… ({len(text) - limit:,} more characters)"
+    return text[: max(0, limit - len(tail))] + tail
+
+
+def quote(value, limit: int = MAX_QUOTED_CHARS) -> str:
+    """``repr(value)`` for a message, at most about ``limit`` characters: a long value shows
+    its start and its length ("'xxxx…' (5,000,000 characters)")."""
+    if isinstance(value, str) and len(value) > limit:
+        return repr(value[:limit]) + f"… ({len(value):,} characters)"
+    text = repr(value)
+    return text if len(text) <= limit else text[:limit] + "…"
+
+
 class SketchforgeError(Exception):
-    """Base of every error a user can cause; ``str(err)`` is a complete, readable sentence."""
+    """Base of every error a user can cause; ``str(err)`` is a complete, readable sentence
+    of at most MAX_MESSAGE_CHARS characters."""
+
+    def __str__(self) -> str:
+        return shorten(super().__str__())
 
 
 class ContourError(SketchforgeError, ValueError):
@@ -21,7 +51,7 @@ class LayerNotFoundError(SketchforgeError, KeyError):
     """A command names a layer id the document does not have."""
 
     def __str__(self) -> str:  # KeyError would quote the message
-        return str(self.args[0]) if self.args else "layer not found"
+        return shorten(str(self.args[0])) if self.args else "layer not found"
 
 
 class UnknownCommandError(SketchforgeError, ValueError):

@@ -33,6 +33,7 @@ from sketchforge.errors import (
     PluginError,
     SketchforgeError,
     SolverError,
+    quote,
 )
 
 _gesture_ids = itertools.count(1)
@@ -238,7 +239,10 @@ class AddLayer(Command):
         if self.id is None:
             self.id = doc.new_layer_id()
         if self.id in doc.layer_ids():
-            raise ParameterError(f"a layer with id {self.id!r} already exists")
+            raise ParameterError(f"a layer with id {quote(self.id)} already exists")
+        from sketchforge.document.document import check_layer_count
+
+        check_layer_count(doc)
         if self.layer_name is None:
             self.layer_name = self.id.replace("_", " ").capitalize()
         n = len(doc.layers)
@@ -525,40 +529,106 @@ class SetAssembly(Command):
 MIRROR_AXES = ("host", "own")
 
 
-def host_of(doc, layer: Layer) -> Layer | None:
-    """The layer an attached part hangs on: the nearest layer behind ``layer`` whose outline
-    (holes cut out) contains the midpoint of its junction Γ_conn, looking past a sibling
-    attached by the same junction (a copy duplicated in place, about to be mirrored); None
-    for a free part (no junction) or a junction over empty space. The assembly decides attachment by the same
-    rule (the junction over a layer below), so this is the host it will be glued to."""
-    mesh = layer.mesh
-    if mesh is None or len(mesh.junction) < 2:
-        return None
+def _attachment(doc, layer: Layer):
+    """The document's attachment of ``layer`` by the one rule the assembly uses too
+    (:func:`sketchforge.geometry.attachment.find_host`, on the layers the assembly takes: the
+    visible ones with a mesh), or None for a part without a junction."""
     import shapely
 
+    from sketchforge.geometry.attachment import find_host, median_edge_length
+
+    mesh = layer.mesh
+    if layer.closed or mesh is None or len(mesh.junction) < 2:
+        return None
+    line = shapely.LineString(mesh.V[mesh.junction, :2])
+    if not line.length > 0:
+        return None
+    layers = doc.layers
+    regions = [_region(l) if (l.visible or l is layer) else None for l in layers]
+    h = [median_edge_length(l.mesh.V[:, :2], l.mesh.F) if l.mesh is not None else 0.0 for l in layers]
+    ends = [l.mesh.V[l.mesh.junction[[0, -1]], :2] if l.mesh is not None and len(l.mesh.junction) >= 2 else None
+            for l in layers]
+    names = [quote(l.name or l.id) for l in layers]
+    k = doc.index_of(layer.id)
+    return find_host(line, k, regions, h, names, h[k], ends)
+
+
+def host_of(doc, layer: Layer) -> Layer | None:
+    """The layer an attached part hangs on, by the assembly's own rule (:func:`attachment`):
+    the nearest visible layer behind it that its junction lies over, or failing that the
+    nearest in front (a leg drawn behind the body hangs on the body's back face), looking past
+    a twin glued by the same junction (a copy duplicated in place, about to be mirrored). A
+    junction that runs partly off that layer still names it (the assembly will refuse it, and
+    :func:`attachment` says why); None for a free part or a junction over empty space."""
+    found = _attachment(doc, layer)
+    return None if found is None or found.near is None else doc.layers[found.near]
+
+
+def _region(layer: Layer):
+    """The layer's region in the drawing plane (holes cut out), or None if it has none."""
     from sketchforge.geometry import guard
 
-    J = mesh.V[mesh.junction, :2]
-    mid = J.mean(axis=0)
-    ends = J[[0, -1]]
-    tol = 1e-6 * max(1.0, float(np.ptp(mesh.V[:, :2], axis=0).max()))
+    mesh = layer.mesh
+    if layer.points is None or mesh is None or not len(mesh.boundary):
+        return None
+    try:
+        region = guard.polygon(mesh.V[mesh.boundary, :2], f"the outline of layer {quote(layer.id)}")
+        for hole in mesh.holes:
+            region = region.difference(guard.polygon(mesh.V[hole, :2], "a hole"))
+    except SketchforgeError:
+        return None
+    return region
+
+
+def attachment(doc, layer: Layer) -> tuple[Layer | None, str | None]:
+    """Where the assembly glues ``layer`` — the one rule of
+    :func:`sketchforge.geometry.attachment.find_host`, which the assemble plugin applies too:
+    (host, None) for a part whose junction lies inside the nearest layer behind it that it
+    lies over, or else inside the nearest one in front; (None, problem) when the nearest layer
+    it lies over does not hold all of it (the junction runs outside it, or spans two layers),
+    the problem a sentence naming both; (None, None) for a free part (closed, or a junction
+    over empty space).
+
+    Cheap (shapely on the outlines), so the app can say at once why an assembly will fail and
+    check, after a redraw, whether the parts glued to a layer still are."""
+    found = _attachment(doc, layer)
+    if found is None:
+        return None, None
+    return (doc.layers[found.host] if found.host is not None else None), found.problem
+
+
+def twin_source(doc, layer: Layer) -> Layer | None:
+    """The attached part ``layer`` is an unchanged copy of, moved aside (Ctrl+D: the same
+    stroke and holes shifted by one offset, the same kind and parameters); None if there is
+    none, or the copy lies in place (then :func:`host_of` looks past it already).
+
+    Mirroring such a copy about its host's axis is meant to give the original's twin (a
+    right leg from a left leg): its mirror image at the mirrored place, not the mirror of
+    wherever the copy was put aside. The nearest such layer behind ``layer`` wins, then the
+    nearest in front."""
+    P = None if layer.points is None else np.asarray(layer.points)
+    if P is None or not len(P):
+        return None
     k = doc.index_of(layer.id)
-    for below in reversed(doc.layers[:k]):
-        if below.points is None or below.mesh is None:
+    others = list(reversed(doc.layers[:k])) + list(doc.layers[k + 1 :])
+    scale = max(1.0, float(np.abs(P).max()))
+    for other in others:
+        Q = None if other.points is None else np.asarray(other.points)
+        if Q is None or Q.shape != P.shape or other.closed != layer.closed or len(other.holes) != len(layer.holes):
             continue
-        bj = below.mesh.junction
-        if len(bj) >= 2:
-            other = below.mesh.V[bj[[0, -1]], :2]
-            if min(np.abs(other - ends).max(), np.abs(other[::-1] - ends).max()) <= tol:
-                continue  # a sibling glued at the same place (a copy in place): look past it
-        try:
-            region = guard.polygon(below.mesh.V[below.mesh.boundary, :2], f"the outline of layer {below.id!r}")
-            for hole in below.mesh.holes:
-                region = region.difference(guard.polygon(below.mesh.V[hole, :2], "a hole"))
-        except SketchforgeError:
+        if dict(other.params) != dict(layer.params):
             continue
-        if region.contains(shapely.Point(mid)):
-            return below
+        d = P[0] - Q[0]
+        tol = 1e-9 * (scale + float(np.abs(d).max()))
+        if not np.abs(d).max() > tol:
+            continue  # in place: not moved aside
+        if np.abs(P - Q - d).max() > tol:
+            continue
+        if any(np.asarray(a).shape != np.asarray(b).shape or np.abs(np.asarray(a) - np.asarray(b) - d).max() > tol
+               for a, b in zip(layer.holes, other.holes)):
+            continue
+        if host_of(doc, other) is not None:
+            return other
     return None
 
 
@@ -597,6 +667,14 @@ class MirrorLayer(ReplaceLayerCommand):
 
     name: ClassVar[str] = "mirror_layer"
     axis: Any = "host"
+    #: The layer whose mirror image this layer becomes (journal field ``of``): with
+    #: ``axis="host"``, an unchanged copy moved aside becomes its original's twin (see
+    #: :func:`twin_source`), found by the first ``do`` and journaled, so a replay does exactly
+    #: that. A journal entry without it mirrors the layer itself, as files written before.
+    of: str | None = None
+    #: Look for the original of a copy moved aside (commands made by the app or a script);
+    #: False for journal entries, which say with ``of`` what to mirror.
+    find_twin: bool = field(default=True, repr=False)
     #: Which axis the last ``do`` used ("host", "own" or "x"), for the app's message.
     used_axis: str = field(default="", repr=False)
 
@@ -605,21 +683,29 @@ class MirrorLayer(ReplaceLayerCommand):
 
     def compute(self, doc, old: Layer) -> Layer:
         if old.points is None:
-            raise ParameterError(f"layer {old.id!r} has no contour to mirror")
-        cx, self.used_axis = mirror_axis_x(doc, old, self.axis)
-        pts = np.array(old.points)
+            raise ParameterError(f"layer {quote(old.id)} has no contour to mirror")
+        if self.of is None and self.find_twin and self.axis == "host":
+            twin = twin_source(doc, old)
+            self.of = None if twin is None else twin.id
+        src = old if self.of is None else doc.layer(self.of)
+        if src.points is None:
+            raise ParameterError(f"layer {quote(src.id)} has no contour to mirror")
+        cx, self.used_axis = mirror_axis_x(doc, src, self.axis)
+        pts = np.array(src.points)
         pts[:, 0] = 2.0 * cx - pts[:, 0]
         holes = []
-        for h in old.holes:
+        for h in src.holes:
             h = np.array(h)
             h[:, 0] = 2.0 * cx - h[:, 0]
             holes.append(h)
-        return inflate_layer(doc, old.evolve(points=pts, holes=tuple(holes), edits=()))
+        return inflate_layer(doc, old.evolve(points=pts, holes=tuple(holes), closed=src.closed, edits=()))
 
     def to_dict(self) -> dict:
         d = {"command": self.name, "layer": self.layer}
         if self.axis != "own":
             d["axis"] = self.axis
+        if self.of is not None:
+            d["of"] = self.of
         return d
 
     @classmethod
@@ -627,7 +713,8 @@ class MirrorLayer(ReplaceLayerCommand):
         axis = d.get("axis", "own")  # files from before the option mirrored about the part's own axis
         if not (axis in MIRROR_AXES or (isinstance(axis, (int, float)) and not isinstance(axis, bool))):
             raise DocumentFormatError(f"command {cls.name!r}: 'axis' must be 'host', 'own' or a number")
-        return cls(layer=parse_field(d, "layer", str, cls.name), axis=float(axis) if not isinstance(axis, str) else axis)
+        return cls(layer=parse_field(d, "layer", str, cls.name), axis=float(axis) if not isinstance(axis, str) else axis,
+                   of=parse_field(d, "of", str, cls.name, None), find_twin=False)
 
 
 @dataclass
@@ -694,7 +781,10 @@ class DuplicateLayer(Command):
         if self.new_id is None:
             self.new_id = doc.new_layer_id(src.id + "_copy")
         if self.new_id in doc.layer_ids():
-            raise ParameterError(f"a layer with id {self.new_id!r} already exists")
+            raise ParameterError(f"a layer with id {quote(self.new_id)} already exists")
+        from sketchforge.document.document import check_layer_count
+
+        check_layer_count(doc)
         if self.new_name is None:
             self.new_name = src.name + " copy"
         if self._copy is None or self._src is not src:
@@ -1080,7 +1170,7 @@ class CommandRegistry:
                 raise PluginError(f"the command {name!r} is registered by both plugins {both}; uninstall one of them") from None
             known = ", ".join(self.names())
             raise UnknownCommandError(
-                f"unknown command {name!r} (is the plugin that provides it installed? known: {known})"
+                f"unknown command {quote(name)} (is the plugin that provides it installed? known: {known})"
             ) from None
 
     def from_dict(self, d, depth: int = 1) -> Command:
@@ -1097,4 +1187,4 @@ class CommandRegistry:
         except SketchforgeError:
             raise
         except (TypeError, ValueError, KeyError, OverflowError) as exc:
-            raise DocumentFormatError(f"command {name!r}: {exc}") from None
+            raise DocumentFormatError(f"command {quote(name)}: {exc}") from None

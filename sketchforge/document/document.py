@@ -28,9 +28,21 @@ from sketchforge.document.commands import Command
 from sketchforge.document.events import Signal
 from sketchforge.document.layer import Layer, Light
 from sketchforge.document.undo import UndoStack
-from sketchforge.errors import LayerNotFoundError, SketchforgeError, SolverError
+from sketchforge.errors import LayerNotFoundError, LimitError, SketchforgeError, SolverError, quote, shorten
 from sketchforge.geometry.merge import merge_meshes
 from sketchforge.plugins.solvers import SolverChoice
+
+
+#: Layers a document may hold. A Monster Mash model has tens of parts; every layer costs
+#: the canvas a rasterisation and the assembly depth rows against every layer it overlaps
+#: (issue 30: 3 000 copies of one layer ran for hours).
+MAX_LAYERS = 256
+
+
+def check_layer_count(doc) -> None:
+    """LimitError when ``doc`` holds MAX_LAYERS layers already (before a layer is added)."""
+    if len(doc.layers) >= MAX_LAYERS:
+        raise LimitError(f"a document holds at most {MAX_LAYERS} layers; remove some before adding more")
 
 
 class Document:
@@ -95,8 +107,11 @@ class Document:
         for i, layer in enumerate(self._layers):
             if layer.id == layer_id:
                 return i
-        known = ", ".join(self.layer_ids()) or "none"
-        raise LayerNotFoundError(f"there is no layer with id {layer_id!r} (layers: {known})")
+        ids = self.layer_ids()
+        known = ", ".join(shorten(i, 40) for i in ids[:12]) or "none"
+        if len(ids) > 12:
+            known += f", and {len(ids) - 12} more"
+        raise LayerNotFoundError(f"there is no layer with id {quote(layer_id)} (layers: {known})")
 
     def layer(self, layer_id: str) -> Layer:
         return self._layers[self.index_of(layer_id)]

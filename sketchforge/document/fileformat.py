@@ -37,7 +37,7 @@ from sketchforge.atomic import write_bytes_atomic
 from sketchforge.document import provenance
 from sketchforge.document.document import Document
 from sketchforge.document.layer import Layer, Light
-from sketchforge.errors import DocumentFormatError, ExportError, LimitError, SketchforgeError
+from sketchforge.errors import DocumentFormatError, ExportError, LimitError, SketchforgeError, quote
 from sketchforge.geometry.mesh import Mesh
 from sketchforge.plugins.solvers import SOLVER_KINDS, SolverChoice
 
@@ -302,7 +302,7 @@ def validate_header(data: Any, source: str) -> tuple[Light, list]:
     if not isinstance(data, dict):
         raise DocumentFormatError(f"{source}: not a sketchforge document (the top level is not an object)")
     if data.get("format") != FORMAT_NAME:
-        raise DocumentFormatError(f"{source}: not a sketchforge document (field 'format' is {data.get('format')!r})")
+        raise DocumentFormatError(f"{source}: not a sketchforge document (field 'format' is {quote(data.get('format'))})")
     version = data.get("version")
     if not isinstance(version, int) or isinstance(version, bool):
         raise DocumentFormatError(f"{source}: field 'version' must be an integer")
@@ -334,6 +334,10 @@ def document_from_dict(data: Any, source: str = "document", host=None, use_snaps
         return replay_journal(light, journal, source, host)
     if not isinstance(snap, dict) or not isinstance(snap.get("layers"), list):
         raise DocumentFormatError(f"{source}: field 'snapshot' must be an object with a 'layers' list")
+    from sketchforge.document.document import MAX_LAYERS
+
+    if len(snap["layers"]) > MAX_LAYERS:
+        raise LimitError(f"{source}: the snapshot has {len(snap['layers']):,} layers; a document holds at most {MAX_LAYERS}")
     # Parse the journal too, so a bad entry is reported now rather than at the next save.
     doc = Document(host=host, light=light)
     for i, entry in enumerate(journal):
@@ -352,6 +356,9 @@ def document_from_dict(data: Any, source: str = "document", host=None, use_snaps
     plugin_data = snap.get("plugin_data", {})
     if not isinstance(plugin_data, dict) or not all(isinstance(k, str) for k in plugin_data):
         raise DocumentFormatError(f"{source}: snapshot.plugin_data must be an object")
+    from sketchforge.plugins.plugin_data import validate_plugin_data
+
+    validate_plugin_data(doc.host, plugin_data, f"{source}: snapshot")  # the limits the plugins' commands keep
     assembly = _assembly_from_dict(snap.get("assembly"), f"{source}: snapshot.assembly", doc.host)
     doc.restore_state(layers, cur_light, light, journal, plugin_data, assembly)
     return doc
@@ -383,6 +390,7 @@ def replay_journal(light: Light, journal: list, source: str = "journal", host=No
             cmd.do(doc)
         except SketchforgeError as exc:
             name = entry.get("command") if isinstance(entry, dict) else None
+            name = name if isinstance(name, str) and len(name) <= 80 else quote(name)
             # One documented type for "this file is bad"; the specific error stays as __cause__.
             raise DocumentFormatError(f"{source}: journal entry {i} ({name}): {exc}") from exc
         if progress is not None:

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 from typing import Any, Iterable, Iterator
 
-from sketchforge.errors import DocumentFormatError
+from sketchforge.errors import DocumentFormatError, quote, shorten
 
 
 def _entries(entries: Iterable) -> Iterator[dict]:
@@ -210,10 +210,10 @@ def check_available(data: dict, host, source: str) -> None:
             info = table.get(name) if isinstance(table.get(name), dict) else {}
             plugin, version = info.get("plugin"), info.get("version")
             if isinstance(plugin, str):
-                key = f"from plugin {plugin!r}" + (f" version {version}" if isinstance(version, str) else "")
+                key = f"from plugin {quote(plugin)}" + (f" version {shorten(version, 60)}" if isinstance(version, str) else "")
             else:
                 key = "its plugin is not recorded in the file"
-            needs.setdefault(key, []).append(f"unknown {what} {name!r}")
+            needs.setdefault(key, []).append(f"unknown {what} {quote(name)}")
     parts = [f"{', '.join(items)} ({key})" for key, items in needs.items()]
     tail = f"; it was made with {', '.join(solvers)}, not installed either" if solvers else ""
     raise DocumentFormatError(f"{source} needs plugins that are not installed: " + "; ".join(parts) + tail)

@@ -32,6 +32,10 @@ pluggy wrappers (``hookwrapper=True`` or ``wrapper=True``) are refused with a me
 calls each plugin's hook on its own (so that a failing plugin is named and disabled alone),
 so a wrapper would never run.
 
+Document data (returns a dict, collected when a document is opened):
+
+- :func:`sketchforge_plugin_data_validators`
+
 Each registry hook must return a list. The host calls them plugin by plugin: one that raises
 disables its plugin; each contribution is checked (:mod:`sketchforge.plugins.contracts`) and
 refused with a message naming the plugin if it breaks its contract (``host.problems``).
@@ -200,3 +204,19 @@ def sketchforge_qt_panels():
     SCULPTURE controls (plugin ``isophote_tool``) come through this hook.
     """
 
+# --- document data ----------------------------------------------------------------------------
+
+
+@hookspec
+def sketchforge_plugin_data_validators():
+    """Return ``{key: validate}`` for the document-level data this plugin keeps
+    (``doc.plugin_data(key)``, saved in ``snapshot.plugin_data``).
+
+    ``validate(value)`` is called with the stored JSON value when a document is opened, before
+    the document is built; it returns nothing for a value the plugin's own commands could have
+    made, and raises a :class:`~sketchforge.errors.SketchforgeError` with a one-line sentence
+    otherwise (use the same limits as the commands). The host then refuses the file with a
+    ``DocumentFormatError`` naming the key; nothing is loaded and the file is not changed.
+    A key no installed plugin validates is loaded as it is (see
+    :mod:`sketchforge.plugins.plugin_data`).
+    """

@@ -93,7 +93,7 @@ def run_app(doc_path=None, screenshot: str | None = None, mode: str = "editing")
     from sketchforge.qt.main_window import MainWindow
 
     host = plugin_host()
-    window = MainWindow(Document(host=host), host=host)
+    window = MainWindow(Document(host=host), host=host, offload_inflation=screenshot is None)
     window.resize(*WINDOW_SIZE)
     if doc_path is not None:
         # Errors opening a file are shown (a dialog when interactive, stderr for a screenshot).

@@ -101,10 +101,20 @@ class _AutosaveGuard:
 
 
 class MainWindow(QMainWindow):
-    def __init__(self, doc, host=None, settings: QSettings | None = None, parent=None) -> None:
+    def __init__(self, doc, host=None, settings: QSettings | None = None, parent=None,
+                 offload_inflation: bool = False) -> None:
         super().__init__(parent)
         self.doc = doc
         self.host = host or doc.host
+        #: With ``offload_inflation`` (the app), inflations run in a child process: their
+        #: native factorisation holds the GIL, which froze this window for up to 1.5 s even
+        #: though the solve runs on a worker thread (see sketchforge.offload).
+        self.offload = None
+        if offload_inflation:
+            from sketchforge.offload import OffloadedInflation
+
+            self.offload = OffloadedInflation(doc.host)
+            doc.host = self.offload
         self.settings = settings or QSettings()
         self.path: Path | None = None
         self.mode = "editing"
@@ -808,12 +818,54 @@ class MainWindow(QMainWindow):
 
         kept = f"; kept its {len(layer.edits)} sculpt edit(s)" if keep else ""
         kept += "".join("; " + n for n in notes)
-        self.runner.run(
-            cmd,
-            label="Inflating",
-            on_done=lambda c: self.show_message(f"{what} {'in' if what == 'cut a hole' else 'of'} “{layer.name}”{kept}"),
-            on_error=error,
-        )
+        glued = self._parts_glued_to(layer)
+
+        def done(c) -> None:
+            self.show_message(f"{what} {'in' if what == 'cut a hole' else 'of'} “{layer.name}”{kept}")
+            self._check_parts_still_glued(layer.id, glued, what, c)
+
+        self.runner.run(cmd, label="Inflating", on_done=done, on_error=error)
+
+    def _parts_glued_to(self, host) -> list[str]:
+        """Ids of the parts the assembly glues to ``host`` now (their junction lies on it)."""
+        return [p.id for p in self.doc.layers if p.id != host.id and C.attachment(self.doc, p)[0] is host]
+
+    def _check_parts_still_glued(self, host_id: str, glued: list[str], what: str, cmd) -> None:
+        """After ``host_id``'s outline changed: each part that was glued to it and whose
+        junction no longer lies on it is named in the status bar, and the person is offered
+        to undo the change (issue 30: a tail left hanging by a redrawn body was only found in
+        OBSERVATION, as an assembly error)."""
+        if host_id not in self.doc.layer_ids():
+            return
+        host = self.doc.layer(host_id)
+        left = []
+        for pid in glued:
+            if pid not in self.doc.layer_ids():
+                continue
+            part = self.doc.layer(pid)
+            now, problem = C.attachment(self.doc, part)
+            if now is None or now.id != host_id:
+                where = (f"it is now glued to “{now.name}”" if now is not None else
+                         "it would not assemble: " + problem if problem else "it is now a free part")
+                left.append((part, where))
+        if not left:
+            return
+        names = ", ".join(f"“{p.name}”" for p, _ in left)
+        self.show_message(f"the junction of {names} no longer lies on “{host.name}”: Ctrl+Z undoes the change")
+        details = "; ".join(f"“{p.name}”: {w}" for p, w in left)
+        if ask_yes_no(
+            self,
+            "Parts left their host",
+            f"After this change ({what}), the junction of {names} no longer lies on “{host.name}” ({details}). "
+            "Undo the change? (No keeps it: redraw or move those parts to attach them again.)",
+        ):
+            # Only if the change is still the last thing done (a queued stroke may have run
+            # while the question was open).
+            if self.runner.busy or host_id not in self.doc.layer_ids() or self.doc.layer(host_id) is not cmd._new:
+                self.show_message("not undone: something changed meanwhile; Ctrl+Z undoes step by step")
+                return
+            self.doc.undo_stack.undo()
+            self.show_message(f"undid the change of “{host.name}”: {names} glued to it again")
 
     def set_closed(self, closed: bool) -> None:
         """The panel's box: make the selected part closed (free) or open (attached by its
@@ -1098,6 +1150,8 @@ class MainWindow(QMainWindow):
             self.app_context.closing.emit()
             self._autosave_timer.stop()
             self.autosaver.discard()  # a normal close: nothing to recover next time
+            if self.offload is not None:
+                self.offload.shutdown()
             event.accept()
         else:
             event.ignore()
@@ -1107,3 +1161,5 @@ class MainWindow(QMainWindow):
         self._closing_now = True
         self.runner.cancel()
         self.close()
+        if self.offload is not None:
+            self.offload.shutdown()

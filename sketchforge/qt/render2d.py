@@ -23,21 +23,32 @@ def points_polygon(points) -> QPolygonF:
     return QPolygonF([QPointF(float(x), float(y)) for x, y in np.asarray(points)[:, :2]])
 
 
-def layer_thumbnail(layer, light, shader, size: int = 48) -> QPixmap:
-    """A small picture of one layer: its shaded mesh, or its stroke, fitted with a margin."""
+def thumbnail_pixels(layer, light, shader, size: int = 48):
+    """The shaded pixels of a layer's thumbnail, (size, size, 3) uint8, or None without a mesh.
+    Numpy only, so it may run off the GUI thread (a big layer's takes a few tenths of a second)."""
+    if layer.mesh is None or not layer.mesh.n_faces:
+        return None
+    bg = (THUMB_BACKGROUND.redF(), THUMB_BACKGROUND.greenF(), THUMB_BACKGROUND.blueF())
+    return render_top([layer.mesh], np.asarray(light.direction), size, shader=shader.shade, background=bg,
+                      margin=4.0 / size)
+
+
+def layer_thumbnail(layer, light, shader, size: int = 48, rgb=None, placeholder: bool = False) -> QPixmap:
+    """A small picture of one layer: its shaded mesh, or its stroke, fitted with a margin.
+    ``rgb``: the pixels from :func:`thumbnail_pixels`, computed already; ``placeholder``: draw
+    the stroke only, until they are."""
     image = QImage(size, size, QImage.Format.Format_ARGB32_Premultiplied)
     image.fill(THUMB_BACKGROUND)
-    if layer.mesh is not None and layer.mesh.n_faces:
-        bg = (THUMB_BACKGROUND.redF(), THUMB_BACKGROUND.greenF(), THUMB_BACKGROUND.blueF())
-        rgb = render_top([layer.mesh], np.asarray(light.direction), size, shader=shader.shade, background=bg,
-                         margin=4.0 / size)
+    if rgb is None and not placeholder:
+        rgb = thumbnail_pixels(layer, light, shader, size)
+    if rgb is not None:
         shaded = QImage(np.ascontiguousarray(rgb).data, size, size, 3 * size, QImage.Format.Format_RGB888)
         image = shaded.convertToFormat(QImage.Format.Format_ARGB32_Premultiplied)  # a copy: rgb may go
     painter = QPainter(image)
     painter.setPen(QPen(QColor(180, 180, 180)))
     painter.drawRect(0, 0, size - 1, size - 1)
     pts = None
-    if (layer.mesh is None or not layer.mesh.n_faces) and layer.points is not None and len(layer.points):
+    if rgb is None and layer.points is not None and len(layer.points):
         pts = layer.points
     if pts is not None:
         lo, hi = pts.min(axis=0), pts.max(axis=0)

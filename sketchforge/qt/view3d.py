@@ -28,6 +28,8 @@ from sketchforge.qt.errors_ui import error_text
 NO_GL_PLATFORMS = ("offscreen", "minimal")
 CLAY = (0.84, 0.74, 0.62, 1.0)
 LAYER_COLOURS = ((0.84, 0.74, 0.62, 1), (0.62, 0.74, 0.84, 1), (0.70, 0.84, 0.62, 1), (0.84, 0.62, 0.70, 1))
+#: A layer an assembly error names.
+FAILED_COLOUR = (0.88, 0.30, 0.24, 1.0)
 
 
 #: Smooth shading with a light at the viewer's upper right (eye coordinates), so the faces that
@@ -170,11 +172,21 @@ class View3D(QWidget):
         self._framed = False  # the camera was framed on a model: keep the user's orbit from now
         self._bounds = None  # (centre, radius) of a sphere around what is shown (document units)
         self._layout = QStackedLayout(self)
+        #: Why the assembled model is not shown (an assembly that failed, naming the part), over
+        #: the top of the view for as long as it holds; hidden when an assembly succeeds. A
+        #: child laid over the stack, not in a layout: the OpenGL widget keeps its parent.
+        self.banner = QLabel("", self)
+        self.banner.setWordWrap(True)
+        self.banner.setStyleSheet("QLabel { background: #f6d8d2; color: #5a1408; padding: 6px; }")
+        self.banner.setVisible(False)
         self.info = QLabel("")
         self.info.setAlignment(Qt.AlignmentFlag.AlignCenter)
         self.info.setWordWrap(True)
         self._layout.addWidget(self.info)
+        #: The last assembly failure (a sentence naming the part), or None.
+        self.failure: str | None = None
         self._active = False
+        self.shown: list = []
         doc.assembly_invalidated.connect(self._invalidated)
         doc.light_changed.connect(lambda *a: self._apply_style())
 
@@ -267,16 +279,20 @@ class View3D(QWidget):
     def refresh(self) -> None:
         parts = [l for l in self.doc.layers if l.visible and l.mesh is not None]
         if not parts:
+            self._set_failure(None)
             self._show([], "nothing to show: draw a contour in EDITING mode")
             return
         if self.source == "layers":
-            self._show([(l.mesh, LAYER_COLOURS[i % len(LAYER_COLOURS)]) for i, l in enumerate(parts)], "")
+            # Each layer's own mesh never needs the assembly: usable whatever it says.
+            self._show(self._layer_meshes(parts), "")
+            self._update_banner()
             return
         if not self.doc.host.has_assembler():
             self._show([(l.mesh, CLAY) for l in parts], "assemble plugin not installed: showing the layers' own meshes")
             return
         revision = self.doc.geometry_revision
         if self._assembled is not None and self._assembled[0] == revision:
+            self._set_failure(None)
             self._show_assembled(self._assembled[1], parts)
             return
         if self._job is not None and not self._job.done and not self._job.cancelled:
@@ -285,21 +301,80 @@ class View3D(QWidget):
             self._job.cancel()
         host = self.doc.host
         layers = list(parts)  # immutable values: safe to read on the pool thread
+        # A junction that runs off its host fails the assembly: said at once, from the
+        # document's own attachment rule, instead of after the assembly job (which can wait
+        # behind other work), and the assembly is still run to confirm it.
+        problems = self._junction_problems()
+        if problems:
+            self._fail(problems[0][1], layers, [problems[0][0]])
 
         def done(mesh):
             self._job = None
             self._assembled = (revision, mesh)
             self.doc.offer_assembled(revision, mesh)  # export and pins need not assemble again
+            self._set_failure(None)
             self._show_assembled(mesh, layers)
 
         def failed(exc, tb):
             self._job = None
-            self._show([(l.mesh, CLAY) for l in layers], f"assembly failed: {error_text(exc)}")
+            self._fail(error_text(exc), layers)
 
         choice = self.doc.assembly  # the document's assembler and its parameters (set_assembly)
         self._job = self.jobs.start(lambda: host.assemble(layers, dict(choice.params), choice.solver), done, failed,
                                     label="Assembling")
         self._job.revision = revision
+
+    # --- assembly failures -----------------------------------------------------------------------
+    def _junction_problems(self) -> list:
+        from sketchforge.document.commands import attachment
+
+        out = []
+        for layer in self.doc.layers:
+            if layer.visible and layer.mesh is not None:
+                _, problem = attachment(self.doc, layer)
+                if problem:
+                    out.append((layer.id, problem[0].upper() + problem[1:]))
+        return out
+
+    def _layer_meshes(self, layers, culprits=()) -> list:
+        """Each layer's mesh in its own colour; the layers an error names in red."""
+        return [(l.mesh, FAILED_COLOUR if l.id in culprits else LAYER_COLOURS[i % len(LAYER_COLOURS)]) for i, l in enumerate(layers)]
+
+    def _fail(self, text: str, layers, culprits=None) -> None:
+        """Show why the assembly failed: in the status bar and a banner over the view, naming
+        the part, with each layer's own mesh shown meanwhile (the named ones in red)."""
+        if culprits is None:  # the assembler's sentence names the part first, by its name, quoted
+            at = {l.id: min((text.find(f"'{n}'") for n in (l.name, l.id) if n and f"'{n}'" in text), default=-1) for l in layers}
+            named = sorted((i, lid) for lid, i in at.items() if i >= 0)
+            culprits = [named[0][1]] if named else []
+        self._set_failure(text)
+        self._show(self._layer_meshes(layers, set(culprits)), f"assembly failed: {text}")
+
+    def _set_failure(self, text: str | None) -> None:
+        self.failure = text
+        self._update_banner()
+
+    def _update_banner(self) -> None:
+        if self.failure is None:
+            self.banner.setVisible(False)
+            return
+        where = ("each layer is shown on its own (the part named in red); fix it in EDITING, or pick "
+                 "“Per layer”" if self.source == "assembled" else "the layers are shown each on its own")
+        self.banner.setText(f"The assembly failed: {self.failure}\n{where[0].upper() + where[1:]}.")
+        self._place_banner()
+        self.banner.setVisible(True)
+        self.banner.raise_()
+
+    def _place_banner(self) -> None:
+        width = max(self.width(), 1)
+        self.banner.setFixedWidth(width)
+        self.banner.setFixedHeight(self.banner.heightForWidth(width))
+        self.banner.move(0, 0)
+
+    def resizeEvent(self, event) -> None:
+        super().resizeEvent(event)
+        if self.banner.isVisible():
+            self._place_banner()
 
     def _show_assembled(self, mesh, layers) -> None:
         if mesh is None:
@@ -310,10 +385,12 @@ class View3D(QWidget):
         self.assembled_shown.emit(mesh)
 
     def _show(self, meshes, note: str) -> None:
-        import pyqtgraph.opengl as gl
-
         if note:
             self.message.emit(note)
+        #: What is on display: [(mesh, colour)] (also without OpenGL, for the tests).
+        self.shown = list(meshes)
+        if self.gl is None:
+            return
         for item in self._items:
             self.gl.removeItem(item)
         self._items = []

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from sketchforge.atomic import write_bytes_atomic
+from sketchforge.errors import ParameterError
 from sketchforge.exporters import write_gltf
 
 from .gltf import animated_glb_bytes
@@ -15,9 +16,21 @@ def has_animation(doc) -> bool:
     return bool(Animation.of(doc).pins)
 
 
+def loop_frame(anim: Animation, frame: int) -> int:
+    """The frame of the loop that frame ``frame`` of playback shows: ``frame`` modulo the
+    loop, 0 without a motion (as the app's timeline and the exported glTF have it). Frames are
+    computed in order from frame 0, so without this ``--frame 10**21`` would run for ever."""
+    frame = int(frame)
+    if frame < 0:
+        raise ParameterError(f"a frame number must be 0 or more, got {frame}")
+    return frame % anim.loop if anim.has_motion() else 0
+
+
 def pose_document(doc, frame: int):
-    """The assembled model posed at ``frame`` (the static model when there are no pins)."""
-    return posed_mesh(doc.export_mesh(), Animation.of(doc), int(frame))
+    """The assembled model posed at ``frame`` (the static model when there are no pins);
+    frames past the loop wrap (:func:`loop_frame`)."""
+    anim = Animation.of(doc)
+    return posed_mesh(doc.export_mesh(), anim, loop_frame(anim, frame))
 
 
 def write_animation(path, doc, progress=None) -> str:

@@ -37,3 +37,10 @@ def _create_panel(app):
     from .qt import create_panel  # Qt: imported only by the app, when it builds its panels
 
     return create_panel(app)
+
+
+@hookimpl
+def sketchforge_plugin_data_validators():
+    from .state import KEY, validate_json
+
+    return {KEY: validate_json}

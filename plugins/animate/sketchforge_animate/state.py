@@ -18,7 +18,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from sketchforge.errors import DocumentFormatError, ParameterError
+from sketchforge.errors import DocumentFormatError, ParameterError, quote
 
 KEY = "animate"
 FPS = 24
@@ -26,6 +26,12 @@ FPS = 24
 SMOOTHING_FRAMES = 1.5
 MAX_PINS = 64
 MAX_LOOP_FRAMES = 24 * 60
+
+
+def validate_json(value) -> None:
+    """The ``sketchforge_plugin_data_validators`` check of a stored animation: raises
+    DocumentFormatError where :meth:`Animation.from_json` would."""
+    Animation.from_json(value)
 
 
 def _vec(v, what: str) -> tuple[float, float, float]:
@@ -66,22 +72,47 @@ class Animation:
 
     @classmethod
     def from_json(cls, d) -> "Animation":
+        """The animation of a stored value, checked with the limits the commands keep (at
+        most MAX_PINS pins with distinct string ids, a loop of 0..MAX_LOOP_FRAMES frames, one
+        finite [x, y, z] per loop frame in a motion, and a motion only with a loop). Raises
+        DocumentFormatError in one line."""
         if d is None:
             return cls()
         try:
+            if not isinstance(d, dict):
+                raise ParameterError(f"it must be an object with 'loop' and 'pins', got {type(d).__name__}")
             loop = d.get("loop", 0)
             if not isinstance(loop, int) or isinstance(loop, bool) or not 0 <= loop <= MAX_LOOP_FRAMES:
-                raise ParameterError(f"the loop length must be 0..{MAX_LOOP_FRAMES} frames")
-            pins = []
-            for p in d["pins"]:
+                raise ParameterError(f"the loop length must be 0..{MAX_LOOP_FRAMES} frames, got {quote(loop, 40)}")
+            raw = d["pins"]
+            if not isinstance(raw, list):
+                raise ParameterError(f"'pins' must be a list, got {type(raw).__name__}")
+            if len(raw) > MAX_PINS:
+                raise ParameterError(f"an animation has at most {MAX_PINS} pins, this one has {len(raw):,}")
+            pins, seen = [], set()
+            for p in raw:
+                if not isinstance(p, dict):
+                    raise ParameterError(f"a pin must be an object, got {type(p).__name__}")
+                pid = p["id"]
+                if not isinstance(pid, str) or not pid:
+                    raise ParameterError(f"a pin's id must be a non-empty string, got {quote(pid, 40)}")
+                if pid in seen:
+                    raise ParameterError(f"two pins have the id {quote(pid)}")
+                seen.add(pid)
                 motion = p.get("motion")
                 if motion is not None:
+                    if loop < 2:
+                        raise ParameterError(f"pin {quote(pid)} has a motion but the loop has {loop} frames")
+                    if not isinstance(motion, list) or len(motion) != loop:
+                        raise ParameterError(f"pin {quote(pid)}: its motion must have one [x, y, z] per loop frame ({loop})")
                     motion = np.array(motion, dtype=np.float64)
                     if motion.shape != (loop, 3) or not np.all(np.isfinite(motion)):
-                        raise ParameterError(f"pin {p['id']!r}: its motion must have one [x, y, z] per loop frame")
+                        raise ParameterError(f"pin {quote(pid)}: its motion must have one [x, y, z] per loop frame ({loop})")
                     motion.setflags(write=False)
-                pins.append(Pin(str(p["id"]), _vec(p["rest"], "a pin's rest"), _vec(p["target"], "a pin's target"), motion))
-        except (KeyError, TypeError, AttributeError, ValueError, ParameterError) as exc:
+                pins.append(Pin(pid, _vec(p["rest"], f"the rest of pin {quote(pid)}"), _vec(p["target"], f"the target of pin {quote(pid)}"), motion))
+        except KeyError as exc:
+            raise DocumentFormatError(f"the animation data is malformed: a pin or the animation lacks the field {quote(exc.args[0], 40)}") from None
+        except (TypeError, AttributeError, ValueError, ParameterError, OverflowError) as exc:
             raise DocumentFormatError(f"the animation data is malformed: {exc}") from None
         return cls(tuple(pins), loop)
 

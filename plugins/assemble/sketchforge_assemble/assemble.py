@@ -15,7 +15,7 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from sketchforge.errors import ParameterError
+from sketchforge.errors import LimitError, ParameterError
 from sketchforge.geometry.mesh import Mesh
 
 from .attach import Attachment, find_attachments
@@ -100,6 +100,39 @@ class AssemblyResult:
     solver: dict = field(default_factory=dict)
 
 
+#: Most work an assembly takes on: for every pair of layers whose bounding boxes overlap, the
+#: smaller one's vertex count, summed (each such vertex gets depth rows against the other
+#: layer). Parts stacked on each other make it grow with the square of their number, and the
+#: depth QP faster still (issue 30: 10 copies of a 4.9k-vertex layer in place, 221k, took
+#: 2.8 s; 20, 0.93M, 8.4 s; 40, 3.8M, 73 s; 3000 ran past any patience). The example creature
+#: needs 6.1k (about 70k at the benchmark's finest resolution, 93k vertices), the toucan 2.9k,
+#: a crowd of 38 layers of random creatures 16k.
+MAX_OVERLAP_WORK = 1_000_000
+
+
+def overlap_work(meshes: Sequence[Mesh]) -> tuple[int, int]:
+    """(pairs of layers whose bounding boxes overlap, the work :data:`MAX_OVERLAP_WORK`
+    bounds) for these meshes, in O(layers²) on their bounding boxes only."""
+    if len(meshes) < 2:
+        return 0, 0
+    lo = np.array([m.V[:, :2].min(axis=0) for m in meshes])
+    hi = np.array([m.V[:, :2].max(axis=0) for m in meshes])
+    n = np.array([m.n_vertices for m in meshes], dtype=np.int64)
+    over = np.all((lo[:, None, :] <= hi[None, :, :]) & (lo[None, :, :] <= hi[:, None, :]), axis=2)
+    i, j = np.nonzero(np.triu(over, k=1))
+    return int(len(i)), int(np.minimum(n[i], n[j]).sum())
+
+
+def _check_overlap_work(meshes: Sequence[Mesh]) -> None:
+    pairs, work = overlap_work(meshes)
+    if work > MAX_OVERLAP_WORK:
+        raise LimitError(
+            f"assembling these {len(meshes)} layers would keep {pairs:,} overlapping pairs of layers apart "
+            f"({work:,} vertex rows; the limit is {MAX_OVERLAP_WORK:,}): parts are stacked on top of each "
+            "other, so hide, move or remove some of them"
+        )
+
+
 def _sheet(cache: AssemblyCache | None, k: int, name: str, mesh: Mesh, free: bool):
     """:func:`.sheet.sheet_from_mesh` through the cache (keyed by the mesh's arrays)."""
     sheet = memo(cache, "sheet", (mesh.V, mesh.F, mesh.boundary, mesh.junction, tuple(mesh.holes), free),
@@ -165,6 +198,7 @@ def assemble_detailed(meshes: Sequence[Mesh | None], closed: Sequence[bool] | No
     if not keep:
         raise ParameterError("there is no layer with a mesh to assemble")
     knames = [names[i] for i in keep]
+    _check_overlap_work([meshes[i] for i in keep])  # before any work, so a refusal is quick
     sheets = [_sheet(cache, k, knames[k], meshes[i], bool(closed[i])) for k, i in enumerate(keep)]
 
     attachments, warnings = find_attachments(sheets, knames, p["on_bad_junction"])

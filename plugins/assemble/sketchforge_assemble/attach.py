@@ -16,12 +16,12 @@ from dataclasses import dataclass
 
 from sketchforge.errors import GeometryError
 from sketchforge.geometry import guard
+from sketchforge.geometry.attachment import BACK, FRONT, find_host
 
 from .errors import AttachmentError
 from .sheet import Sheet
 
-FRONT = 1
-BACK = -1
+__all__ = ["Attachment", "BACK", "FRONT", "find_attachments", "lo_chain_index"]
 
 
 @dataclass(frozen=True)
@@ -87,43 +87,15 @@ def find_attachments(sheets: list[Sheet], names: list[str], on_bad_junction: str
         except GeometryError as exc:
             bad_junction(f"{exc}, so it cannot be glued to a layer; redraw the part")
             continue
-        tol = 1e-6 * max(line.length, s.h)
-        problem = None
-        attached = False
-        for side, order in ((FRONT, range(u - 1, -1, -1)), (BACK, range(u + 1, len(sheets)))):
-            hits = [i for i in order if line.intersection(polys[i]).length > tol]
-            if not hits:
-                continue
-            lower = hits[0]
-            # The junction is cut into the lower face as a slit; it must stay inside the
-            # outline, with a little clearance so the re-triangulation has no slivers.
-            clearance = 0.05 * sheets[lower].h
-            outside = line.difference(polys[lower].buffer(-clearance)).length
-            if outside <= tol:
-                attachments.append(Attachment(u, lower, side))
-                attached = True
-                break
-            # Not on this side; remember why, but still try the other side (a layer partly
-            # under the junction behind the part must not stop it attaching to the layer in
-            # front that holds the whole junction, e.g. after moving an arm behind everything).
-            if problem is not None:
-                continue
-            if len(hits) > 1 and any(
-                line.difference(polys[lower]).intersection(polys[i]).length > tol for i in hits[1:]
-            ):
-                problem = (
-                    f"the junction of layer '{names[u]}' spans two layers ('{names[lower]}' and "
-                    f"'{names[hits[1]]}'); redraw its ends so that both lie inside one layer"
-                )
-            else:
-                problem = (
-                    f"the junction of layer '{names[u]}' runs outside layer '{names[lower]}'; "
-                    f"redraw its ends so that both lie inside '{names[lower]}'"
-                )
-        if attached:
-            continue
-        if problem is not None:
-            bad_junction(problem)
+        # The document's rule (sketchforge.geometry.attachment), shared with its commands and
+        # the app's warnings: the junction is cut into the host as a slit, so it must lie
+        # inside its outline with a little clearance.
+        ends = [t.xy[t.junction[[0, -1]]] if len(t.junction) >= 2 else None for t in sheets]
+        found = find_host(line, u, polys, [t.h for t in sheets], [f"'{n}'" for n in names], s.h, ends)
+        if found.host is not None:
+            attachments.append(Attachment(u, found.host, found.side))
+        elif found.problem is not None:
+            bad_junction(found.problem)
     return _break_loops(attachments, names, bad_junction), warnings
 
 

@@ -81,6 +81,12 @@ def inflate_stroke(points, closed: bool = False, params: Mapping | None = None, 
     outline = prepare_outline(points, p["resolution"], closed=bool(closed))
     check_vertex_budget(outline.area, outline.perimeter, outline.edge_length, max_vertices)
     contour = resample_outline(outline)
+    # Where the outline comes close to itself it is resampled finer than h, and Triangle grades
+    # its triangles down to that: count those points (three interior ones per extra boundary
+    # point, generously) before Triangle runs.
+    extra = len(contour.points) - outline.perimeter / outline.edge_length
+    if extra > 0:
+        check_vertex_budget(outline.area, outline.perimeter + 4.0 * extra * outline.edge_length, outline.edge_length, max_vertices)
     rings = prepare_holes(holes, contour)
     tri = triangulate_polygon(contour.points, contour.edge_length, MIN_ANGLE, holes=rings)
     rim = np.concatenate([tri.boundary, *tri.holes]) if rings else tri.boundary

@@ -85,8 +85,10 @@ class SculptResult:
         The sculpt solver that made it.
     solution : SculptSolution
         What the solver returned (its regions, curves and numbers).
-    ignored_length : float
-        Length of the drawn stroke that fell outside the band (drawing units): ignored.
+    ignored_length, ignored_fraction : float
+        Length (drawing units) and share of the cleaned stroke that was not used: outside the
+        band, or in pieces inside it shorter than half an edge length. The person is told
+        (:meth:`describe`), since drawing outside the band changes nothing there.
     """
 
     mesh: Mesh
@@ -107,6 +109,7 @@ class SculptResult:
     solver: str = "gauss_newton"
     solution: object = field(default=None, repr=False)
     ignored_length: float = 0.0
+    ignored_fraction: float = 0.0
 
     @property
     def options(self) -> dict:
@@ -143,12 +146,12 @@ class SculptResult:
         """One line for the person: how far the isophote was and is from the stroke, and what
         of the stroke was ignored."""
         part = "" if self.fraction == 1.0 else f" ({self.fraction:.0%} of the change: the whole of it overshot)"
-        ignored = ""
-        if self.ignored_length > 0.5 * self.h:
-            total = self.ignored_length + self.stroke.length
-            ignored = (f"; {self.ignored_length / self.h:.0f} edge lengths of the stroke ({self.ignored_length / total:.0%}) "
-                       "ran outside the band and were ignored")
-        return f"isophote {self.before / self.h:.1f} → {self.after / self.h:.1f} edge lengths from the stroke{part}{ignored}"
+        text = f"isophote {self.before / self.h:.1f} → {self.after / self.h:.1f} edge lengths from the stroke{part}"
+        # Less than half an edge length left out is the clipping's own rounding at the ends.
+        if self.ignored_length >= 0.5 * self.h:
+            text += (f"; {self.ignored_fraction:.0%} of the stroke ({self.ignored_length:.3g} drawing units) lay outside "
+                     "the band and was ignored")
+        return text
 
     @property
     def h(self) -> float:
@@ -348,8 +351,9 @@ def sculpt(
     c, iso, band_geom = _pick(ld, pick, r)
     cleaned = prepare_stroke(stroke, h)
     pieces = clip_to_band(cleaned, band_geom, h)
-    ignored = max(0.0, float(np.linalg.norm(np.diff(cleaned, axis=0), axis=1).sum())
-                  - sum(float(np.linalg.norm(np.diff(p, axis=0), axis=1).sum()) for p in pieces))
+    drawn = float(np.sum(np.linalg.norm(np.diff(cleaned, axis=0), axis=1)))
+    used = float(sum(np.sum(np.linalg.norm(np.diff(p, axis=0), axis=1)) for p in pieces))
+    ignored = max(0.0, drawn - used)
     stroke_geom = shapely.MultiLineString(pieces) if len(pieces) > 1 else shapely.LineString(pieces[0])
     honoured = honoured_samples(pd, pieces, band_geom)
     if len(honoured) == 0:
@@ -410,5 +414,5 @@ def sculpt(
     reach = float(solution.info.get("reach", r))
     return SculptResult(
         new_mesh, changed, c, iso, band_geom, stroke_geom, dE, before, after, fraction, T, full, ld, r, reach,
-        solver.name, solution, ignored,
+        solver.name, solution, ignored, ignored / drawn if drawn > 0 else 0.0,
     )
