@@ -15,7 +15,7 @@ from sketchforge.document import Document
 from sketchforge.document import fileformat as ff
 from sketchforge.document.commands import ReplaceLayerCommand
 from sketchforge.errors import DocumentFormatError, ParameterError, PluginError, SolverError, UnknownSolverError
-from sketchforge.plugin_api import Assembler, Inflater, SculptSolver, hookimpl, validate_params
+from sketchforge.plugin_api import Assembler, SculptSolver, hookimpl, validate_params
 from sketchforge.plugins import manager
 from sketchforge.plugins.testing import FanInflater, make_test_host
 from third_party_solvers import ThirdPartySolvers, probe_params, probe_solve
