@@ -529,28 +529,37 @@ class SetAssembly(Command):
 MIRROR_AXES = ("host", "own")
 
 
-def _attachment(doc, layer: Layer):
-    """The document's attachment of ``layer`` by the one rule the assembly uses too
-    (:func:`sketchforge.geometry.attachment.find_host`, on the layers the assembly takes: the
-    visible ones with a mesh), or None for a part without a junction."""
+def _attachments(doc, which=None) -> dict:
+    """{layer id: JunctionHost or None} for the layers ``which`` (None: every layer) by the one
+    rule the assembly uses too (:func:`sketchforge.geometry.attachment.find_host`, on the
+    layers the assembly takes: the visible ones with a mesh); None for a part without a
+    junction. The layers' regions and edge lengths are built once for all of them (the app
+    checks every part before an assembly and after a redraw)."""
     import shapely
 
     from sketchforge.geometry.attachment import find_host, median_edge_length
 
-    mesh = layer.mesh
-    if layer.closed or mesh is None or len(mesh.junction) < 2:
-        return None
-    line = shapely.LineString(mesh.V[mesh.junction, :2])
-    if not line.length > 0:
-        return None
     layers = doc.layers
-    regions = [_region(l) if (l.visible or l is layer) else None for l in layers]
+    wanted = [l for l in layers if which is None or l.id in which]
+    parts = [l for l in wanted if not l.closed and l.mesh is not None and len(l.mesh.junction) >= 2]
+    out: dict = {l.id: None for l in wanted}
+    if not parts:
+        return out
+    regions = [_region(l) if l.visible else None for l in layers]
     h = [median_edge_length(l.mesh.V[:, :2], l.mesh.F) if l.mesh is not None else 0.0 for l in layers]
     ends = [l.mesh.V[l.mesh.junction[[0, -1]], :2] if l.mesh is not None and len(l.mesh.junction) >= 2 else None
             for l in layers]
     names = [quote(l.name or l.id) for l in layers]
-    k = doc.index_of(layer.id)
-    return find_host(line, k, regions, h, names, h[k], ends)
+    for part in parts:
+        line = shapely.LineString(part.mesh.V[part.mesh.junction, :2])
+        if line.length > 0:
+            k = doc.index_of(part.id)
+            out[part.id] = find_host(line, k, regions, h, names, h[k], ends)
+    return out
+
+
+def _attachment(doc, layer: Layer):
+    return _attachments(doc, {layer.id})[layer.id]
 
 
 def host_of(doc, layer: Layer) -> Layer | None:
@@ -590,11 +599,19 @@ def attachment(doc, layer: Layer) -> tuple[Layer | None, str | None]:
     over empty space).
 
     Cheap (shapely on the outlines), so the app can say at once why an assembly will fail and
-    check, after a redraw, whether the parts glued to a layer still are."""
-    found = _attachment(doc, layer)
-    if found is None:
-        return None, None
-    return (doc.layers[found.host] if found.host is not None else None), found.problem
+    check, after a redraw, whether the parts glued to a layer still are (for many layers at
+    once: :func:`attachments`)."""
+    return attachments(doc, {layer.id})[layer.id]
+
+
+def attachments(doc, which=None) -> dict:
+    """{layer id: (host, problem)} as :func:`attachment` says it, for the layers ``which``
+    (ids; None: every layer), with the layers' outlines built once."""
+    out = {}
+    for lid, found in _attachments(doc, which).items():
+        out[lid] = (None, None) if found is None else (
+            (doc.layers[found.host] if found.host is not None else None), found.problem)
+    return out
 
 
 def twin_source(doc, layer: Layer) -> Layer | None:

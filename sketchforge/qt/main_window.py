@@ -828,7 +828,7 @@ class MainWindow(QMainWindow):
 
     def _parts_glued_to(self, host) -> list[str]:
         """Ids of the parts the assembly glues to ``host`` now (their junction lies on it)."""
-        return [p.id for p in self.doc.layers if p.id != host.id and C.attachment(self.doc, p)[0] is host]
+        return [pid for pid, (now, _) in C.attachments(self.doc).items() if pid != host.id and now is host]
 
     def _check_parts_still_glued(self, host_id: str, glued: list[str], what: str, cmd) -> None:
         """After ``host_id``'s outline changed: each part that was glued to it and whose
@@ -839,11 +839,9 @@ class MainWindow(QMainWindow):
             return
         host = self.doc.layer(host_id)
         left = []
-        for pid in glued:
-            if pid not in self.doc.layer_ids():
-                continue
+        present = [pid for pid in glued if pid in self.doc.layer_ids()]
+        for pid, (now, problem) in C.attachments(self.doc, set(present)).items():
             part = self.doc.layer(pid)
-            now, problem = C.attachment(self.doc, part)
             if now is None or now.id != host_id:
                 where = (f"it is now glued to “{now.name}”" if now is not None else
                          "it would not assemble: " + problem if problem else "it is now a free part")

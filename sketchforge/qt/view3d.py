@@ -326,15 +326,11 @@ class View3D(QWidget):
 
     # --- assembly failures -----------------------------------------------------------------------
     def _junction_problems(self) -> list:
-        from sketchforge.document.commands import attachment
+        from sketchforge.document.commands import attachments
 
-        out = []
-        for layer in self.doc.layers:
-            if layer.visible and layer.mesh is not None:
-                _, problem = attachment(self.doc, layer)
-                if problem:
-                    out.append((layer.id, problem[0].upper() + problem[1:]))
-        return out
+        shown = {l.id for l in self.doc.layers if l.visible and l.mesh is not None}
+        return [(lid, problem[0].upper() + problem[1:]) for lid, (_, problem) in attachments(self.doc, shown).items()
+                if problem]
 
     def _layer_meshes(self, layers, culprits=()) -> list:
         """Each layer's mesh in its own colour; the layers an error names in red."""
