@@ -633,7 +633,7 @@ def twin_source(doc, layer: Layer) -> Layer | None:
         Q = None if other.points is None else np.asarray(other.points)
         if Q is None or Q.shape != P.shape or other.closed != layer.closed or len(other.holes) != len(layer.holes):
             continue
-        if dict(other.params) != dict(layer.params):
+        if other.solver != layer.solver or dict(other.params) != dict(layer.params):
             continue
         d = P[0] - Q[0]
         tol = 1e-9 * (scale + float(np.abs(d).max()))
@@ -1181,10 +1181,8 @@ class CommandRegistry:
             return self._classes[name]
         except KeyError:
             if name in self._ambiguous:
-                from sketchforge.errors import PluginError
-
                 both = " and ".join(repr(p) for p in self._ambiguous[name])
-                raise PluginError(f"the command {name!r} is registered by both plugins {both}; uninstall one of them") from None
+                raise PluginError(f"the command {quote(name)} is registered by both plugins {both}; uninstall one of them") from None
             known = ", ".join(self.names())
             raise UnknownCommandError(
                 f"unknown command {quote(name)} (is the plugin that provides it installed? known: {known})"

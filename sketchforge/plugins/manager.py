@@ -23,7 +23,7 @@ from typing import Iterable
 
 import pluggy
 
-from sketchforge.errors import ParameterError, PluginError, SketchforgeError, UnknownSolverError
+from sketchforge.errors import ParameterError, PluginError, SketchforgeError, UnknownSolverError, quote
 from sketchforge.plugins import contracts, hookspecs
 from sketchforge.plugins.solvers import SOLVER_KINDS, json_value
 
@@ -32,11 +32,6 @@ log = logging.getLogger("sketchforge.plugins")
 CORE = "sketchforge-core"
 
 ENTRY_POINT_GROUP = "sketchforge"
-
-def _short(v, n: int = 60) -> str:
-    """repr(v), cut to ``n`` characters for a message line."""
-    text = repr(v)
-    return text if len(text) <= n else text[: n - 1] + "…"
 
 
 ALLOWLIST_ENV = "SKETCHFORGE_PLUGINS"
@@ -226,7 +221,7 @@ class PluginHost:
             raise PluginError(f"the {spec.what} {name!r} is registered by both plugins {clash[0]!r} and {clash[1]!r}; "
                               f"uninstall one of them (or leave one out with {ALLOWLIST_ENV})")
         known = ", ".join(sorted(reg)) or "none"
-        raise UnknownSolverError(f"no {spec.what} named {_short(name)} is installed (installed: {known})")
+        raise UnknownSolverError(f"no {spec.what} named {quote(name)} is installed (installed: {known})")
 
     def solver_params(self, kind: str, solver, params) -> dict:
         """``solver``'s complete parameters for ``params`` (a mapping, maybe partial), checked by
@@ -242,7 +237,7 @@ class PluginHost:
                               f"parameters: {type(exc).__name__}: {exc}") from exc
         if not isinstance(out, dict) or not json_value(out):
             raise PluginError(f"the {spec.what} {solver.name!r} (plugin {self.provider_of(solver)!r}): check_params must "
-                              f"return a dict of JSON values, got {_short(out)}")
+                              f"return a dict of JSON values, got {quote(out)}")
         return out
 
     def run_solver(self, kind: str, solver, *args):
@@ -340,7 +335,7 @@ class PluginHost:
                 for item in items:
                     name = getattr(item, "name", None)
                     if not name or not isinstance(name, str):
-                        self._report(f"plugin {plugin!r}: a {what} without a name was registered: {_short(item)} (ignored)")
+                        self._report(f"plugin {plugin!r}: a {what} without a name was registered: {quote(item)} (ignored)")
                         continue
                     if name in out and out[name] is item:
                         continue  # the same value twice (one module registered under two names)

@@ -40,9 +40,9 @@ class SculptProblem:
     E : (n,) float64
         The shading now (signed R at the vertices' display slopes).
     Rp, Rq : (n,) float64
-        ∂R/∂p and ∂R/∂q there.
+        ∂R/∂p and ∂R/∂q there (properties: evaluated on first use, once per layer state).
     p, q : (n,) float64
-        The vertices' display slopes (∂z/∂x, ∂z/∂y).
+        The vertices' display slopes (∂z/∂x, ∂z/∂y) (likewise).
     h : float
         Mean edge length.
     c : float
@@ -84,10 +84,6 @@ class SculptProblem:
     light: np.ndarray
     model: Any
     E: np.ndarray
-    Rp: np.ndarray
-    Rq: np.ndarray
-    p: np.ndarray
-    q: np.ndarray
     h: float
     c: float
     pick: np.ndarray
@@ -103,6 +99,7 @@ class SculptProblem:
     outline: Any
     Q: Any
     before: float
+    _slopes: Callable = field(repr=False, default=None)
     _shading: Callable = field(repr=False, default=None)
     _shading_change: Callable = field(repr=False, default=None)
     _distance_after: Callable = field(repr=False, default=None)
@@ -118,6 +115,24 @@ class SculptProblem:
     @property
     def n(self) -> int:
         return len(self.V)
+
+    # The slopes and R's gradient: only some solvers need them (gauss_newton linearises on
+    # its own), so they are evaluated when first read.
+    @property
+    def p(self) -> np.ndarray:
+        return self._slopes()[0]
+
+    @property
+    def q(self) -> np.ndarray:
+        return self._slopes()[1]
+
+    @property
+    def Rp(self) -> np.ndarray:
+        return self._slopes()[3]
+
+    @property
+    def Rq(self) -> np.ndarray:
+        return self._slopes()[4]
 
     def shading(self, z: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Shading of candidate heights ``z`` (n,), as the app would show it: E, R_p, R_q (n,)."""

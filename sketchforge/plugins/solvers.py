@@ -32,7 +32,7 @@ import numbers
 from dataclasses import dataclass, field
 from typing import Any, Callable, Mapping
 
-from sketchforge.errors import ParameterError
+from sketchforge.errors import ParameterError, quote
 
 
 @dataclass(frozen=True)
@@ -145,22 +145,16 @@ def validate_params(params: Mapping | None, defaults: Mapping, checks: Mapping[s
         params = {}
     if not isinstance(params, Mapping):
         raise ParameterError(f"parameters must be an object of name: value, got {type(params).__name__}")
-    unknown = sorted(k for k in params if k not in defaults)
+    unknown = sorted(str(k) for k in params if k not in defaults)
     if unknown:
         known = ", ".join(sorted(defaults)) or "none"
-        key = unknown[0] if isinstance(unknown[0], str) else repr(unknown[0])
-        raise ParameterError(f"unknown parameter {_quote(key)} (known: {known})")
+        raise ParameterError(f"unknown parameter {quote(unknown[0])} (known: {known})")
     out = dict(defaults)
     out.update(params)
     for key, check in (checks or {}).items():
         if key in out:
             out[key] = check(out[key])
     return out
-
-
-def _quote(key: str, n: int = 60) -> str:
-    text = repr(key)
-    return text if len(text) <= n else text[: n - 1] + "…"
 
 
 def number(key: str, lo: float | None = None, hi: float | None = None, *, lo_open: bool = False,
@@ -172,14 +166,14 @@ def number(key: str, lo: float | None = None, hi: float | None = None, *, lo_ope
         if v is None and optional:
             return None
         if isinstance(v, bool) or not isinstance(v, numbers.Real):
-            raise ParameterError(f"{key!r} must be a number{' or null' if optional else ''}, got {_short(v)}")
+            raise ParameterError(f"{key!r} must be a number{' or null' if optional else ''}, got {quote(v)}")
         if integer:
             if isinstance(v, float) and not v.is_integer():
                 raise ParameterError(f"{key!r} must be a whole number, got {v!r}")
             try:
                 x = int(v)
             except (OverflowError, ValueError):
-                raise ParameterError(f"{key!r} must be a whole number, got {_short(v)}") from None
+                raise ParameterError(f"{key!r} must be a whole number, got {quote(v)}") from None
         else:
             try:
                 x = float(v)
@@ -202,7 +196,7 @@ def choice(key: str, options) -> Callable:
 
     def check(v):
         if v not in options:
-            raise ParameterError(f"{key!r} must be one of {', '.join(map(repr, options))}, got {_short(v)}")
+            raise ParameterError(f"{key!r} must be one of {', '.join(map(repr, options))}, got {quote(v)}")
         return v
 
     return check
@@ -213,15 +207,10 @@ def flag(key: str) -> Callable:
 
     def check(v):
         if not isinstance(v, bool):
-            raise ParameterError(f"{key!r} must be true or false, got {_short(v)}")
+            raise ParameterError(f"{key!r} must be true or false, got {quote(v)}")
         return v
 
     return check
-
-
-def _short(v: Any, n: int = 40) -> str:
-    text = repr(v)
-    return text if len(text) <= n else text[: n - 1] + "…"
 
 
 def json_value(v: Any, depth: int = 0) -> bool:

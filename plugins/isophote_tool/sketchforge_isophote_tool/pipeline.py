@@ -175,8 +175,9 @@ _PICKS: "OrderedDict[tuple, tuple]" = OrderedDict()
 
 
 def _pick(ld: LayerData, pick, r: float):
-    """(c, isophote, band) for a pick, cached: redrawing the stroke for the same pick (the
-    app's live preview does it on every throttled mouse move) skips the isophote and band."""
+    """(c, isophote, band, in_band) for a pick, in_band (n,) bool the vertices inside the band;
+    cached: redrawing the stroke for the same pick (the app's live preview does it on every
+    throttled mouse move) skips the isophote and band."""
     p = np.asarray(pick, dtype=np.float64).reshape(-1)
     key = (id(ld), p.tobytes(), r)
 
@@ -184,7 +185,9 @@ def _pick(ld: LayerData, pick, r: float):
         c, iso = picked_isophote(ld, pick)
         band_geom = band_around(ld, iso, r)
         shapely.prepare(band_geom)
-        return ld, c, iso, band_geom
+        in_band = shapely.contains_xy(band_geom, ld.V2[:, 0], ld.V2[:, 1])
+        in_band.setflags(write=False)
+        return ld, c, iso, band_geom, in_band
 
     hit = cached(_PICKS, key, make)
     if hit[0] is not ld:  # an id reused by a newer LayerData: recompute
@@ -234,8 +237,8 @@ def _slopes(ld: LayerData):
     return got
 
 
-def build_problem(ld: LayerData, c: float, pick, iso, band_geom, r: float, pieces: list, honoured: np.ndarray,
-                  before: float) -> SculptProblem:
+def build_problem(ld: LayerData, c: float, pick, iso, band_geom, in_band: np.ndarray, r: float, pieces: list,
+                  honoured: np.ndarray, before: float) -> SculptProblem:
     """The :class:`SculptProblem` of an edit on layer ``ld`` (services bound to its data)."""
     pd, h = ld.planar, ld.h
     samples = stroke_samples(pieces)
@@ -243,8 +246,6 @@ def build_problem(ld: LayerData, c: float, pick, iso, band_geom, r: float, piece
     m_s = np.minimum(pd.margin_at(samples.P), pd.margin)
     w_rim = smoothstep(ds_rim / np.maximum(m_s, 1e-300)) if pd.margin > 0 else np.ones(len(ds_rim))
     B = bary_rows(pd, samples.P)
-    p, q, _, Rp, Rq = _slopes(ld)
-    in_band = shapely.contains_xy(band_geom, pd.V2[:, 0], pd.V2[:, 1])
 
     def shading(z):
         return vertex_shading(pd, z, ld.light, ld.model)
@@ -257,12 +258,11 @@ def build_problem(ld: LayerData, c: float, pick, iso, band_geom, r: float, piece
         return mean_distance(honoured, isophote_lines(pd, E, c))
 
     return SculptProblem(
-        V=ld.mesh.V, F=pd.F, is_rim=pd.is_contour, light=ld.light, model=ld.model, E=ld.E, Rp=Rp, Rq=Rq, p=p, q=q,
-        h=h, c=float(c), pick=np.asarray(pick, np.float64).reshape(2), isophote=np.asarray(iso.coords, np.float64)[:, :2],
+        V=ld.mesh.V, F=pd.F, is_rim=pd.is_contour, light=ld.light, model=ld.model, E=ld.E, h=h, c=float(c), pick=np.asarray(pick, np.float64).reshape(2), isophote=np.asarray(iso.coords, np.float64)[:, :2],
         band=band_geom, band_radius=r, in_band=in_band,
         stroke=pieces, samples=samples.P, sample_weights=samples.w * w_rim, d_rim=pd.d_rim,
         rim_margin=np.minimum(pd.margin_v, pd.margin), outline=pd.outline, Q=pd.Q, before=before,
-        _shading=shading, _shading_change=change, _distance_after=after,
+        _slopes=lambda: _slopes(ld), _shading=shading, _shading_change=change, _distance_after=after,
         _locate=lambda P: pd.locator.locate(P), _distance_to_stroke=lambda P, u: distance_to(pieces, P, h, u),
         host_data=HostData(ld, pieces, samples, B, w_rim, honoured),
     )
@@ -348,7 +348,7 @@ def sculpt(
     T["layer"] = time.perf_counter() - t0
 
     t = time.perf_counter()
-    c, iso, band_geom = _pick(ld, pick, r)
+    c, iso, band_geom, in_band = _pick(ld, pick, r)
     cleaned = prepare_stroke(stroke, h)
     pieces = clip_to_band(cleaned, band_geom, h)
     drawn = float(np.sum(np.linalg.norm(np.diff(cleaned, axis=0), axis=1)))
@@ -363,7 +363,7 @@ def sculpt(
             "turns vertical and cannot follow a redrawn isophote: draw it further inside the shape"
         )
     before = mean_distance(honoured, iso)
-    problem = build_problem(ld, c, pick, iso, band_geom, r, pieces, honoured, before)
+    problem = build_problem(ld, c, pick, iso, band_geom, in_band, r, pieces, honoured, before)
     T["stroke"] = time.perf_counter() - t
 
     t = time.perf_counter()
