@@ -117,7 +117,8 @@ def test_replay_check_explains_a_difference_by_the_solver_versions(third_party_d
     assert cli.main(["replay", str(path), "--check"]) == 2
     err = capsys.readouterr().err.strip().splitlines()[-1]
     assert "replay differs from the saved snapshot: layer 'a': mesh differ" in err
-    assert "(the sculpt solver 'probe' was version 3 of plugin 'plugin-0-ThirdPartySolvers' None; installed: version 4" in err
+    assert ("(the sculpt solver 'probe' was version 3 of plugin 'plugin-0-ThirdPartySolvers'; installed: version 4 of "
+            "'plugin-0-NewerProbe')") in err
 
 
 @pytest.mark.parametrize("entry, message", [

@@ -177,9 +177,12 @@ def version_notes(data: dict, host) -> list[str]:
             now = {**_who(host, have[name]), "solver_version": have[name].version}
             then = {k: info.get(k) for k in ("version", "solver_version")}
             if then["version"] != now["version"] or then["solver_version"] != now["solver_version"]:
-                notes.append(f"the {SOLVER_KINDS[kind].what} {name!r} was version {then['solver_version']} of plugin "
-                             f"{info.get('plugin')!r} {then['version']}; installed: version {now['solver_version']} of "
-                             f"{now['plugin']!r} {now['version']}")
+                def of(plugin, version):  # a plugin registered by hand has no version to say
+                    return f"{quote(plugin)}" + (f" {version}" if isinstance(version, str) else "")
+
+                notes.append(f"the {SOLVER_KINDS[kind].what} {quote(name)} was version {then['solver_version']} of plugin "
+                             f"{of(info.get('plugin'), then['version'])}; installed: version {now['solver_version']} of "
+                             f"{of(now['plugin'], now['version'])}")
     return notes
 
 
