@@ -55,6 +55,26 @@ def _solver(doc, name: str | None):
     return solver, host.provider_of(solver)
 
 
+def turn_light(light, L: np.ndarray):
+    """An edit's light after its layer's linear map ``L`` (2, 2): the in-plane part turned,
+    its length kept (a scale or a shear must not change a direction's length), z kept. An
+    in-plane light is renormalised exactly as before lights could tilt; an overhead one
+    (no in-plane part) stays as it is. Anything that is not a list of numbers is returned as
+    it is (the file check refuses it)."""
+    if not (isinstance(light, list) and len(light) >= 2):
+        return light
+    xy = np.asarray(light[:2], dtype=np.float64)
+    v = L @ xy
+    if len(light) < 3 or light[2] == 0.0:
+        v = v / max(float(np.hypot(v[0], v[1])), 1e-300)
+    else:
+        length = float(np.hypot(xy[0], xy[1]))
+        if length == 0.0:
+            return list(light)
+        v = v * (length / max(float(np.hypot(v[0], v[1])), 1e-300))
+    return [float(v[0]), float(v[1]), *light[2:]]
+
+
 def _apply(doc, layer: Layer, pick, band, stroke, model_name: str, light=None, solver_name=None, params=None):
     from .pipeline import sculpt  # imports jax: only when an edit actually runs
 
@@ -145,13 +165,8 @@ class SculptIsophote(ReplaceLayerCommand):
             e["stroke"] = transform_points(A, e["stroke"]).tolist()
         if not moved_only and isinstance(e.get("band"), (int, float)) and not isinstance(e.get("band"), bool):
             e["band"] = float(e["band"]) * scale
-        light = e.get("light")
-        if not moved_only and isinstance(light, list) and len(light) >= 2:
-            # A direction: turned by the linear part and renormalised (a scale or a shear
-            # must not change its length).
-            v = L @ np.asarray(light[:2], dtype=np.float64)
-            v = v / max(float(np.hypot(v[0], v[1])), 1e-300)
-            e["light"] = [float(v[0]), float(v[1]), *light[2:]]
+        if not moved_only and "light" in e:
+            e["light"] = turn_light(e["light"], L)
         return e
 
     @classmethod
