@@ -92,6 +92,7 @@ class SculptController(QObject):
         self.live_preview = True
         self.status = ""
         self._last_attempt = None
+        self._strokes_applied = False  # the strokes kept for several picks are what the last edit applied
         self.last_info: dict = {}
         self._options: dict = {}
         tools = self._tools()
@@ -194,6 +195,7 @@ class SculptController(QObject):
         if self.tool is not None:
             (getattr(self.tool, "reset", None) or self.tool.cancel)()
         self._last_attempt = None
+        self._strokes_applied = False
         self.last_info = {}
         for name in ("isophote", "band", "stroke", "strips", "regions"):
             self.canvas.set_overlay(name, [])
@@ -256,6 +258,12 @@ class SculptController(QObject):
         return len(getattr(self.tool, "picks", None) or []) if self.picking else int(self.pick_point is not None)
 
     @property
+    def strokes_to_apply(self) -> int:
+        """Strokes drawn for several picked isophotes and not applied as they are: what Enter
+        (or the panel's Apply) would apply; 0 right after the edit was applied."""
+        return 0 if self._strokes_applied else self.strokes_drawn
+
+    @property
     def strokes_drawn(self) -> int:
         """Of those, how many have a stroke kept (several picked: before the edit is applied)."""
         picks = (getattr(self.tool, "picks", None) or []) if self.picking else []
@@ -279,6 +287,7 @@ class SculptController(QObject):
             return self._add_pick(point)
         self.stop_preview()
         self._last_attempt = None
+        self._strokes_applied = False
         self.last_info = {}
         for name in ("stroke", "strips", "regions"):
             self.canvas.set_overlay(name, [])
@@ -452,6 +461,7 @@ class SculptController(QObject):
         except SketchforgeError as exc:
             self._fail(exc)
             return
+        self._strokes_applied = False
         if cmd is None:  # several isophotes picked: the stroke is kept until each has one
             self._show_stroke()
             self._set_status(self.tool.message)
@@ -525,6 +535,7 @@ class SculptController(QObject):
 
         def on_done(done_cmd):
             self._last_attempt = done_cmd
+            self._strokes_applied = True
             self.last_info = result_info(done_cmd)
             self._show_debug()
             r = getattr(done_cmd, "result", None)

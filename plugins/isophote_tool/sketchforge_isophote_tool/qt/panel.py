@@ -187,7 +187,7 @@ class IsophoteSculptPanel(QWidget):
             self.spin.setEnabled(mine)
             picked, drawn = getattr(c, "pick_count", 0), getattr(c, "strokes_drawn", 0)
             self.apply.setVisible(mine and picked > 1)
-            self.apply.setEnabled(mine and drawn > 0)
+            self.apply.setEnabled(mine and getattr(c, "strokes_to_apply", drawn) > 0)
             self.apply.setText(f"Apply {drawn} of {picked} strokes (Enter)" if picked > 1 else "Apply strokes (Enter)")
         finally:
             self._updating = False
