@@ -34,12 +34,9 @@ import numpy as np
 import scipy.sparse as sp
 import shapely
 
-from sketchforge.errors import NothingToDoError, SculptError, SolverError
 from sketchforge.geometry.band import band_radius
-from sketchforge.geometry.mesh import Mesh
 from sketchforge.geometry.reflectance import LAMBERTIAN
-from sketchforge.plugins.registry import ReflectanceModel
-from sketchforge.plugins.sculpt_problem import SculptProblem
+from sketchforge.plugin_api import Mesh, NothingToDoError, ReflectanceModel, SculptError, SculptProblem, SolverError
 
 from .layerdata import layer_data
 from .pipeline import (
