@@ -228,3 +228,33 @@ def test_a_joint_edit_with_a_one_isophote_solver_changes_nothing(real_host):
     with pytest.raises(SculptError, match="^the sculpt solver 'strips' redraws one isophote per edit"):
         doc.execute({**_entry(doc), "solver": "strips"})
     assert doc.layer("a").mesh is before
+
+
+def test_several_isophotes_must_be_true_or_false_at_registration():
+    from sketchforge.plugins.hookspecs import hookimpl
+    from sketchforge.plugins.solvers import SculptSolver
+    from sketchforge.plugins.testing import make_test_host
+
+    class Plugin:
+        __name__ = "vague"
+
+    vague = SculptSolver("vague", GAUSS_NEWTON.solve, check_params=GAUSS_NEWTON.check_params, several_isophotes="yes")
+    plugin = Plugin()
+    plugin.sketchforge_sculpt_solvers = hookimpl(specname="sketchforge_sculpt_solvers")(lambda: [vague])
+    host = make_test_host(plugin)
+    assert "vague" not in host.solvers("sculpt")
+    assert any("sculpt solver 'vague': several_isophotes must be True or False" in p for p in host.problems), host.problems
+
+
+def test_every_solver_gets_the_whole_light(real_host, pair):
+    """The host hands the 3D light to the solver, z included, for one isophote and several."""
+    mesh, s1, s2 = pair
+    seen = []
+    spy = dataclasses.replace(GAUSS_NEWTON, name="spy", solve=lambda p, q: seen.append(p.light.copy()) or GAUSS_NEWTON.solve(p, q))
+    from sketchforge.document.layer import Light
+
+    light = Light.from_angle(30.0, 55.0).direction
+    sculpt(mesh, light, P1, 0.2, isophote_stroke(mesh, P1, offset=0.1, half=0.2, light=light)[0], solver=spy)
+    sculpt_many(mesh, light, [(P1, 0.2, isophote_stroke(mesh, P1, offset=0.1, half=0.2, light=light)[0]),
+                              (P2, 0.2, isophote_stroke(mesh, P2, offset=0.1, half=0.2, light=light)[0])], solver=spy)
+    assert len(seen) >= 2 and all(np.array_equal(l, light) for l in seen) and light[2] > 0.8
