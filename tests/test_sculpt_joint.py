@@ -258,3 +258,20 @@ def test_every_solver_gets_the_whole_light(real_host, pair):
     sculpt_many(mesh, light, [(P1, 0.2, isophote_stroke(mesh, P1, offset=0.1, half=0.2, light=light)[0]),
                               (P2, 0.2, isophote_stroke(mesh, P2, offset=0.1, half=0.2, light=light)[0])], solver=spy)
     assert len(seen) >= 2 and all(np.array_equal(l, light) for l in seen) and light[2] > 0.8
+
+
+def test_choosing_another_solver_keeps_the_picks_it_can_take(real_host):
+    from sketchforge_isophote_tool.tool import SculptIsophoteTool
+
+    doc = _doc(real_host)
+    tool = SculptIsophoteTool(doc, band=0.2)
+    assert tool.pick_at(P1)
+    assert tool.add_pick_at(P2) and len(tool.picks) == 2
+    assert tool.set_band(0.15)  # the newest pick's band
+    assert [p.band for p in tool.picks] == [0.2, 0.15]
+    tool.set_options({"model": "lambertian", "params": {"smoothness": 1.5}})
+    assert [p.band for p in tool.picks] == [0.2, 0.15] and tool.band == 0.15
+    assert np.array_equal(tool.picks[1].pick, P2)
+    if "strips" in real_host.solvers("sculpt"):
+        tool.set_options({"solver": "strips"})
+        assert len(tool.picks) == 1 and "redraws one isophote per edit" in tool.message

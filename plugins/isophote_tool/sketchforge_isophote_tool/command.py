@@ -120,11 +120,13 @@ class SculptIsophote(ReplaceLayerCommand):
         return "Sculpt isophote"
 
     def compute(self, doc, old: Layer) -> Layer:
-        self.result = _apply(doc, old, self.pick, self.band, self.stroke, self.model, None, self.solver, self.params)
+        # Read once: the light the edit solves with is the one it records.
+        light = [float(v) for v in doc.light.direction]
+        self.result = _apply(doc, old, self.pick, self.band, self.stroke, self.model, light, self.solver, self.params)
         # The layer remembers the light this edit used and the solver that made it, so
         # re-applying it after a parameter change gives the same edit even if the light has
         # moved since or another solver has become the default.
-        entry = {**self.to_dict(), "light": [float(v) for v in doc.light.direction], "solver": self.result.solver}
+        entry = {**self.to_dict(), "light": light, "solver": self.result.solver}
         return old.evolve(mesh=self.result.mesh, edits=tuple(old.edits) + (entry,))
 
     def to_dict(self) -> dict:
@@ -245,8 +247,9 @@ class SculptIsophotes(ReplaceLayerCommand):
         return f"Sculpt {len(self.edits)} isophotes" if len(self.edits) != 1 else "Sculpt isophote"
 
     def compute(self, doc, old: Layer) -> Layer:
-        self.result = _apply_many(doc, old, self.edits, self.model, None, self.solver, self.params)
-        entry = {**self.to_dict(), "light": [float(v) for v in doc.light.direction], "solver": self.result.solver}
+        light = [float(v) for v in doc.light.direction]  # read once: the light used is the one recorded
+        self.result = _apply_many(doc, old, self.edits, self.model, light, self.solver, self.params)
+        entry = {**self.to_dict(), "light": light, "solver": self.result.solver}
         return old.evolve(mesh=self.result.mesh, edits=tuple(old.edits) + (entry,))
 
     def to_dict(self) -> dict:

@@ -178,7 +178,15 @@ class SculptIsophoteTool(Tool):
             self.options = old
             raise
         if self.pick is not None and options != old:
-            self.pick_at(self.pick)  # the isophote through the pick depends on the model
+            # The isophote through a pick depends on the model: picked again, every one of them
+            # with its band (strokes drawn for them are dropped). A solver that redraws one
+            # isophote per edit keeps the first; the message says why.
+            kept = [(p.pick.copy(), p.band) for p in self.picks]
+            self.band = kept[0][1]
+            if self.pick_at(kept[0][0]):
+                for point, band in kept[1:]:
+                    if not self.add_pick_at(point, band):
+                        break
 
     def _check_solver(self) -> None:
         from .command import _solver
@@ -259,8 +267,9 @@ class SculptIsophoteTool(Tool):
         self.message = ""
         self._update_band()
 
-    def add_pick_at(self, point) -> bool:
-        """Shift+click: another isophote of the picked layer (see the module docstring)."""
+    def add_pick_at(self, point, band: float | None = None) -> bool:
+        """Shift+click: another isophote of the picked layer (see the module docstring), with
+        the band radius ``band`` (None: the current one)."""
         from .isophote import picked_isophote
         from .joint import MAX_ISOPHOTES, one_at_a_time
 
@@ -296,10 +305,9 @@ class SculptIsophoteTool(Tool):
             self.message = refusal
             return False
         self._earlier = self.picks
-        kept, layer_id, ld = self._earlier, self.layer_id, self._ld
-        self._set_newest(p, layer_id, float(c), iso, ld)
-        self._earlier = kept
-        self._update_band()
+        if band is not None:
+            self.band = float(band)
+        self._set_newest(p, self.layer_id, float(c), iso, self._ld)
         return True
 
     def _solver(self):
