@@ -136,7 +136,6 @@ class LightPanel(QGroupBox):
     def __init__(self, parent=None) -> None:
         super().__init__("Light", parent)
         self.disc = LightDisc()
-        self.dial = self.disc  # the name of the in-plane dial it replaces
         self.angle = QDoubleSpinBox()
         self.angle.setRange(-180.0, 180.0)
         self.angle.setDecimals(1)
