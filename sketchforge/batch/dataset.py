@@ -110,9 +110,11 @@ def dataset_sample(seed: int, index: int, count: int, size: int, expected: tuple
     """The job: make sample ``index`` (:func:`.samples.make_sample`), render it, and return the
     ``.npz`` bytes (``data``), its document's bytes (``extra``) and its manifest entry
     (``record``)."""
+    from sketchforge.batch.jobs import tune_malloc
     from sketchforge.batch.samples import make_sample
     from sketchforge.document import fileformat as ff
 
+    tune_malloc()
     t0, c0 = time.perf_counter(), time.process_time()
     npz_name, doc_name = sample_names(index, count)
     try:

@@ -131,6 +131,15 @@ class Engine:
                     "differ; install the same versions on every worker"
                 )
 
+    def wait_for_workers(self, n: int, timeout: float | None = None) -> None:
+        """Wait until ``n`` workers are connected (workers of a cluster join one by one)."""
+        if self._client is None:
+            raise RuntimeError("the engine is not started")
+        try:
+            self._client.wait_for_workers(n, timeout=self.timeout if timeout is None else timeout)
+        except (TimeoutError, OSError):
+            raise SketchforgeError(f"{self.where}: fewer than {n} workers after {timeout or self.timeout:g} s") from None
+
     def close(self) -> None:
         """Close the client and, when it was made here, the local cluster."""
         for thing in (self._client, self._cluster):

@@ -13,6 +13,7 @@ then reports as such.
 
 from __future__ import annotations
 
+import ctypes
 import os
 import platform
 import socket
@@ -66,6 +67,26 @@ class JobResult:
     extra: bytes = b""
     record: dict | None = None
     worker: str = field(default_factory=this_worker)
+
+
+@cache
+def tune_malloc() -> None:
+    """Undo, in a Dask worker, the cost of its nanny's ``MALLOC_TRIM_THRESHOLD_=65536``.
+
+    Setting that variable also stops glibc from raising its mmap threshold (128 KiB) as a
+    process frees large blocks, so every array above it is mapped and unmapped afresh, page
+    faults and all: a replay then costs about 1.5x its CPU time (measured on random creatures:
+    0.54 s per document against 0.35 s in one process, and 0.36 s once the variable is unset).
+    Where it is set, the thresholds go where glibc's own adjustment would take them: mmap at
+    32 MiB (its ceiling on 64-bit machines) and trim at twice that."""
+    if "MALLOC_TRIM_THRESHOLD_" not in os.environ:
+        return
+    try:
+        libc = ctypes.CDLL("libc.so.6")
+        libc.mallopt(-3, 32 << 20)  # M_MMAP_THRESHOLD
+        libc.mallopt(-1, 64 << 20)  # M_TRIM_THRESHOLD
+    except (OSError, AttributeError):  # not glibc: nothing to undo
+        pass
 
 
 @cache
@@ -165,6 +186,7 @@ def replay_export(source: str, raw: bytes, output: str, fmt: str, size: int, exp
     expected : tuple
         The client's :func:`software`.
     """
+    tune_malloc()
     t0, c0 = time.perf_counter(), time.process_time()
     try:
         check_software(expected)
@@ -184,5 +206,6 @@ def replay_export(source: str, raw: bytes, output: str, fmt: str, size: int, exp
 def warm_up() -> str:
     """Build the worker's plugin host (imports every plugin) before its first job; returns
     the worker's ``host:pid``."""
+    tune_malloc()
     software()
     return this_worker()
