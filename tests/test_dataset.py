@@ -48,16 +48,16 @@ def test_every_sample_holds_consistent_maps_of_a_random_shape_model_and_light(da
         assert a["shading"].shape == (SIZE, SIZE) and a["shading"].dtype == np.float32
         assert a["normal"].shape == (SIZE, SIZE, 3) and a["normal"].dtype == np.float32
         assert a["depth"].shape == (SIZE, SIZE) and a["mask"].dtype == bool and a["light"].shape == (3,)
-        m, n, l = a["mask"], a["normal"].astype(np.float64), a["light"]
+        m, n, light = a["mask"], a["normal"].astype(np.float64), a["light"]
         model = str(a["model"])
         assert model == rec["model"] and model in real_host.reflectance_models
-        assert abs(np.linalg.norm(l) - 1) < 1e-12 and l[2] >= 0 and l.tolist() == rec["light"]
+        assert abs(np.linalg.norm(light) - 1) < 1e-12 and light[2] >= 0 and light.tolist() == rec["light"]
         assert 0.1 < m.mean() < 0.95 and m.sum() == rec["mask_pixels"]
         assert np.abs(np.linalg.norm(n[m], axis=1) - 1).max() < 1e-5
         assert not n[~m].any() and not a["shading"][~m].any() and not a["depth"][~m].any()
-        expected = np.maximum(0.0, evaluate(real_host.reflectance_models[model], n[m], l))
+        expected = np.maximum(0.0, evaluate(real_host.reflectance_models[model], n[m], light))
         if model == "lambertian":
-            expected = np.maximum(0.0, n[m] @ l)  # the issue's check, written out
+            expected = np.maximum(0.0, n[m] @ light)  # the issue's check, written out
         assert np.abs(a["shading"][m] - expected).max() <= 1e-6
         assert 0.05 < (a["shading"][m] > 0).mean() < 0.95  # lit and unlit parts: an in-plane light
         # depth is in pixels, so its central differences are the normals' slopes
@@ -119,8 +119,8 @@ def test_lights_are_uniform_on_the_directions_a_document_can_hold_and_switching_
     az = np.arctan2(flat[:, 1], flat[:, 0])
     counts = np.histogram(az, bins=8, range=(-math.pi, math.pi))[0]
     assert counts.min() > 4000 / 8 * 0.8 and counts.max() < 4000 / 8 * 1.2
-    for l in flat[:50]:  # a document keeps them bit for bit
-        assert np.array_equal(Light.from_vector(l).direction, l)
+    for v in flat[:50]:  # a document keeps them bit for bit
+        assert np.array_equal(Light.from_vector(v).direction, v)
     monkeypatch.setattr(samples, "LIGHT_LEAVES_PLANE", True)
     raised = lights()
     assert np.allclose(np.linalg.norm(raised, axis=1), 1, atol=1e-12) and np.all(raised[:, 2] >= 0)

@@ -69,12 +69,12 @@ def test_the_shading_image_is_max_of_zero_and_the_reflectance_of_the_maps_normal
         light = rng.normal(size=3)
         light[2] = abs(light[2])
         light /= np.linalg.norm(light)
-        img = gb.reflectance_image(maps, light, lambda N, l: N @ l)
+        img = gb.reflectance_image(maps, light, lambda normals, towards: normals @ towards)
         n = maps.normal.astype(np.float64)
         assert np.array_equal(img[maps.mask], np.maximum(0.0, n[maps.mask] @ light))
         assert np.all(img[~maps.mask] == 0)
         assert 0 < (img[maps.mask] > 0).mean() < 1 or light[2] > 0.5
     with pytest.raises(ValueError, match="one finite value per normal"):
-        gb.reflectance_image(maps, light, lambda N, l: np.ones(3))
+        gb.reflectance_image(maps, light, lambda normals, towards: np.ones(3))
     with pytest.raises(ValueError, match="one finite value per normal"):
-        gb.reflectance_image(maps, light, lambda N, l: np.full(len(N), np.nan))
+        gb.reflectance_image(maps, light, lambda normals, towards: np.full(len(normals), np.nan))

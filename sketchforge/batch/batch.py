@@ -16,9 +16,10 @@ import json
 import os
 import re
 import time
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Iterator
+from typing import Any
 
 from sketchforge.atomic import check_target, write_bytes_atomic
 from sketchforge.errors import ExportError, SketchforgeError
@@ -118,7 +119,8 @@ def find_documents(paths: list[Path]) -> list[tuple[Path, Path]]:
         else:
             raise SketchforgeError(f"no such file or folder: {p}")
     if not found:
-        raise SketchforgeError("no documents found under " + ", ".join(str(p) for p in paths) + " (a folder's documents are its *.json files)")
+        where = ", ".join(str(p) for p in paths)
+        raise SketchforgeError(f"no documents found under {where} (a folder's documents are its *.json files)")
     return found
 
 

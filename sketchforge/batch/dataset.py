@@ -37,8 +37,9 @@ import io
 import json
 import time
 import zipfile
+from collections.abc import Iterator
 from pathlib import Path
-from typing import Any, Iterator
+from typing import Any
 
 import numpy as np
 
@@ -88,14 +89,14 @@ def render_sample(mesh, light: np.ndarray, model, size: int) -> dict[str, np.nda
     check_raster_cost([mesh], view)
     maps = front_surface([mesh], view)
     # Every pixel is evaluated (a JAX model then compiles once per image size, not per sample).
-    shading = reflectance_image(maps, light, lambda N, l: evaluate(model, N, l))
+    shading = reflectance_image(maps, light, lambda normals, towards: evaluate(model, normals, towards))
     return {
         "shading": shading.astype(np.float32),
         "normal": maps.normal,
         "depth": (maps.height * view.scale).astype(np.float32),
         "mask": maps.mask,
         "light": np.asarray(light, dtype=np.float64),
-        "scale": np.float64(view.scale),
+        "scale": np.array(view.scale, dtype=np.float64),
         "origin": np.array([view.x0, view.y1], dtype=np.float64),
     }
 

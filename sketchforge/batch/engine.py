@@ -67,7 +67,7 @@ class Engine:
         self._client: Any = None
 
     # --- life cycle ----------------------------------------------------------------------------
-    def __enter__(self) -> "Engine":
+    def __enter__(self) -> Engine:
         self.start()
         return self
 
@@ -77,10 +77,10 @@ class Engine:
     def start(self) -> None:
         """Connect (or start the local cluster), then check every worker runs the same
         software as this process and warm it up."""
-        from sketchforge.batch.jobs import software, software_difference, warm_up
-
         import dask
         from dask.distributed import Client, LocalCluster
+
+        from sketchforge.batch.jobs import software, software_difference, warm_up
 
         # Dask's own log lines (a slow event loop, a closing comm, a task given up after its
         # worker died) would come between ours: each of those reaches the user as a result,
@@ -167,7 +167,9 @@ class Engine:
             return f"a local Dask cluster of {workers}"
         return f"the Dask cluster at {self.scheduler} ({workers})"
 
-    def run(self, fn: Callable[..., Any], jobs: Iterable[tuple[Any, tuple]], window: int | None = None) -> Iterator[tuple[Any, Any]]:
+    def run(
+        self, fn: Callable[..., Any], jobs: Iterable[tuple[Any, tuple]], window: int | None = None
+    ) -> Iterator[tuple[Any, Any]]:
         """Run ``fn(*args)`` for each ``(tag, args)`` of ``jobs``, yielding ``(tag, result)`` in
         the order the jobs finish; a job whose worker died yields a :class:`WorkerDied` as its
         result instead. ``jobs`` is read lazily: at most ``window`` jobs (default a few per

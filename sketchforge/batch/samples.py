@@ -170,7 +170,9 @@ def make_sample(seed: int, index: int, host=None) -> Sample:
     host = default_host() if host is None else host
     for plugin in ("assemble", "isophote_tool"):
         if plugin not in host.plugin_names():
-            raise SketchforgeError(f"sketchforge dataset needs the {plugin!r} plugin (its random shapes and edits); it is not installed")
+            raise SketchforgeError(
+                f"sketchforge dataset needs the {plugin!r} plugin (its random shapes and edits); it is not installed"
+            )
     models = sorted(host.reflectance_models)
     last = ""
     for attempt in range(MAX_ATTEMPTS):

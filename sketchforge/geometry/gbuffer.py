@@ -717,11 +717,11 @@ def reflectance_image(maps: SurfaceMaps, light, reflectance) -> np.ndarray:
     -------
     (height, width) float64
     """
-    l = np.asarray(light, dtype=np.float64).reshape(3)
+    direction = np.asarray(light, dtype=np.float64).reshape(3)
     N = maps.normal.reshape(-1, 3).astype(np.float64)
     outside = ~maps.mask.reshape(-1)
     N[outside] = (0.0, 0.0, 1.0)
-    R = np.asarray(reflectance(N, l), dtype=np.float64).reshape(-1)
+    R = np.asarray(reflectance(N, direction), dtype=np.float64).reshape(-1)
     if R.shape != (len(N),) or not np.all(np.isfinite(R)):
         raise ValueError(f"the reflectance returned {R.shape} values for {len(N)} normals; it must return one finite value per normal")
     out = np.maximum(R, 0.0)
