@@ -166,8 +166,9 @@ def test_the_progress_bar_draws_in_place_on_a_terminal_and_failures_scroll_above
     term = Terminal()
     bar = ProgressBar(4, "documents", stream=term)
     bar.advance(True)
-    bar.line("sketchforge: failed: b.json: broken")
     bar.advance(False)
+    bar.line("sketchforge: failed: b.json: broken")
+    assert "2/4 documents, 1 failed" in term.getvalue().rsplit("broken\n", 1)[1]  # the bar redrawn, counted
     bar.advance(True)
     bar.advance(True)
     bar.close()

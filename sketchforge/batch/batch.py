@@ -190,8 +190,8 @@ def run_batch(entries: list[Entry], out_dir: Path, fmt: str, size: int, engine, 
 
     def fail(e: Entry, message: str) -> None:
         e.ok, e.error = False, message
-        bar.line(f"sketchforge: failed: {_printable(message)}")
         bar.advance(False)
+        bar.line(f"sketchforge: failed: {_printable(message)}")
 
     def jobs() -> Iterator[tuple[Entry, tuple]]:
         for e in entries:

@@ -224,8 +224,8 @@ def run_dataset(out_dir: Path, count: int, size: int, seed: int, engine, progres
             failed.append({"index": i, "error": message})
             from sketchforge.cli import printable
 
-            bar.line(f"sketchforge: failed: {printable(message)}")
             bar.advance(False)
+            bar.line(f"sketchforge: failed: {printable(message)}")
     finally:
         bar.close()
     write_bytes_atomic(out_dir / MANIFEST_NAME, manifest_bytes(seed, count, size, records, failed, expected, models))

@@ -91,17 +91,21 @@ class Engine:
             # it was running is lost (with queued ones, they would be counted as its victims).
             local = {"distributed.scheduler.allowed-failures": ALLOWED_FAILURES,
                      "distributed.scheduler.worker-saturation": 1.0}
-            with dask.config.set(local):
-                self._cluster = LocalCluster(
-                    n_workers=self.requested or local_cores(),
-                    threads_per_worker=1,
-                    processes=True,
-                    host="127.0.0.1",
-                    scheduler_port=0,
-                    dashboard_address=None,
-                    silence_logs=logging.CRITICAL,
-                )
-            self._client = Client(self._cluster)
+            try:
+                with dask.config.set(local):
+                    self._cluster = LocalCluster(
+                        n_workers=self.requested or local_cores(),
+                        threads_per_worker=1,
+                        processes=True,
+                        host="127.0.0.1",
+                        scheduler_port=0,
+                        dashboard_address=None,
+                        silence_logs=logging.CRITICAL,
+                    )
+                self._client = Client(self._cluster)
+            except (OSError, RuntimeError, TimeoutError) as exc:  # no port, no process could start
+                self.close()
+                raise SketchforgeError(f"cannot start a local Dask cluster: {type(exc).__name__}: {exc}") from None
         else:
             try:
                 self._client = Client(self.scheduler, timeout=f"{self.timeout}s")
