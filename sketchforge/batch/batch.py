@@ -17,7 +17,7 @@ import os
 import re
 import time
 from collections.abc import Iterator
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -71,7 +71,6 @@ class BatchResult:
     cluster: str
     report: Path
     interrupted: bool = False
-    extra: dict = field(default_factory=dict)
 
     @property
     def failed(self) -> int:
@@ -169,7 +168,6 @@ def write_report(result: BatchResult, fmt: str, size: int | None) -> None:
         "failed": result.failed,
         "interrupted": result.interrupted,
         "seconds": round(result.seconds, 3),
-        **result.extra,
         "results": [e.to_dict() for e in entries],
     }
     write_bytes_atomic(result.report, (json.dumps(body, indent=1, ensure_ascii=False) + "\n").encode("utf-8"))

@@ -29,7 +29,7 @@ def add_parsers(sub: Any, whole_number: Callable[[str], int]) -> None:
         "batch",
         help="replay every document under some paths and export each (on a Dask cluster)",
         description="Replay every document (a folder's *.json files, recursively) and export each to "
-        "EXPORT_DIR/<name>.<format>, the bytes `replay DOC --export` writes (png: those of `render`).",
+        "OUT/<name>.<format>, the bytes `replay DOC --export` writes (png: those of `render`).",
     )
     b.add_argument("paths", nargs="+", type=Path, metavar="PATH", help="documents, or folders of them")
     b.add_argument("--export-dir", required=True, type=Path, metavar="OUT", help="folder for the outputs and batch-report.json")
