@@ -90,6 +90,8 @@ def test_a_folder_on_the_default_local_cluster_gives_the_replay_bytes_and_one_li
         assert sum(name in line and words in line for line in lines) == 1, (name, lines)
         assert not _output(out, name, "obj").exists()
     assert "Traceback" not in err and "exported 5 of 8 documents" in err
+    # nothing else: Dask's own warnings and log lines stay out of the user's terminal
+    assert all(line.startswith(("sketchforge: failed:", "exported ")) for line in err.splitlines()), err
     report = json.loads((out / "batch-report.json").read_text())
     assert report["documents"] == 8 and report["ok"] == 5 and report["failed"] == 3
     assert "local Dask cluster of 2 workers" in report["cluster"]

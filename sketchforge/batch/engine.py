@@ -99,7 +99,9 @@ class Engine:
                         processes=True,
                         host="127.0.0.1",
                         scheduler_port=0,
-                        dashboard_address=None,
+                        # The scheduler always serves HTTP: on a free loopback port, not
+                        # on 8787 (with a warning line when another cluster holds it).
+                        dashboard_address="127.0.0.1:0",
                         silence_logs=logging.CRITICAL,
                     )
                 self._client = Client(self._cluster)
