@@ -1,4 +1,5 @@
-"""Command line: ``sketchforge [DOC]`` (the app), ``replay``, ``info``, ``render``.
+"""Command line: ``sketchforge [DOC]`` (the app), ``replay``, ``info``, ``render``, and
+``batch`` and ``dataset`` (:mod:`sketchforge.batch`).
 
 Errors a user can cause print one line on stderr and exit with status 2; no traceback.
 """
@@ -13,7 +14,7 @@ from pathlib import Path
 from sketchforge.atomic import check_target, refuse_input_as_output, same_file
 from sketchforge.errors import SketchforgeError, quote, shorten
 
-SUBCOMMANDS = ("replay", "info", "render")
+SUBCOMMANDS = ("replay", "info", "render", "batch", "dataset")
 #: ``render --isophotes``: more lines than this are closer than a pixel apart at any size.
 MAX_ISOPHOTES = 255
 
@@ -209,6 +210,9 @@ def build_parser() -> argparse.ArgumentParser:
                    help="shade with this light instead of the document's: a direction towards it, z >= 0 "
                         "(0,0,1 straight overhead; write --light=-1,0,1 when x is negative)")
     d.set_defaults(func=cmd_render)
+    from sketchforge.batch.cli import add_parsers
+
+    add_parsers(sub, whole_number)
     return p
 
 

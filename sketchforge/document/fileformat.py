@@ -515,7 +515,15 @@ def read_regular_file(path, limit: int | None = None) -> bytes:
 
 def read_json(path) -> Any:
     path = Path(path)
-    raw = read_regular_file(path)
+    return parse_json(read_regular_file(path), path)
+
+
+def parse_json(raw: bytes, path) -> Any:
+    """A document file's bytes as JSON, with the checks and one-line errors of :func:`read_json`
+    (``path`` names the file in them): for bytes read elsewhere (a batch worker on another
+    machine gets the document's bytes, not its path)."""
+    if len(raw) > MAX_FILE_BYTES:
+        raise LimitError(f"cannot open {path}: {len(raw)} bytes is over the limit of {MAX_FILE_BYTES}")
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:
