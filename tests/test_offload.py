@@ -1,0 +1,128 @@
+"""The inflation's child process, headless (issue 39, point 1: no test ever crashed the child, so
+its restart path never ran).
+
+The crash is real: a parameter value whose unpickling calls ``os.abort()`` (SIGABRT, what a
+segfaulting native library does: no ``finally`` runs) is sent to the child with a job, so the
+child dies in the middle of that job. The window's thread must get one SolverError line, and
+the next inflation must run in a new child and give, bit for bit, the mesh this process makes.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import os
+
+import numpy as np
+import pytest
+
+from sketchforge.errors import SolverError
+from sketchforge.offload import OffloadedInflation
+from sketchforge.plugins.manager import PluginHost
+from sketchforge.plugins.solvers import Inflater
+from sketchforge.plugins.testing import FanInflater, make_test_host
+
+T = np.linspace(0.0, 2.0 * np.pi, 90, endpoint=False)
+ELLIPSE = np.c_[np.cos(T), 0.6 * np.sin(T)]
+HOLE = np.c_[0.2 * np.cos(T[::6]), 0.15 * np.sin(T[::6])]
+
+
+class AbortInTheChild:
+    """Unpickles as ``os.abort()``: sent to the child, it ends the child mid-job."""
+
+    def __reduce__(self):
+        return (os.abort, ())
+
+
+@pytest.fixture(scope="module")
+def host():
+    return PluginHost.create(allowlist=["inflate"], skip_broken=True)
+
+
+@pytest.fixture(scope="module")
+def offloaded(host):
+    off = OffloadedInflation(host)
+    yield off
+    off.shutdown()
+
+
+def _children() -> set[int]:
+    return {p.pid for p in multiprocessing.active_children()}
+
+
+def test_the_child_answers_for_the_hosts_own_inflater_and_matches_it_bit_for_bit(host, offloaded):
+    assert offloaded.offloading() and offloaded.offloading("poisson")
+    assert not offloaded.offloading("no_such_inflater")
+    here = host.inflate(ELLIPSE, True, {"resolution": 0.08}, holes=[HOLE])
+    there = offloaded.inflate(ELLIPSE, True, {"resolution": 0.08}, holes=[HOLE])
+    assert there.identical(here) and len(there.holes) == 1
+    assert not there.V.flags.writeable and not there.F.flags.writeable  # a Mesh of this process
+    open_here = host.inflate(ELLIPSE[:60], False, {"resolution": 0.1})
+    open_there = offloaded.inflate(ELLIPSE[:60], False, {"resolution": 0.1}, holes=None)
+    assert open_there.identical(open_here) and len(open_there.junction) > 0
+    # everything else is the host's own
+    assert offloaded.wrapped is host and offloaded.commands is host.commands
+    assert offloaded.solvers("inflate") is host.solvers("inflate")
+    with pytest.raises(AttributeError):
+        offloaded.__no_such_dunder__
+
+
+def test_a_child_that_crashes_mid_job_is_one_line_and_the_next_job_runs_in_a_new_child(host, offloaded):
+    assert offloaded.offloading()
+    before = _children()
+    assert before, "the child process is running"
+    with pytest.raises(SolverError) as info:
+        offloaded.inflate(ELLIPSE, True, {"resolution": AbortInTheChild()})
+    msg = str(info.value)
+    assert msg == "the inflation stopped in native code (the solver process crashed); nothing was changed"
+    # The next job runs, in another process, and gives what this process gives.
+    again = offloaded.inflate(ELLIPSE, True, {"resolution": 0.09})
+    assert again.identical(host.inflate(ELLIPSE, True, {"resolution": 0.09}))
+    assert offloaded.offloading()
+    after = _children()
+    assert after and not (after & before), (before, after)  # the crashed child is gone, a new one answers
+    # and it keeps answering after a second crash
+    with pytest.raises(SolverError):
+        offloaded.inflate(ELLIPSE, True, {"resolution": AbortInTheChild()})
+    assert offloaded.inflate(ELLIPSE, True, {"resolution": 0.09}).identical(again)
+
+
+def test_an_inflaters_own_refusal_comes_back_as_it_is(offloaded):
+    from sketchforge.errors import ContourError, ParameterError
+
+    with pytest.raises(ParameterError, match="resolution"):
+        offloaded.inflate(ELLIPSE, True, {"resolution": -1.0})
+    with pytest.raises(ContourError):
+        offloaded.inflate(np.array([[0.0, 0.0], [1.0, 0.0]]), True, {})
+    assert offloaded.inflate(ELLIPSE, True, {"resolution": 0.1}) is not None  # the child is still the same good one
+
+
+def test_a_host_whose_inflater_the_child_does_not_have_inflates_here():
+    fan = make_test_host(FanInflater())
+    off = OffloadedInflation(fan)
+    try:
+        assert not off.offloading() and not off.offloading("fan")
+        square = np.array([[0, 0], [1, 0], [1, 1], [0, 1.0]])
+        assert off.inflate(square, True, {}).identical(fan.inflate(square, True, {}))
+    finally:
+        off.shutdown()
+
+
+def test_an_inflater_of_the_same_name_but_another_implementation_inflates_here():
+    """The child answers only for the very function (plugin, module, name, version) the
+    window's host has under that name: a look-alike stays in this process."""
+
+    class LookAlike:
+        from sketchforge.plugins.hookspecs import hookimpl
+
+        @hookimpl
+        def sketchforge_inflaters(self):
+            return [Inflater("poisson", FanInflater().inflate, version="1")]
+
+    host = make_test_host(LookAlike())
+    off = OffloadedInflation(host)
+    try:
+        assert not off.offloading()
+        square = np.array([[0, 0], [1, 0], [1, 1], [0, 1.0]])
+        assert off.inflate(square, True, {}).n_vertices == 5  # the fan, made here
+    finally:
+        off.shutdown()
