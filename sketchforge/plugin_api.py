@@ -37,12 +37,16 @@ The README's *Plugin guide* documents each contract with a complete brush exampl
   ``create(app)`` imports Qt itself, so the plugin stays importable headless.
 - **Exporters** (:class:`Exporter`): ``write(path, mesh)`` writes to the path it is given
   (the host's temp file: no atomic-write code needed); suffixes like ``".off"``.
+- **Caches** (:class:`LRUCache`, keys of array values by :func:`array_key`): one thread-safe
+  least-recently-used cache, bounded by entries and/or bytes, optionally keyed weakly by an
+  object (derived data of a mesh goes with the mesh).
 - **Provenance**: saved documents record which plugin (and version) provided each command
   and the reflectance models edits used; opening one whose plugin is missing says so once.
 """
 
 from __future__ import annotations
 
+from sketchforge.cache import LRUCache, array_key
 from sketchforge.document.commands import (
     Command,
     MacroCommand,
@@ -95,6 +99,7 @@ __all__ = [
     "ExportError",
     "Exporter",
     "Inflater",
+    "LRUCache",
     "Layer",
     "Light",
     "MacroCommand",
@@ -114,6 +119,7 @@ __all__ = [
     "SolverError",
     "UnknownSolverError",
     "Tool",
+    "array_key",
     "choice",
     "flag",
     "hookimpl",

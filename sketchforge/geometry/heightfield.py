@@ -38,13 +38,10 @@ gets a finite slope of magnitude 1 / NZ_MIN, its normal 0.6° off the drawing pl
 
 from __future__ import annotations
 
-import hashlib
-import threading
-from collections import OrderedDict
-
 import numpy as np
 import scipy.sparse as sp
 
+from sketchforge.cache import LRUCache, array_key
 from sketchforge.geometry.intensity import gradient_operators
 from sketchforge.geometry.normals import NZ_MIN, normals_from_slopes, vertex_normals
 
@@ -238,26 +235,11 @@ def layer_normals(mesh) -> np.ndarray:
     return normals_from_slopes(p, q)
 
 
-_OPERATORS: "OrderedDict[bytes, tuple]" = OrderedDict()
-_OPERATORS_KEPT = 16
-_LOCK = threading.Lock()
+#: gradient_operators of the last few planar meshes (thread-safe: the canvas rasterises on a
+#: worker thread).
+_OPERATORS = LRUCache(16, name="gradient operators")
 
 
 def _operators(V2: np.ndarray, F: np.ndarray):
-    """gradient_operators(V2, F), kept for the last few planar meshes (thread-safe: the canvas
-    rasterises on a worker thread)."""
-    h = hashlib.blake2b(digest_size=16)
-    for a in (V2, F):
-        h.update(np.ascontiguousarray(a).tobytes())
-    key = h.digest()
-    with _LOCK:
-        hit = _OPERATORS.get(key)
-        if hit is not None:
-            _OPERATORS.move_to_end(key)
-            return hit
-    ops = gradient_operators(V2, F)
-    with _LOCK:
-        _OPERATORS[key] = ops
-        while len(_OPERATORS) > _OPERATORS_KEPT:
-            _OPERATORS.popitem(last=False)
-    return ops
+    """gradient_operators(V2, F), kept for the last few planar meshes."""
+    return _OPERATORS.get_or_make(array_key(V2, F), lambda: gradient_operators(V2, F))

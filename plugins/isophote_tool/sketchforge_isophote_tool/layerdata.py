@@ -13,9 +13,6 @@ the shading E at every vertex.
 
 from __future__ import annotations
 
-import hashlib
-import threading
-from collections import OrderedDict
 from dataclasses import dataclass
 
 import numpy as np
@@ -33,6 +30,7 @@ from sketchforge.geometry.locate import TriangleLocator
 from sketchforge.geometry.mesh import Mesh
 from sketchforge.geometry.reflectance import evaluate_pq
 from sketchforge.plugins.registry import ReflectanceModel
+from sketchforge.plugin_api import LRUCache, array_key
 
 #: Default rim margin: max(RIM_EDGES · h, RIM_SIZE · size), size = 2·area/perimeter.
 RIM_EDGES = 3.0
@@ -243,43 +241,19 @@ def _planar(mesh: Mesh) -> PlanarData:
     )
 
 
-_PLANAR: "OrderedDict[bytes, PlanarData]" = OrderedDict()
-_CACHE: "OrderedDict[tuple, LayerData]" = OrderedDict()
-_CACHE_SIZE = 8
 #: The app runs edits on worker threads (a preview still finishing while the command's solve
-#: starts): cache lookups and inserts hold this lock; the computations do not.
-_LOCK = threading.Lock()
-
-
-def cached(cache: OrderedDict, key, make):
-    """``cache[key]``, made by ``make()`` on a miss; LRU of _CACHE_SIZE entries, thread-safe."""
-    with _LOCK:
-        hit = cache.get(key)
-        if hit is not None:
-            cache.move_to_end(key)
-            return hit
-    value = make()
-    with _LOCK:
-        cache[key] = value
-        while len(cache) > _CACHE_SIZE:
-            cache.popitem(last=False)
-    return value
-
-
-def _digest(*arrays) -> bytes:
-    h = hashlib.blake2b(digest_size=16)
-    for a in arrays:
-        h.update(np.ascontiguousarray(a).tobytes())
-    return h.digest()
+#: starts): the caches are thread-safe; the computations run outside their lock.
+_PLANAR = LRUCache(8, name="planar data")
+_CACHE = LRUCache(8, name="layer data")
 
 
 def planar_data(mesh: Mesh) -> PlanarData:
     """Cached :class:`PlanarData` of a layer (keyed on its planar positions and triangles)."""
-    return cached(_PLANAR, _digest(mesh.V[:, :2], mesh.F, mesh.boundary), lambda: _planar(mesh))
+    return _PLANAR.get_or_make(array_key(mesh.V[:, :2], mesh.F, mesh.boundary), lambda: _planar(mesh))
 
 
 def mesh_key(mesh: Mesh) -> bytes:
-    return _digest(mesh.V, mesh.F, mesh.boundary)
+    return array_key(mesh.V, mesh.F, mesh.boundary)
 
 
 def vertex_shading(pd: PlanarData, z: np.ndarray, light: np.ndarray, model: ReflectanceModel):
@@ -301,4 +275,4 @@ def layer_data(mesh: Mesh, light: np.ndarray, model: ReflectanceModel) -> LayerD
         E, _, _ = vertex_shading(pd, z, light, model)
         return LayerData(mesh, pd, z, E, light, model)
 
-    return cached(_CACHE, key, make)
+    return _CACHE.get_or_make(key, make)

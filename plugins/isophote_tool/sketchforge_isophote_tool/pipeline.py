@@ -20,7 +20,6 @@ to the named solver (``sketchforge_sculpt_solvers``; the built-in ``gauss_newton
 from __future__ import annotations
 
 import time
-from collections import OrderedDict
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -31,12 +30,13 @@ from sketchforge.errors import NothingToDoError, ParameterError, PluginError, Sc
 from sketchforge.geometry.band import band_radius
 from sketchforge.geometry.mesh import Mesh
 from sketchforge.geometry.reflectance import LAMBERTIAN
+from sketchforge.plugin_api import LRUCache
 from sketchforge.plugins.registry import ReflectanceModel
 from sketchforge.plugins.sculpt_problem import SculptProblem, SculptSolution
 
 from .fidelity import honoured_samples, isophote_lines, mean_distance
 from .isophote import band_around, picked_isophote
-from .layerdata import LayerData, cached, layer_data, vertex_shading
+from .layerdata import LayerData, layer_data, vertex_shading
 from .shading import bary_rows, shading_change
 from .stroke import clip_to_band, prepare_stroke, resample_polyline, stroke_samples
 
@@ -171,7 +171,7 @@ class SculptResult:
         return base_characteristics(self.layer, pieces, self.reach, n)
 
 
-_PICKS: "OrderedDict[tuple, tuple]" = OrderedDict()
+_PICKS = LRUCache(8, name="picks")
 
 
 def _pick(ld: LayerData, pick, r: float):
@@ -189,7 +189,7 @@ def _pick(ld: LayerData, pick, r: float):
         in_band.setflags(write=False)
         return ld, c, iso, band_geom, in_band
 
-    hit = cached(_PICKS, key, make)
+    hit = _PICKS.get_or_make(key, make)
     if hit[0] is not ld:  # an id reused by a newer LayerData: recompute
         hit = make()
     return hit[1:]

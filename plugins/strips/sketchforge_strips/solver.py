@@ -27,20 +27,19 @@ the change): the never-worse guard every sculpt solver gets.
 
 from __future__ import annotations
 
-import hashlib
-import threading
 import time
-from collections import OrderedDict
 
 import numpy as np
 from scipy.spatial import cKDTree
 
 from sketchforge.plugin_api import (
+    LRUCache,
     NothingToDoError,
     ParameterError,
     SculptProblem,
     SculptSolution,
     SculptSolver,
+    array_key,
     choice,
     number,
     validate_params,
@@ -99,25 +98,13 @@ def _smoothstep(t):
     return t * t * (3.0 - 2.0 * t)
 
 
-_RASTERS: "OrderedDict[bytes, Raster]" = OrderedDict()
-_LOCK = threading.Lock()
+_RASTERS = LRUCache(8, name="strips rasters")
 
 
 def _raster(V2: np.ndarray, F: np.ndarray) -> Raster:
     """The layer's grid raster, cached on its planar positions and triangles (an edit changes
     only heights, so a layer's later edits reuse it)."""
-    key = hashlib.blake2b(np.ascontiguousarray(V2).tobytes() + np.ascontiguousarray(F).tobytes(), digest_size=16).digest()
-    with _LOCK:
-        hit = _RASTERS.get(key)
-        if hit is not None:
-            _RASTERS.move_to_end(key)
-            return hit
-    r = Raster(V2, F)
-    with _LOCK:
-        _RASTERS[key] = r
-        while len(_RASTERS) > 8:
-            _RASTERS.popitem(last=False)
-    return r
+    return _RASTERS.get_or_make(array_key(V2, F), lambda: Raster(V2, F))
 
 
 def solve(problem: SculptProblem, params: dict) -> SculptSolution:
