@@ -895,6 +895,7 @@ def _transformed(doc, layer: Layer, A: np.ndarray) -> Layer:
         V[:, :2] = f(V[:, :2])
         if not moved_only:
             V[:, 2] *= s
+        V.setflags(write=False)  # the step keeps these vertices, and shares everything else
         changes["mesh"] = replace(layer.mesh, V=V)
     changes["edits"] = edits
     return layer.evolve(**changes)

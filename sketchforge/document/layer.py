@@ -16,7 +16,7 @@ import numpy as np
 
 from sketchforge.errors import ParameterError
 from sketchforge.geometry.inflate_params import DEFAULT_INFLATE_PARAMS  # noqa: F401 (re-exported)
-from sketchforge.geometry.mesh import Mesh
+from sketchforge.geometry.mesh import Mesh, frozen_array
 
 
 def _holes(a) -> tuple:
@@ -25,12 +25,11 @@ def _holes(a) -> tuple:
     out = []
     for n, ring in enumerate(a, start=1):
         try:
-            arr = np.array(ring, dtype=np.float64, copy=True)
+            arr = frozen_array(ring, np.float64)
         except (TypeError, ValueError):
             raise ParameterError(f"hole {n} must be a list of [x, y] number pairs") from None
         if arr.ndim != 2 or arr.shape[1] != 2:
             raise ParameterError(f"hole {n} must be a list of [x, y] pairs, got shape {arr.shape}")
-        arr.setflags(write=False)
         out.append(arr)
     return tuple(out)
 
@@ -38,10 +37,9 @@ def _holes(a) -> tuple:
 def _points(a) -> np.ndarray | None:
     if a is None:
         return None
-    arr = np.array(a, dtype=np.float64, copy=True)
+    arr = frozen_array(a, np.float64)  # a layer's own (read-only) points: shared, not copied
     if arr.ndim != 2 or arr.shape[1] != 2:
         raise ParameterError(f"contour points must be a list of [x, y] pairs, got shape {arr.shape}")
-    arr.setflags(write=False)
     return arr
 
 

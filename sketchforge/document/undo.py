@@ -10,27 +10,45 @@
 
 Signals (all emitted only when the value really changes):
 ``index_changed(int)``, ``can_undo_changed(bool)``, ``can_redo_changed(bool)``,
-``undo_text_changed(str)``, ``redo_text_changed(str)``, ``clean_changed(bool)``.
+``undo_text_changed(str)``, ``redo_text_changed(str)``, ``clean_changed(bool)``;
+``history_trimmed(str)``: once, the first time the history's memory budget drops steps (the
+sentence to show; the app puts it in its status bar).
+
+Memory (issue 39): a step keeps what it replaced (a layer value; arrays already read-only are
+shared, never copied), so the history grows with every step. Past ``memory_budget`` bytes
+(default :data:`DEFAULT_MEMORY_BUDGET`, None: no limit) of arrays that only the history holds,
+the oldest steps are dropped after each push. A dropped step can no longer be undone, but its
+journal entry moves to the document's ``base_journal``: the journal, the saved file and a
+replay are unchanged.
 """
 
 from __future__ import annotations
 
 from typing import TYPE_CHECKING
 
+from sketchforge.cache import held_arrays
 from sketchforge.document.events import Signal
 from sketchforge.errors import PluginError, SketchforgeError
 
 if TYPE_CHECKING:  # pragma: no cover
     from sketchforge.document.commands import Command
 
+#: Bytes of arrays the undo history may hold beyond the document's own (1 GB).
+DEFAULT_MEMORY_BUDGET = 10**9
+
 
 class UndoStack:
-    def __init__(self, document) -> None:
+    def __init__(self, document, memory_budget: int | None = DEFAULT_MEMORY_BUDGET) -> None:
         self._doc = document
         self._commands: list[Command] = []
         self._index = 0
         self._clean_index = 0
         self._macros: list = []  # open MacroCommands, innermost last
+        #: Most bytes of arrays only the history holds (None: no limit); see the module doc.
+        self.memory_budget = memory_budget
+        #: Steps dropped so far to stay within the budget.
+        self.dropped = 0
+        self.history_trimmed = Signal(str, name="history_trimmed")
         self.index_changed = Signal(int, name="index_changed")
         self.can_undo_changed = Signal(bool, name="can_undo_changed")
         self.can_redo_changed = Signal(bool, name="can_redo_changed")
@@ -82,7 +100,7 @@ class UndoStack:
     def _state(self):
         return (self._index, self.can_undo(), self.can_redo(), self.undo_text(), self.redo_text(), self.is_clean())
 
-    def _emit_changes(self, before) -> None:
+    def _emit_changes(self, before, rows_changed: bool = False) -> None:
         after = self._state()
         signals = (
             self.index_changed,
@@ -95,7 +113,7 @@ class UndoStack:
         for sig, a, b in zip(signals, before, after):
             if a != b:
                 sig.emit(b)
-        if before != after:
+        if before != after or rows_changed:
             self._doc.history_changed.emit()
 
     # --- mutation -----------------------------------------------------------------------------
@@ -140,7 +158,7 @@ class UndoStack:
         else:
             self._commands.append(command)
             self._index += 1
-        self._emit_changes(before)
+        self._emit_changes(before, rows_changed=self._keep_within_budget() > 0)
         return command
 
     def undo(self) -> None:
@@ -211,8 +229,60 @@ class UndoStack:
                 self._clean_index = -1
         self._commands.append(macro)
         self._index += 1
-        self._emit_changes(before)
+        self._emit_changes(before, rows_changed=self._keep_within_budget() > 0)
         return macro
+
+    # --- memory -------------------------------------------------------------------------------
+    def history_bytes(self) -> int:
+        """Bytes of the arrays only the history holds (what forgetting it would free): every
+        array a step keeps, counted once however many steps share it, less those of the
+        document's current layers."""
+        held: dict = {}
+        for command in self._commands:
+            held_arrays(command, held)
+        current = held_arrays(self._doc.layers)
+        return sum(n for k, n in held.items() if k not in current)
+
+    def _keep_within_budget(self) -> int:
+        """Drop the oldest steps while the history holds more than ``memory_budget`` bytes,
+        keeping the newest step; the first time, say so (``history_trimmed``). Returns how
+        many were dropped."""
+        if self.memory_budget is None or self._index < 2:
+            return 0
+        per = [held_arrays(c) for c in self._commands]
+        current = held_arrays(self._doc.layers)
+        users: dict = {}
+        size: dict = {}
+        for held in per:
+            for k, n in held.items():
+                users[k] = users.get(k, 0) + 1
+                size[k] = n
+        total = sum(n for k, n in size.items() if k not in current)
+        drop = 0
+        while total > self.memory_budget and self._index - drop > 1:
+            for k in per[drop]:
+                users[k] -= 1
+                if users[k] == 0 and k not in current:
+                    total -= size[k]
+            drop += 1
+        if drop:
+            self._drop_oldest(drop)
+        return drop
+
+    def _drop_oldest(self, n: int) -> None:
+        gone = self._commands[:n]
+        # The journal stays whole: the document replays from base_journal + the done steps.
+        self._doc.base_journal.extend(c.to_dict() for c in gone)
+        del self._commands[:n]
+        self._index -= n
+        self._clean_index = self._clean_index - n if self._clean_index >= n else -1
+        self.dropped += n
+        if self.dropped == n:  # the first time: say it once
+            budget = self.memory_budget
+            self.history_trimmed.emit(
+                f"the undo history reached its memory budget of {budget / 1e9:.3g} GB: its oldest steps are dropped "
+                f"from now on ({n} so far); the document and its journal are unchanged"
+            )
 
     def abort_macro(self) -> None:
         """Undo the children of the innermost open macro and drop it (an error mid-gesture)."""

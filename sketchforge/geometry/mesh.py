@@ -7,15 +7,39 @@ from dataclasses import dataclass, field
 import numpy as np
 
 
-def _frozen(a, dtype, ndim: int, name: str) -> np.ndarray:
+def unwritable(a) -> bool:
+    """Whether nobody can write the memory of the array ``a``: it is read-only and so is every
+    array it is a view of (a read-only view of a writable array can still change under it),
+    and its memory belongs to numpy or to an immutable ``bytes``."""
+    while isinstance(a, np.ndarray):
+        if a.flags.writeable:
+            return False
+        if a.base is None:
+            return True
+        a = a.base
+    return isinstance(a, bytes)
+
+
+def frozen_array(a, dtype) -> np.ndarray:
+    """``a`` as a read-only C-contiguous array of ``dtype``: ``a`` itself when it already is
+    one that nobody can write (:func:`unwritable`), else a frozen copy. Values share their
+    arrays this way: an undo step that moves a layer keeps its new vertices, not another copy
+    of its triangles (issue 39: 200 moves of a 36k-vertex layer kept 489 MB)."""
+    if isinstance(a, np.ndarray) and a.dtype == dtype and a.flags.c_contiguous and unwritable(a):
+        return a
     arr = np.array(a, dtype=dtype, copy=True)
+    arr.setflags(write=False)
+    return arr
+
+
+def _frozen(a, dtype, ndim: int, name: str) -> np.ndarray:
+    arr = frozen_array(a, dtype)
     if ndim == 2 and arr.size == 0:
         arr = arr.reshape(0, 3)
     if arr.ndim != ndim:
         raise ValueError(f"Mesh.{name} must have {ndim} dimensions, got shape {arr.shape}")
-    # Meshes are shared between the document, undo history and views; making the arrays
-    # read-only turns an accidental in-place edit (which would corrupt undo) into an error.
-    arr.setflags(write=False)
+    # Meshes are shared between the document, undo history and views; read-only arrays turn an
+    # accidental in-place edit (which would corrupt undo) into an error.
     return arr
 
 
@@ -77,6 +101,7 @@ class Mesh:
         """Same connectivity, new z (n,) float64."""
         V = np.array(self.V)
         V[:, 2] = np.asarray(z, dtype=np.float64)
+        V.setflags(write=False)  # frozen here: the Mesh takes it without another copy
         return Mesh(V, self.F, self.boundary, self.junction, self.holes)
 
     def identical(self, other: "Mesh | None") -> bool:

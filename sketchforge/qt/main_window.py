@@ -470,6 +470,9 @@ class MainWindow(QMainWindow):
         for sig in (stack.can_undo_changed, stack.can_redo_changed, stack.undo_text_changed, stack.redo_text_changed):
             sig.connect(lambda *_: self._sync_undo())
         stack.clean_changed.connect(lambda *_: self._sync_title())
+        # Once, the first time the undo history's memory budget drops its oldest steps: it
+        # stays in the status bar until the next message.
+        stack.history_trimmed.connect(lambda text: self.statusBar().showMessage(text[:1].upper() + text[1:]))
         doc.history_changed.connect(self._sync_undo)
         doc.history_changed.connect(self._sync_title)
         doc.light_changed.connect(self._on_light)

@@ -25,7 +25,10 @@ class HistoryPanel(QListWidget):
         self._updating = True
         try:
             self.clear()
-            self.addItem(QListWidgetItem("<start>" if not self.doc.base_journal else "<opened file>"))
+            first = "<start>" if not self.doc.base_journal else "<opened file>"
+            if getattr(stack, "dropped", 0):
+                first = "<older steps dropped>"  # the memory budget's (the journal keeps them)
+            self.addItem(QListWidgetItem(first))
             for i, cmd in enumerate(stack.commands()):
                 item = QListWidgetItem(cmd.text())
                 if i >= stack.index:
