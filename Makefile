@@ -46,7 +46,7 @@ test: $(STAMP)
 bench: $(STAMP)
 	for b in benchmarks/bench_*.py; do $(BIN)/python $$b || exit 1; done
 
-# Mutation testing (mutmut), on demand, not in CI: `make mutate SCOPE=document` (or geometry,
+# Mutation testing (mutmut), on demand, not in CI: `make mutate SCOPE=document` (or geometry, plugins, core, strips,
 # inflate, isophote_tool, assemble, animate, all). Scores and survivors go to mutation/results/;
 # a second run re-tests only what changed. Hours of CPU for `all` on 2 cores; SAMPLE=150 checks
 # a seeded sample of the unchecked mutants instead and estimates the scope's score from it.

@@ -47,7 +47,7 @@ SCOPES: dict[str, tuple[str, str, list[str], list[str]]] = {
         "tests/test_holes.py", "tests/test_contour.py", "tests/test_parts.py",
         "tests/test_tools.py", "tests/test_fuzz_loader.py", "tests/attack",
         "tests/test_plugin_platform.py", "tests/test_document_survivors.py", "tests/test_transform_edits.py",
-        "tests/test_light_3d.py",
+        "tests/test_light_3d.py", "tests/test_undo_memory.py", "tests/test_provenance.py",
     ]),
     "geometry": ("sketchforge", "sketchforge", ["sketchforge/geometry/*"], [
         "tests/test_contour.py", "tests/test_inflate.py", "tests/test_laplacian.py",
@@ -86,7 +86,18 @@ SCOPES: dict[str, tuple[str, str, list[str], list[str]]] = {
                      "tests/test_assemble_parts.py", "tests/test_assemble_measures.py",
                      "tests/test_assemble_contracts.py"]),
     "animate": ("plugins/animate/sketchforge_animate", "sketchforge_animate",
-                ["sketchforge_animate/*"], ["tests/test_animate.py"]),
+                ["sketchforge_animate/*"], ["tests/test_animate.py", "tests/test_animate_oracle.py",
+                                            "tests/test_plugin_data_validation.py"]),
+    # issue 39: the plugin platform (solver registries, manager, contracts, plugin data), the
+    # inflation's child process and the cache helper, and the strips solver had no scope.
+    "plugins": ("sketchforge", "sketchforge", ["sketchforge/plugins/*"], [
+        "tests/test_plugin_contracts.py", "tests/test_solver_registries.py", "tests/test_plugins.py",
+        "tests/test_plugin_platform.py", "tests/test_plugin_data_validation.py", "tests/test_provenance.py",
+        ]),
+    "core": ("sketchforge", "sketchforge", ["sketchforge/offload.py", "sketchforge/cache.py"], [
+        "tests/test_offload.py", "tests/test_cache.py", "tests/test_undo_memory.py"]),
+    "strips": ("plugins/strips/sketchforge_strips", "sketchforge_strips", ["sketchforge_strips/*"], [
+        "tests/test_strips_parts.py", "tests/test_strips_solver.py", "tests/test_strips_corpus.py"]),
 }
 
 # Test inputs, not product: modules (and, in corpus.py, functions marked ``# pragma: no mutate
@@ -102,6 +113,8 @@ DO_NOT_MUTATE: dict[str, list[str]] = {
     "isophote_tool": ["sketchforge_isophote_tool/testing.py", "sketchforge_isophote_tool/qt/*"],
     "assemble": ["sketchforge_assemble/testing.py"],
     "animate": ["sketchforge_animate/qt/*"],
+    # test support shipped with the package (fixtures, a test host): inputs, not product
+    "plugins": ["sketchforge/plugins/testing.py", "sketchforge/plugins/pytest_plugin.py"],
 }
 
 # Left out of every mutation run: a surviving mutant runs every test that reaches its function,
