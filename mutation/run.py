@@ -48,6 +48,7 @@ SCOPES: dict[str, tuple[str, str, list[str], list[str]]] = {
         "tests/test_tools.py", "tests/test_fuzz_loader.py", "tests/attack",
         "tests/test_plugin_platform.py", "tests/test_document_survivors.py", "tests/test_transform_edits.py",
         "tests/test_light_3d.py", "tests/test_undo_memory.py", "tests/test_provenance.py",
+        "tests/test_transform_contracts.py",
     ]),
     "geometry": ("sketchforge", "sketchforge", ["sketchforge/geometry/*"], [
         "tests/test_contour.py", "tests/test_inflate.py", "tests/test_laplacian.py",

@@ -64,6 +64,13 @@ def test_the_child_answers_for_the_hosts_own_inflater_and_matches_it_bit_for_bit
     assert offloaded.solvers("inflate") is host.solvers("inflate")
     with pytest.raises(AttributeError):
         offloaded.__no_such_dunder__
+    # special names are never the host's (pickling and copying ask the wrapper itself)
+    host.__dict__["__sketchforge_probe__"] = 1
+    try:
+        with pytest.raises(AttributeError):
+            offloaded.__sketchforge_probe__
+    finally:
+        del host.__dict__["__sketchforge_probe__"]
 
 
 def test_a_child_that_crashes_mid_job_is_one_line_and_the_next_job_runs_in_a_new_child(host, offloaded):
