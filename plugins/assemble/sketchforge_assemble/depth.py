@@ -386,7 +386,9 @@ def solve_depth(P, q, Aeq, beq, Ain, bin_, method: str = "osqp", pad: float = 0.
         rows near an anchored glue-only solution first (:func:`_osqp_screened`), its glue
         residual then closed to round-off (:func:`_polish_glue`); if some depth row is still
         violated, the dual active-set method (:func:`_active_set`) finishes from
-        OSQP's active set. "active_set": the active-set method alone, from the equality rows.
+        OSQP's active set; all that only when the glue-only optimum leaves some depth row
+        violated (otherwise it is the exact answer, ``info["exact"]``: see the comment in the
+        code). "active_set": the active-set method alone, from the equality rows.
     pad : float
         Extra clearance asked of OSQP (a fraction of the gap).
     tol : float
@@ -422,6 +424,19 @@ def solve_depth(P, q, Aeq, beq, Ain, bin_, method: str = "osqp", pad: float = 0.
         Ain, Aeq = sp.csr_matrix(Ain), sp.csr_matrix(Aeq)
         P, q, _, _, _ = guard.qp(P, q, sp.vstack([Aeq, Ain]).tocsc(), np.r_[beq, bin_ + pad],
                                  np.r_[beq, np.full(len(bin_), np.inf)], what)
+        # The glue-only optimum first: where it satisfies every depth row, it is the QP's exact
+        # optimum (no depth row is active) and no iterative solver is needed. Measured (issue 39,
+        # benchmarks/bench_depth_qp.py, 10 QPs: the example creature, its 3-layer part, 8 seeded
+        # random creatures): that held for all ten. OSQP at 1e-4 on the padded rows ended up to
+        # 17 gaps from it on the creature (39 with polishing on, which is also slower); the
+        # interior-point Clarabel and PIQP reach it within 1e-3 gap in 3x and 1.6x OSQP's time;
+        # the active set alone exactly, in 5x. This solve costs about one OSQP run (~25 ms on the
+        # creature); where some row is active, OSQP and the active set below take over as before.
+        x = _equality_solution(P, q, Aeq, beq)
+        if x is not None and (len(bin_) == 0 or np.min(Ain @ x - bin_) >= 0.0):
+            info["exact"] = True
+            info["active"] = int(np.sum(Ain @ x - bin_ <= pad + 1e-6)) if len(bin_) else 0
+            return x, info
         x, y, osqp_info = _osqp_screened(P, q, Aeq, beq, Ain, bin_, pad)
         info.update(osqp_info)
         x = _polish_glue(x, Aeq, beq)
