@@ -484,3 +484,27 @@ def test_pair_rows_constrain_every_vertex_over_the_other_sheet_at_its_exact_poin
         glued = bary @ skip_i[cols[cols < si.n]]
         assert abs(b[r] - (0.05 * (1 - glued) + np.abs(vals) @ off[cols])) <= 1e-12
     assert np.all(np.vstack(out.pair) == ([1, 0] if sign > 0 else [0, 1]))
+
+
+@pytest.mark.parametrize("seed", SEEDS[:4])
+def test_a_glue_only_optimum_that_clears_every_row_is_the_answer_with_no_iterative_solver(seed, monkeypatch):
+    # issue 39: where no depth row is active at the optimum (every QP the benchmark captured),
+    # the glue-only optimum is the exact answer; OSQP, 1e-4 accurate, ended 17 gaps from it
+    P, q, Aeq, beq, Ain, bin_ = _random_qp(seed)
+    x_eq = _equality_solution(P, q, Aeq, beq)
+    loose = bin_ - (np.max(bin_ - Ain @ x_eq) + 0.5)  # every row now holds there, with room
+    calls = []
+    monkeypatch.setattr(depth, "_osqp_screened", lambda *a: calls.append(a) or (_ for _ in ()).throw(AssertionError))
+    x, info = solve_depth(P, q, Aeq, beq, Ain, loose, method="osqp", pad=0.01)
+    assert calls == [] and info["exact"] and info["osqp_iterations"] == 0 and info["iterations"] == 0
+    assert np.array_equal(x, x_eq) and info["active"] == 0
+    exact, _ = solve_depth(P, q, Aeq, beq, Ain, loose, method="active_set")
+    assert np.abs(x - exact).max() <= 1e-9
+    # one row violated there: the iterative solvers take over, and the answer clears it
+    monkeypatch.undo()
+    tight = loose.copy()
+    k = int(np.argmin(Ain @ x_eq - loose))
+    tight[k] = (Ain @ x_eq)[k] + 0.05
+    x2, info2 = solve_depth(P, q, Aeq, beq, Ain, tight, method="osqp", pad=0.01)
+    assert "exact" not in info2 and info2["osqp_iterations"] > 0
+    assert np.min(Ain @ x2 - tight) >= 0.0
