@@ -309,7 +309,7 @@ def draw(root: Path, per_module: int, seed: int) -> list[dict]:
 
 
 def workspace(root: Path, label: str) -> Path:
-    ws = ROOT / "build" / "planted" / label
+    ws = ROOT / "build" / "planted" / f"{SAMPLE}-{label}"
     if ws.exists():
         shutil.rmtree(ws)
     ws.mkdir(parents=True)
@@ -373,8 +373,11 @@ def plant(path: Path, m: dict) -> bool:
     return True
 
 
+SAMPLE = "sample"
+
+
 def run(root: Path, label: str, modules: list[str] | None, ids: list[str] | None) -> dict:
-    sample = json.loads((OUT / "sample.json").read_text())
+    sample = json.loads((OUT / f"{SAMPLE}.json").read_text())
     ws = workspace(root, label)
     results_path = OUT / f"{label}.json"
     results = json.loads(results_path.read_text()) if results_path.exists() and (modules or ids) else {}
@@ -415,7 +418,7 @@ def run(root: Path, label: str, modules: list[str] | None, ids: list[str] | None
 
 
 def table(labels: list[str]) -> str:
-    sample = json.loads((OUT / "sample.json").read_text())
+    sample = json.loads((OUT / f"{SAMPLE}.json").read_text())
     runs = {label: json.loads((OUT / f"{label}.json").read_text()) for label in labels}
     lines = ["| module | " + " | ".join(labels) + " |", "|---|" + "---|" * len(labels)]
     for module in MODULES:
@@ -444,11 +447,14 @@ def main(argv=None) -> int:
     ap.add_argument("--module", action="append", help="only this module (repeatable)")
     ap.add_argument("--only", nargs="*", help="only these bug ids (fnmatch patterns)")
     ap.add_argument("--table", nargs="*", help="print the table of these labels")
+    ap.add_argument("--sample", default="sample", help="the sample's name: mutation/planted/NAME.json")
     args = ap.parse_args(argv)
+    global SAMPLE
+    SAMPLE = args.sample
     OUT.mkdir(exist_ok=True)
     if args.draw:
         sample = draw(args.root.resolve(), args.per_module, args.seed)
-        (OUT / "sample.json").write_text(json.dumps(sample, indent=1))
+        (OUT / f"{SAMPLE}.json").write_text(json.dumps(sample, indent=1))
     if args.label:
         run(args.root.resolve(), args.label, args.module, args.only)
     if args.table:
