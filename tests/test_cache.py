@@ -215,3 +215,38 @@ def test_the_canvas_cache_forgets_meshes_nobody_holds_and_stays_within_its_bytes
     gb.rasterise([kept[-1]], gb.View.framing([kept[-1]], 121, 100))  # a new view: weighed again
     assert len(cache) <= 4 and cache.nbytes <= cache.max_bytes + one
     assert kept[-1] in cache and kept[0] not in cache
+
+
+def test_what_the_byte_count_looks_into_and_what_it_leaves_alone():
+    a, b = np.zeros(10), np.zeros(20)
+
+    def nested(v, k):
+        for _ in range(k):
+            v = [v]
+        return v
+
+    from sketchforge.cache import MAX_DEPTH
+
+    assert nbytes_of(nested(a, MAX_DEPTH)) == 80  # within reach
+    assert nbytes_of(nested(a, MAX_DEPTH + 2)) == 0  # beyond it: not looked at
+    # a long list of records holding arrays is walked; a long list of plain numbers is not
+    assert nbytes_of([(np.zeros(1),) for _ in range(20)]) == 20 * 8
+    assert nbytes_of([[1.0, 2.0]] * 40 + [a]) == 0
+
+    class Doc:  # a document is never entered (commands may hold one)
+        def __init__(self):
+            self.undo_stack = None
+            self.big = np.zeros(1000)
+
+    class Holder:
+        def __init__(self):
+            self.arr = b
+
+    assert nbytes_of([Doc(), Holder()]) == 160
+    loop = [a]
+    loop.append(loop)  # a cycle ends
+    assert nbytes_of(loop) == 80
+    # without a byte bound, nothing is weighed
+    c = LRUCache(2)
+    c.put(1, np.zeros(10))
+    assert c.nbytes == 0

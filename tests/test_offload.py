@@ -62,8 +62,9 @@ def test_the_child_answers_for_the_hosts_own_inflater_and_matches_it_bit_for_bit
     # everything else is the host's own
     assert offloaded.wrapped is host and offloaded.commands is host.commands
     assert offloaded.solvers("inflate") is host.solvers("inflate")
-    with pytest.raises(AttributeError):
+    with pytest.raises(AttributeError) as info:
         offloaded.__no_such_dunder__
+    assert str(info.value) == "__no_such_dunder__"
     # special names are never the host's (pickling and copying ask the wrapper itself)
     host.__dict__["__sketchforge_probe__"] = 1
     try:
@@ -131,5 +132,17 @@ def test_an_inflater_of_the_same_name_but_another_implementation_inflates_here()
         assert not off.offloading()
         square = np.array([[0, 0], [1, 0], [1, 1], [0, 1.0]])
         assert off.inflate(square, True, {}).n_vertices == 5  # the fan, made here
+    finally:
+        off.shutdown()
+
+
+def test_a_child_that_has_not_started_in_time_leaves_the_inflation_here(host, monkeypatch):
+    import sketchforge.offload as offload
+
+    monkeypatch.setattr(offload, "START_TIMEOUT_S", 1e-6)  # no child starts that fast
+    off = OffloadedInflation(host)
+    try:
+        assert not off.offloading()
+        assert off.inflate(ELLIPSE, True, {"resolution": 0.1}).identical(host.inflate(ELLIPSE, True, {"resolution": 0.1}))
     finally:
         off.shutdown()
