@@ -245,3 +245,29 @@ def test_views_are_told_when_steps_are_dropped_even_if_the_top_looks_the_same(fa
     doc.execute({"command": "transform_layer", "layer": "a", "matrix": [[1, 0, 0.1], [0, 1, 0.0]]})
     # each push dropped a step and added one: the index and texts are as before, the rows not
     assert stack.count() == 4 and changed == [4, 4]
+
+
+def test_the_tally_follows_undo_redo_truncation_and_clear_and_lets_go_of_what_left(fan_host):
+    import gc
+    import weakref
+
+    doc = fan_doc(fan_host)
+    stack = doc.undo_stack
+    for _ in range(5):
+        doc.execute({"command": "transform_layer", "layer": "a", "matrix": [[1, 0, 0.1], [0, 1, 0.0]]})
+    per_step = doc.layer("a").mesh.V.nbytes + doc.layer("a").points.nbytes
+    assert stack.history_bytes() == 5 * per_step
+    for _ in range(3):
+        stack.undo()
+    assert stack.history_bytes() == 5 * per_step  # the undone states are still held (redo)
+    gone = weakref.ref(stack.command(stack.index))
+    doc.execute({"command": "rename_layer", "layer": "a", "name": "B"})  # the redo tail goes
+    gc.collect()
+    assert gone() is None  # nothing keeps a command that left the stack
+    assert stack.history_bytes() == 2 * per_step
+    first = weakref.ref(stack.command(0))
+    stack.clear()
+    gc.collect()
+    assert first() is None and stack.history_bytes() == 0
+    doc.execute({"command": "transform_layer", "layer": "a", "matrix": [[1, 0, 0.1], [0, 1, 0.0]]})
+    assert stack.history_bytes() == per_step

@@ -49,6 +49,14 @@ class UndoStack:
         #: Steps dropped so far to stay within the budget.
         self.dropped = 0
         self.history_trimmed = Signal(str, name="history_trimmed")
+        # The memory tally, kept as commands come and go so that a push costs the same at any
+        # depth of history: {id(command): (command, {array id: bytes})}, {array id: commands
+        # holding it}, and the bytes of every array some command holds. A command's arrays are
+        # read once, when it enters (the top again after a merge): a done command does not
+        # swap its values afterwards.
+        self._held: dict = {}
+        self._users: dict = {}
+        self._held_total = 0
         self.index_changed = Signal(int, name="index_changed")
         self.can_undo_changed = Signal(bool, name="can_undo_changed")
         self.can_redo_changed = Signal(bool, name="can_redo_changed")
@@ -202,6 +210,7 @@ class UndoStack:
             raise RuntimeError("cannot clear the undo stack inside a macro")
         before = self._state()
         self._commands.clear()
+        self._held, self._users, self._held_total = {}, {}, 0
         self._index = 0
         self._clean_index = 0
         self._emit_changes(before)
@@ -237,33 +246,55 @@ class UndoStack:
         """Bytes of the arrays only the history holds (what forgetting it would free): every
         array a step keeps, counted once however many steps share it, less those of the
         document's current layers."""
-        held: dict = {}
-        for command in self._commands:
-            held_arrays(command, held)
-        current = held_arrays(self._doc.layers)
-        return sum(n for k, n in held.items() if k not in current)
+        self._sync_tally()
+        return self._history_bytes(held_arrays(self._doc.layers))
+
+    def _history_bytes(self, current: dict) -> int:
+        return self._held_total - sum(n for k, n in current.items() if k in self._users)
+
+    def _track(self, command) -> None:
+        self._untrack(id(command))
+        held = held_arrays(command)
+        self._held[id(command)] = (command, held)
+        for k, n in held.items():
+            users = self._users.get(k, 0)
+            if users == 0:
+                self._held_total += n
+            self._users[k] = users + 1
+
+    def _untrack(self, key: int) -> None:
+        entry = self._held.pop(key, None)
+        if entry is None:
+            return
+        for k, n in entry[1].items():
+            users = self._users[k] - 1
+            if users == 0:
+                del self._users[k]
+                self._held_total -= n
+            else:
+                self._users[k] = users
+
+    def _sync_tally(self) -> None:
+        live = {id(c) for c in self._commands}
+        for key in [k for k in self._held if k not in live]:
+            self._untrack(key)
+        for c in self._commands:
+            if id(c) not in self._held:
+                self._track(c)
+        if self._commands:
+            self._track(self._commands[-1])  # a merge may have changed it
 
     def _keep_within_budget(self) -> int:
         """Drop the oldest steps while the history holds more than ``memory_budget`` bytes,
         keeping the newest step; the first time, say so (``history_trimmed``). Returns how
         many were dropped."""
+        self._sync_tally()  # always: it also lets go of the commands that left the stack
         if self.memory_budget is None or self._index < 2:
             return 0
-        per = [held_arrays(c) for c in self._commands]
         current = held_arrays(self._doc.layers)
-        users: dict = {}
-        size: dict = {}
-        for held in per:
-            for k, n in held.items():
-                users[k] = users.get(k, 0) + 1
-                size[k] = n
-        total = sum(n for k, n in size.items() if k not in current)
         drop = 0
-        while total > self.memory_budget and self._index - drop > 1:
-            for k in per[drop]:
-                users[k] -= 1
-                if users[k] == 0 and k not in current:
-                    total -= size[k]
+        while self._history_bytes(current) > self.memory_budget and self._index - drop > 1:
+            self._untrack(id(self._commands[drop]))
             drop += 1
         if drop:
             self._drop_oldest(drop)
