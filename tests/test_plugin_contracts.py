@@ -633,6 +633,9 @@ def test_make_plugin_manager_refuses_unknown_legacy_and_wrapper_hooks():
     assert "is a pluggy wrapper" in str(info.value)
     pm = make_plugin_manager([FanInflater()], load_entry_points=False)
     assert [n for n, _ in pm.list_name_plugin()][0] == CORE and pm.problems == [] and pm.skipped == {}
+    # a plugin passed by hand is never skipped quietly, even where broken entry points are
+    with pytest.raises(PluginError, match="unknown hook"):
+        make_plugin_manager([Typo()], load_entry_points=False, skip_broken=True)
 
 
 def test_the_allowlist_loads_only_the_named_entry_points(monkeypatch):
