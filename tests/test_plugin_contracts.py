@@ -800,3 +800,75 @@ def test_the_animation_plugin_validates_its_key_on_open(real_host):
     validate_plugin_data(real_host, {"animate": {"loop": 0, "pins": []}}, "snapshot")
     with pytest.raises(DocumentFormatError, match=r"^snapshot.plugin_data\['animate'\]: the animation data is malformed"):
         validate_plugin_data(real_host, {"animate": {"loop": -1, "pins": []}}, "snapshot")
+
+
+def test_disabling_one_of_two_plugins_that_clash_on_a_name_gives_the_name_to_the_other():
+    a, b = Solvers(_inflater("same", 1.0)), Other(_inflater("same", 2.0))
+    host = make_test_host(a, b)
+    with pytest.raises(PluginError):
+        host.solver("inflate", "same")
+    host.disable("plugin-0-Solvers", "uninstalled")
+    assert host.solver("inflate", "same") is b._inflaters[0]
+    assert host.provider_of(b._inflaters[0]) == "plugin-1-Other"
+
+
+def test_lookup_messages_say_what_is_installed():
+    none = make_test_host()
+    with pytest.raises(UnknownSolverError) as info:
+        none.solver("inflate")
+    assert str(info.value) == ("no inflater is installed (the built-in 'poisson' comes with its plugin; is it left out "
+                               "by SKETCHFORGE_PLUGINS?)")
+    with pytest.raises(UnknownSolverError) as info:
+        none.solver("assemble", "glue")
+    assert str(info.value) == "no assembler named 'glue' is installed (installed: none)"
+
+    class Pose:
+        @hookimpl
+        def sketchforge_pose(self, doc, frame):
+            return None
+
+    class Pose2(Pose):
+        pass
+
+    host = make_test_host(Pose(), Pose2())
+    assert host.validate() == ["plugins 'plugin-0-Pose' and 'plugin-1-Pose2' both implement sketchforge_pose: error, "
+                               "posing is refused until one of them is uninstalled"]
+
+
+def test_the_host_exports_the_mesh_it_is_given_and_a_document_through_its_exporter(tmp_path):
+    written = []
+
+    def write(path, mesh):
+        written.append(mesh.n_vertices)
+        path.write_text(f"{mesh.n_vertices} vertices\n")
+
+    def write_document(path, doc, progress=None):
+        if progress is not None:
+            progress(1, 1)
+        path.write_text("the whole document")
+        return "a document"
+
+    exporters = [Exporter("txt", (".txt",), write), Exporter("docx", (".doc",), write, write_document=write_document,
+                                                             handles=lambda d: True)]
+    host = make_test_host(Solvers(exporters=exporters))
+    V = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [1, 1, 0.5]], dtype=np.float64)
+    m = Mesh(V, np.array([[0, 1, 2], [1, 3, 2]]))
+    assert host.export(tmp_path / "m.txt", mesh=m) == "4 vertices, 2 triangles"
+    assert (tmp_path / "m.txt").read_text() == "4 vertices\n" and written == [4]
+    steps = []
+    assert host.export(tmp_path / "d.doc", doc="the doc", progress=lambda i, n: steps.append((i, n))) == "a document"
+    assert (tmp_path / "d.doc").read_text() == "the whole document" and steps == [(1, 1)]
+    with pytest.raises(ExportError) as info:
+        host.export(tmp_path / "n.txt")
+    assert str(info.value) == "nothing to export: give a mesh or a document"
+
+    def broken(path, mesh):
+        raise ValueError(f"cannot write {path}")
+
+    bad = make_test_host(Solvers(exporters=[Exporter("bad", (".bad",), broken)]))
+    with pytest.raises(ExportError) as info:
+        bad.export(tmp_path / "x.bad", mesh=m)
+    msg = str(info.value)
+    assert msg.startswith(f"cannot write {tmp_path / 'x.bad'}: exporter 'bad' (plugin 'plugin-0-Solvers') failed: ValueError")
+    assert str(tmp_path / "x.bad") in msg.split("ValueError: ")[1]  # the temp path is never shown
+    assert not (tmp_path / "x.bad").exists()
