@@ -430,8 +430,9 @@ def solve_depth(P, q, Aeq, beq, Ain, bin_, method: str = "osqp", pad: float = 0.
         # random creatures): that held for all ten. OSQP at 1e-4 on the padded rows ended up to
         # 17 gaps from it on the creature (39 with polishing on, which is also slower); the
         # interior-point Clarabel and PIQP reach it within 1e-3 gap in 3x and 1.6x OSQP's time;
-        # the active set alone exactly, in 5x. This solve costs about one OSQP run (~25 ms on the
-        # creature); where some row is active, OSQP and the active set below take over as before.
+        # the active set alone exactly, in 6x. This solve costs about half an OSQP run (27 ms on
+        # the creature, where OSQP took 57); where some row is active, OSQP and the active set
+        # below take over as before.
         x = _equality_solution(P, q, Aeq, beq)
         if x is not None and (len(bin_) == 0 or np.min(Ain @ x - bin_) >= 0.0):
             info["exact"] = True
