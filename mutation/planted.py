@@ -393,6 +393,8 @@ def run(root: Path, label: str, modules: list[str] | None, ids: list[str] | None
         for m in sample:
             if m["module"] != module or (ids and not any(fnmatch.fnmatch(m["id"], p) for p in ids)):
                 continue
+            if results.get(m["id"], {}).get("status") in ("caught", "missed", "not applicable"):
+                continue  # measured by an earlier run of this label (one that was stopped)
             path = package_path(ws, m["file"])
             original = path.read_text()
             mtime = path.stat().st_mtime
@@ -417,18 +419,35 @@ def run(root: Path, label: str, modules: list[str] | None, ids: list[str] | None
     return results
 
 
+def _results(spec: str) -> dict:
+    """The results of a label, or of several merged ("before+before2": runs of one checkout
+    split in parts; a later part wins)."""
+    out: dict = {}
+    for label in spec.split("+"):
+        out.update(json.loads((OUT / f"{label}.json").read_text()))
+    return out
+
+
 def table(labels: list[str]) -> str:
+    """Caught / planted per module for each label (``a+b`` merges runs), counting only the bugs
+    every label measured (so each column is over the same bugs), then the bugs missed."""
     sample = json.loads((OUT / f"{SAMPLE}.json").read_text())
-    runs = {label: json.loads((OUT / f"{label}.json").read_text()) for label in labels}
+    runs = {label: _results(label) for label in labels}
+    done = ("caught", "missed")
+    both = [m for m in sample if all(runs[l].get(m["id"], {}).get("status") in done for l in labels)]
     lines = ["| module | " + " | ".join(labels) + " |", "|---|" + "---|" * len(labels)]
+    totals = {label: [0, 0] for label in labels}
     for module in MODULES:
+        ms = [m for m in both if m["module"] == module]
         row = [module]
         for label in labels:
-            ms = [m for m in sample if m["module"] == module and runs[label].get(m["id"], {}).get("status") in ("caught", "missed")]
             caught = sum(runs[label][m["id"]]["status"] == "caught" for m in ms)
+            totals[label][0] += caught
+            totals[label][1] += len(ms)
             row.append(f"{caught}/{len(ms)} ({100 * caught / len(ms):.0f}%)" if ms else "-")
         lines.append("| " + " | ".join(row) + " |")
-    missed = [(label, m) for label in labels for m in sample if runs[label].get(m["id"], {}).get("status") == "missed"]
+    lines.append("| all | " + " | ".join(f"{c}/{n} ({100 * c / n:.0f}%)" if n else "-" for c, n in totals.values()) + " |")
+    missed = [(label, m) for label in labels for m in both if runs[label][m["id"]]["status"] == "missed"]
     if missed:
         lines.append("")
         lines.append("missed:")

@@ -146,3 +146,14 @@ def test_a_child_that_has_not_started_in_time_leaves_the_inflation_here(host, mo
         assert off.inflate(ELLIPSE, True, {"resolution": 0.1}).identical(host.inflate(ELLIPSE, True, {"resolution": 0.1}))
     finally:
         off.shutdown()
+
+
+def test_after_shutdown_the_next_inflation_starts_a_child_again(host):
+    off = OffloadedInflation(host)
+    try:
+        first = off.inflate(ELLIPSE, True, {"resolution": 0.1})
+        off.shutdown()
+        assert off.offloading()  # a new child, started on demand
+        assert off.inflate(ELLIPSE, True, {"resolution": 0.1}).identical(first)
+    finally:
+        off.shutdown()

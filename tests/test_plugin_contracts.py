@@ -872,3 +872,42 @@ def test_the_host_exports_the_mesh_it_is_given_and_a_document_through_its_export
     assert msg.startswith(f"cannot write {tmp_path / 'x.bad'}: exporter 'bad' (plugin 'plugin-0-Solvers') failed: ValueError")
     assert str(tmp_path / "x.bad") in msg.split("ValueError: ")[1]  # the temp path is never shown
     assert not (tmp_path / "x.bad").exists()
+
+
+def test_a_hook_with_nothing_to_give_returns_none_and_that_is_no_problem():
+    class Quiet:
+        @hookimpl
+        def sketchforge_tools(self):
+            return None
+
+        @hookimpl
+        def sketchforge_inflaters(self):
+            return None
+
+    host = make_test_host(FanInflater(), Quiet())
+    assert host.validate() == [] and set(host.solvers("inflate")) == {"fan"}
+    # a stand-in host without the plugin-data hook has no validators
+    from types import SimpleNamespace
+
+    assert plugin_data_validators(SimpleNamespace(pm=SimpleNamespace(hook=SimpleNamespace()))) == {}
+
+
+def test_validate_builds_the_solver_registries_so_a_broken_solver_is_reported_at_start():
+    bad = Inflater("loose", lambda *a: None, check_params=lambda p: {"w": 1.0})  # drops unknown keys
+    host = make_test_host(Solvers(bad))
+    problems = host.validate()
+    assert any("inflater 'loose' accepted the unknown parameter" in p for p in problems), problems
+    bad_asm = Assembler("loose_asm", lambda *a: None, check_params=lambda p: {})
+    host = make_test_host(Solvers(assemblers=[bad_asm]))
+    assert any("assembler 'loose_asm' accepted the unknown parameter" in p for p in host.validate())
+
+
+def test_the_model_probe_reaches_the_shadow_of_each_probe_light():
+    import jax.numpy as jnp
+
+    # flat in shadow only for a light along x: the probe of that light must be in its shadow
+    flat_x = _jax_model(lambda n, l: jnp.where(l[0] > 0.9, jnp.maximum(jnp.dot(n, l), 0.0), jnp.dot(n, l)))
+    assert "must be signed, not clamped" in plugin_error(contracts.check_reflectance_model, flat_x)
+    flat_diag = _jax_model(lambda n, l: jnp.where((l[0] > 0.5) & (l[1] > 0.5), jnp.maximum(jnp.dot(n, l), 0.0),
+                                                  jnp.dot(n, l)))
+    assert "must be signed, not clamped" in plugin_error(contracts.check_reflectance_model, flat_diag)
