@@ -233,3 +233,24 @@ def test_check_available_lists_everything_missing_in_one_line(host):
     with pytest.raises(DocumentFormatError, match="unknown reflectance model 'velvet'"):
         check_available(_data(layers=[{"id": "a", "edits": [{"command": "nudge", "model": "velvet"}]}]), host, "d")
     check_available(_data(journal=[{"command": "nudge", "model": "lambertian"}]), host, "d")
+
+
+def test_a_non_default_reflectance_model_is_recorded_with_its_plugin(fan_host):
+    import jax.numpy as jnp
+
+    from sketchforge.plugins.registry import ReflectanceModel
+
+    class Velvet:
+        @hookimpl
+        def sketchforge_reflectance_models(self):
+            return [ReflectanceModel("velvet", lambda n, l: 0.5 * jnp.dot(n, l) + 0.5)]
+
+    host = make_test_host(FanInflater(), Velvet())
+    doc = Document(host=host)
+    doc.base_journal = [{"command": "add_layer", "id": "a", "name": "A"}, {"command": "nudge", "model": "velvet"},
+                        {"command": "nudge", "model": "lambertian"}]
+    assert record(doc)["reflectance_models"] == {"velvet": {"plugin": "plugin-1-Velvet", "version": None}}
+    # a stand-in host that has no solver registries needs no solver
+    from types import SimpleNamespace
+
+    assert missing_solvers(_data(journal=[{"command": "nudge", "solver": "x"}]), SimpleNamespace()) == []

@@ -283,3 +283,19 @@ def test_a_copy_moved_aside_is_the_twin_a_mirror_places(fan_host):
     doc.execute({"command": "add_layer", "id": "other", "name": "Other"})
     doc.execute({"command": "set_contour", "layer": "other", "points": bent.tolist(), "closed": False})
     assert C.twin_source(doc, doc.layer("other")) is None
+
+
+def test_a_mirror_takes_a_layers_holes_along(real_host):
+    doc = Document(host=real_host)
+    doc.execute({"command": "add_layer", "id": "a", "name": "A"})
+    doc.execute({"command": "set_inflate_params", "layer": "a", "params": {"resolution": 0.1}})
+    outline = np.c_[1.0 + np.cos(T), 2.0 + 0.8 * np.sin(T)]
+    hole = np.c_[1.3 + 0.2 * np.cos(T[::4]), 2.1 + 0.15 * np.sin(T[::4])]
+    doc.execute({"command": "set_contour", "layer": "a", "points": outline.tolist(), "closed": True,
+                 "holes": [hole.tolist()]})
+    assert len(doc.layer("a").holes) == 1
+    doc.execute({"command": "mirror_layer", "layer": "a", "axis": "own"})
+    cx = 0.5 * (outline[:, 0].min() + outline[:, 0].max())
+    got = doc.layer("a").holes[0]
+    assert np.allclose(got[:, 0], 2 * cx - hole[:, 0]) and np.array_equal(got[:, 1], hole[:, 1])
+    assert len(doc.layer("a").mesh.holes) == 1  # inflated with its hole where it now is
