@@ -911,3 +911,41 @@ def test_the_model_probe_reaches_the_shadow_of_each_probe_light():
     flat_diag = _jax_model(lambda n, l: jnp.where((l[0] > 0.5) & (l[1] > 0.5), jnp.maximum(jnp.dot(n, l), 0.0),
                                                   jnp.dot(n, l)))
     assert "must be signed, not clamped" in plugin_error(contracts.check_reflectance_model, flat_diag)
+
+
+class _EntryPoint:
+    """A stand-in for an installed entry point of the group ``sketchforge``."""
+
+    def __init__(self, name, plugin=None, error=None):
+        self.name, self._plugin, self._error = name, plugin, error
+        self.dist = None
+
+    def load(self):
+        if self._error is not None:
+            raise self._error
+        return self._plugin
+
+
+def test_a_broken_entry_point_is_left_out_with_one_line_and_never_half_registered(monkeypatch):
+    from sketchforge.plugins import manager
+
+    class Typo:
+        @hookimpl
+        def sketchforge_inflater(self):
+            return []
+
+    eps = [_EntryPoint("good", FanInflater()), _EntryPoint("typo", Typo()),
+           _EntryPoint("missing", error=ModuleNotFoundError("No module named 'shapely2'"))]
+    monkeypatch.setattr(manager, "entry_points", lambda group: list(eps))
+    pm = make_plugin_manager([], load_entry_points=True, allowlist=None, skip_broken=True)
+    names = [n for n, _ in pm.list_name_plugin()]
+    assert names == [CORE, "good"]  # the one with a bad hook is not left registered
+    assert pm.get_plugin("typo") is None and "unknown hook 'sketchforge_inflater'" in pm.skipped["typo"]
+    assert pm.skipped["missing"] == "ModuleNotFoundError: No module named 'shapely2'"
+    assert len(pm.problems) == 2 and pm.problems[0].startswith("plugin 'missing' could not be loaded")  # by name
+    # without skip_broken (a test host) the first broken one, by name, raises
+    with pytest.raises(ModuleNotFoundError):
+        make_plugin_manager([], load_entry_points=True, skip_broken=False)
+    eps.pop()
+    with pytest.raises(PluginError, match="unknown hook"):
+        make_plugin_manager([], load_entry_points=True, skip_broken=False)
