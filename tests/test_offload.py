@@ -157,3 +157,17 @@ def test_after_shutdown_the_next_inflation_starts_a_child_again(host):
         assert off.inflate(ELLIPSE, True, {"resolution": 0.1}).identical(first)
     finally:
         off.shutdown()
+
+
+def test_the_child_starts_when_the_wrapper_is_made_not_at_the_first_stroke(host):
+    import time
+
+    before = _children()
+    off = OffloadedInflation(host)
+    try:
+        deadline = time.monotonic() + 30.0
+        while not (_children() - before) and time.monotonic() < deadline:
+            time.sleep(0.05)
+        assert _children() - before  # already starting, before anything asked for it
+    finally:
+        off.shutdown()
