@@ -15,12 +15,13 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from sketchforge.errors import LimitError, ParameterError
+from sketchforge.errors import GeometryError, LimitError, ParameterError
 from sketchforge.geometry.mesh import Mesh
 
 from .attach import Attachment, find_attachments
 from .blend import blend_junctions
 from .cache import AssemblyCache, memo
+from .errors import AttachmentError, DepthOrderError
 from .depth import build_problem, settle_free_parts, solve_without_free_parts
 from .fair import fair_seams, fairing_is_fit, hold_weights, seam_zone, supports, wide_zone
 from .remesh import insert_chains
@@ -50,7 +51,7 @@ DEFAULT_PARAMS: Mapping[str, object] = {
     "reg": 1.0,
     "stiffness": 20.0,
     "qp_solver": "osqp",
-    "on_bad_junction": "raise",
+    "on_bad_junction": "free",
     "fillet": 4.0,
     "fair": 12,
 }
@@ -81,6 +82,10 @@ class AssemblyResult:
         Largest residual of a glue row (the glued vertices are shared, so this only measures
         the solver's accuracy, never a crack).
     warnings : list of str
+        One per part that could not be glued (it is free) or other degradation.
+    notes : list of str
+        One per part glued by a stretch of its junction only (see
+        :mod:`sketchforge.geometry.attachment`).
     timings : dict of str -> float
         Seconds per stage.
     """
@@ -96,6 +101,7 @@ class AssemblyResult:
     max_violation: float
     glue_error: float = 0.0
     warnings: list = field(default_factory=list)
+    notes: list = field(default_factory=list)
     timings: dict = field(default_factory=dict)
     solver: dict = field(default_factory=dict)
 
@@ -168,6 +174,12 @@ def assemble_detailed(meshes: Sequence[Mesh | None], closed: Sequence[bool] | No
                       cache: AssemblyCache | None = None) -> AssemblyResult:
     """Assemble layer meshes, back to front, and report diagnostics.
 
+    One part never refuses the model (issue 34): a part whose junction cannot be glued (see
+    :mod:`.attach`), or whose glued junction makes the re-triangulation of its host or the
+    depth order impossible, is assembled as a free part and named in ``warnings``; the rest
+    is assembled as usual. With ``on_bad_junction: "raise"`` the first such problem raises
+    instead.
+
     Parameters
     ----------
     meshes : list of Mesh or None
@@ -190,7 +202,6 @@ def assemble_detailed(meshes: Sequence[Mesh | None], closed: Sequence[bool] | No
     """
     p = _params(params)
     t0 = time.perf_counter()
-    timings = {}
     n_in = len(meshes)
     closed = [False] * n_in if closed is None else list(closed)
     names = [f"layer {i}" for i in range(n_in)] if names is None else list(names)
@@ -200,33 +211,114 @@ def assemble_detailed(meshes: Sequence[Mesh | None], closed: Sequence[bool] | No
     knames = [names[i] for i in keep]
     _check_overlap_work([meshes[i] for i in keep])  # before any work, so a refusal is quick
     sheets = [_sheet(cache, k, knames[k], meshes[i], bool(closed[i])) for k, i in enumerate(keep)]
+    freed: dict[int, str] = {}  # sheet index -> why it is assembled free
+    fell_back = []
+    while True:
+        try:
+            res = _assemble(list(sheets), knames, p, cache, freed)
+        except _PartsFailed as failure:
+            if p["on_bad_junction"] == "raise":
+                raise failure.error from None
+            fresh = [k for k in failure.parts if k not in freed]
+            if not fresh:  # nothing left to blame: every part free, which always assembles
+                fresh = [k for k in range(len(sheets)) if len(sheets[k].junction) and k not in freed]
+                if not fresh:
+                    raise failure.error from None
+            for k in fresh:
+                freed[k] = failure.reason(knames[k])
+            continue
+        if res.faired is False:
+            # The blended junction would cross itself (or flatten a triangle): the plain
+            # sleeve never does, so the model is still handed out, with its folds, and why.
+            p = {**p, "fillet": 0.0}
+            fell_back.append("a junction could not be blended without the surface crossing itself; "
+                             "its parts are glued with a plain fold (assembly parameter 'fillet')")
+            continue
+        break
+    warnings = res.warnings + fell_back
+    timings = res.timings
+    timings["total"] = time.perf_counter() - t0
+    keep_arr = np.array(keep)
+    res.solver["free_shift"] = {keep[i]: v for i, v in res.solver.get("free_shift", {}).items()}
+    return AssemblyResult(
+        mesh=Mesh(res.V, res.F),
+        face_layer=keep_arr[res.face_layer],
+        face_kind=res.face_kind,
+        attachments=[Attachment(keep[a.upper], keep[a.lower], a.side, a.keep) for a in res.attachments],
+        components=res.components,
+        n_equalities=res.n_equalities,
+        n_inequalities=res.n_inequalities,
+        n_active=int(res.solver.get("active", 0)),
+        max_violation=res.max_violation,
+        glue_error=res.glue_error,
+        warnings=warnings,
+        notes=res.notes,
+        timings=timings,
+        solver=res.solver,
+    )
 
-    attachments, warnings = find_attachments(sheets, knames, p["on_bad_junction"])
+
+class _PartsFailed(Exception):
+    """A failure the assembly can get round by assembling ``parts`` (sheet indices) free."""
+
+    def __init__(self, error: Exception, parts):
+        super().__init__(str(error))
+        self.error = error
+        self.parts = list(parts)
+
+    def reason(self, name: str) -> str:
+        text = str(self.error).rstrip(".")
+        return f"layer '{name}' is assembled as a free part: {text[0].lower() + text[1:]}"
+
+
+@dataclass
+class _Stages:
+    """What one pass of :func:`_assemble` made (sheet indices)."""
+
+    V: np.ndarray
+    F: np.ndarray
+    face_layer: np.ndarray
+    face_kind: np.ndarray
+    attachments: list
+    components: int
+    n_equalities: int
+    n_inequalities: int
+    max_violation: float
+    glue_error: float
+    warnings: list
+    notes: list
+    timings: dict
+    solver: dict
+    faired: bool | None  # None: no fairing asked for
+
+
+def _assemble(sheets: list, knames: list[str], p: dict, cache, freed: dict[int, str]) -> _Stages:
+    """One pass of the assembly with the parts in ``freed`` left free; raises
+    :class:`_PartsFailed` naming the parts to free when it cannot finish with them glued."""
+    timings: dict = {}
+    t = time.perf_counter()
+    attachments, warnings, notes = find_attachments(sheets, knames, p["on_bad_junction"], exclude=set(freed))
+    warnings = [freed[k] for k in sorted(freed)] + warnings
     attached = {a.upper for a in attachments}
     for u in range(len(sheets)):
         if u not in attached and len(sheets[u].junction):
-            # junction over empty space, or a bad one with on_bad_junction="free": a free part
-            # whose whole outline is a rim
+            # junction over empty space, or a bad one: a free part whose whole outline is a rim
             sheets[u] = sheets[u].evolve(junction=np.zeros(0, np.int64))
-    timings["attach"] = time.perf_counter() - t0
+    for a in attachments:
+        if a.keep is not None:
+            # only this stretch of the junction is glued; the rest is outline like any other
+            sheets[a.upper] = sheets[a.upper].evolve(junction=sheets[a.upper].junction[a.keep[0]:a.keep[1] + 1])
+    timings["attach"] = time.perf_counter() - t
 
     t = time.perf_counter()
-    for lo in sorted({a.lower for a in attachments}):
-        mine = [a for a in attachments if a.lower == lo]
-        chains = [sheets[a.upper].xy[sheets[a.upper].junction] for a in mine]
-        s = sheets[lo]
-        cut = memo(cache, "remesh", (s.xy, s.z, s.F, s.boundary, s.junction, s.holes, s.h, chains),
-                   lambda: insert_chains(s, chains, knames, [a.upper for a in mine]))
-        sheets[lo] = cut.evolve(layer=lo, name=knames[lo])
+    _cut_junctions(sheets, attachments, knames, cache)
     timings["remesh"] = time.perf_counter() - t
 
     t = time.perf_counter()
-    offs = []
-    for s in sheets:
-        offs.append(s.z + p["margin"] * s.h * taper(s))
-    front_off, back_off = list(offs), list(offs)
+    front_off = [s.z + p["margin"] * s.h * taper(s) for s in sheets]
+    back_off = list(front_off)
     lips = glue = springs = None
-    locators: dict = {}  # per sheet, for the fillets' springs and the depth rows alike
+    locators: dict = {}  # per sheet face, for the fillets' springs and the depth rows alike
     if p["fillet"] > 0 and attachments:
         lips, glue, springs = blend_junctions(sheets, attachments, front_off, back_off, p["fillet"],
                                               locators=locators)
@@ -238,86 +330,115 @@ def assemble_detailed(meshes: Sequence[Mesh | None], closed: Sequence[bool] | No
     timings["constraints"] = time.perf_counter() - t
 
     t = time.perf_counter()
-    pad = 0.5 * gap
-    # Free parts (no attachment either way) are left out of the QP and sit on what lies below
-    # them instead of floating at their rest depth; glued layers do not move (see
-    # depth.solve_without_free_parts and depth.settle_free_parts).
-    in_att = {a.upper for a in attachments} | {a.lower for a in attachments}
+    in_att = attached | {a.lower for a in attachments}
     free = [i for i in range(len(sheets)) if i not in in_att]
-    x, sinfo = solve_without_free_parts(P, q, Aeq, beq, Ain, bin_, offsets, free, pinfo["rest_depth"],
-                                        method=p["qp_solver"], pad=pad, cache=cache)
-    sinfo = dict(sinfo)  # the cached solve's info is shared
-    sinfo.update(pinfo)
-    sinfo["gap"] = gap
-    x, shift = settle_free_parts(x, Ain, bin_, offsets, free, pad)
-    sinfo["free_shift"] = {keep[i]: v for i, v in shift.items()}
-    # Counted at the settled answer, the same way for both solvers: the active set's own count
-    # (its working set) knows nothing of the rows a free part came to rest on.
-    sinfo["active"] = int(np.sum(Ain @ x - bin_ <= pad + 1e-6)) if len(bin_) else 0
+    x, sinfo = _solve_depth_order(P, q, Aeq, beq, Ain, bin_, offsets, free, pinfo, gap, p, cache, attachments)
     timings["solve"] = time.perf_counter() - t
-    viol = 0.0
-    if len(bin_):
-        viol = max(viol, float(np.max(bin_ - Ain @ x, initial=0.0)))
+    viol = float(np.max(bin_ - Ain @ x, initial=0.0)) if len(bin_) else 0.0
     glue_error = float(np.max(np.abs(Aeq @ x - beq), initial=0.0))
 
     t = time.perf_counter()
     delta = [x[offsets[k]:offsets[k + 1]] for k in range(len(sheets))]
     V, F, face_layer, face_kind, seam, ends = build_mesh(sheets, attachments, delta, front_off, back_off, lips)
     timings["stitch"] = time.perf_counter() - t
-    fair_zone = None
+    faired = None
+    sinfo["fair_zone"] = None
     if lips is not None and p["fair"] > 0:
-        t = time.perf_counter()
-        rings = int(p["fair"])
-        A, reach = seam_zone(F, len(V), seam, ends, rings)
-        wide = wide_zone(A, seam, rings)
-        # A free part resting on a face near a junction keeps the face under it as it was
-        # solved (fairing it away would leave the part floating, or sunk into it).
-        held = np.zeros(len(V), bool)
-        for k in sorted(set(range(len(sheets))) - in_att):
-            held |= supports(V, F, face_layer, face_kind, k, sheets[k].polygon().buffer(sheets[k].h), wide)
-        h_med = float(np.median([s.h for s in sheets]))
+        V, faired, sinfo["fair_zone"] = _fair(V, F, face_layer, face_kind, seam, ends, sheets, in_att, p, cache,
+                                              timings)
+    return _Stages(V, F, face_layer, face_kind, attachments, _components(len(sheets), attachments), int(len(beq)),
+                   int(len(bin_)), viol, glue_error, warnings, notes, timings, sinfo, faired)
 
-        def faired(V=V, A=A, reach=reach, wide=wide, held=held):
-            spent = {"fair": 0.0, "fair_check": 0.0}
 
-            def attempt(moved, hold, bend_limit):
-                t1 = time.perf_counter()
-                V2 = fair_seams(V, F, moved, A, hold=hold)
-                t2 = time.perf_counter()
-                ok = fairing_is_fit(V2, F, moved, A, h_med, bend_limit)
-                spent["fair"] += t2 - t1
-                spent["fair_check"] += time.perf_counter() - t2
-                return V2, ok
+def _cut_junctions(sheets: list, attachments: list, knames: list[str], cache) -> None:
+    """Cut every glued junction into its host's face (:func:`.remesh.insert_chains`), in place;
+    a junction the host cannot take fails the pass naming its part."""
+    for lo in sorted({a.lower for a in attachments}):
+        mine = [a for a in attachments if a.lower == lo]
+        chains = [sheets[a.upper].xy[sheets[a.upper].junction] for a in mine]
+        sides = [a.side for a in mine]
+        s = sheets[lo]
+        try:
+            cut = memo(cache, "remesh", (s.xy, s.z, s.F, s.boundary, s.junction, s.holes, s.h, chains, sides),
+                       lambda: insert_chains(s, chains, knames, [a.upper for a in mine], sides))
+        except AttachmentError as exc:
+            raise _PartsFailed(exc, exc.parts or [a.upper for a in mine]) from None
+        except GeometryError as exc:  # a degenerate re-triangulation: every part glued here
+            raise _PartsFailed(exc, [a.upper for a in mine]) from None
+        sheets[lo] = cut.evolve(layer=lo, name=knames[lo])
 
-            # The narrow zone, held softly; where it leaves a fold or a crossing, the wide one
-            # (a bend it leaves is still far below the plain sleeve's, so only a crossing or a
-            # flat triangle there falls back to the plain sleeve).
-            V2, ok = attempt((reach < 1.0) & ~held, hold_weights(reach), MAX_BEND)
-            zone = "narrow"
-            if not ok:
-                V2, ok = attempt(wide & ~held, None, 180.0)
-                zone = "wide"
-            timings.update(spent)
-            return V2, ok, zone
 
-        # Through the cache by the stitched mesh itself: an undo, or an edit that leaves every
-        # junction's rings as they were, skips the fairing's solves and checks.
-        V, safe, fair_zone = memo(cache, "fair", (V, F, seam, ends, held, rings, h_med), faired)
-        V = V.copy()  # the cached array stays as it was, whatever the caller does to the mesh
-        timings.setdefault("fair", time.perf_counter() - t)
-        timings.setdefault("fair_check", 0.0)
-        if not safe:
-            # The blended junction would cross itself (or flatten a triangle): the plain
-            # sleeve never does, so the model is still handed out, with its folds, and why.
-            plain = assemble_detailed(meshes, closed, {**p, "fillet": 0.0}, names, cache=cache)
-            plain.warnings.append("a junction could not be blended without the surface crossing itself; "
-                                  "its parts are glued with a plain fold (assembly parameter 'fillet')")
-            return plain
-    sinfo["fair_zone"] = fair_zone
-    timings["total"] = time.perf_counter() - t0
+def _solve_depth_order(P, q, Aeq, beq, Ain, bin_, offsets, free, pinfo, gap, p, cache, attachments):
+    """(δ, solver info): the depth QP with the free parts left out and settled afterwards
+    (:func:`.depth.solve_without_free_parts`, :func:`.depth.settle_free_parts`); a depth order
+    that cannot hold fails the pass, naming the glued parts of the layers it involves."""
+    pad = 0.5 * gap
+    try:
+        x, sinfo = solve_without_free_parts(P, q, Aeq, beq, Ain, bin_, offsets, free, pinfo["rest_depth"],
+                                            method=p["qp_solver"], pad=pad, cache=cache)
+    except DepthOrderError as exc:
+        involved = set(exc.layers)
+        parts = [a.upper for a in attachments if not involved or a.upper in involved or a.lower in involved]
+        raise _PartsFailed(exc, parts) from None
+    sinfo = dict(sinfo)  # the cached solve's info is shared
+    sinfo.update(pinfo)
+    sinfo["gap"] = gap
+    x, shift = settle_free_parts(x, Ain, bin_, offsets, free, pad)
+    sinfo["free_shift"] = shift
+    # Counted at the settled answer, the same way for both solvers: the active set's own count
+    # (its working set) knows nothing of the rows a free part came to rest on.
+    sinfo["active"] = int(np.sum(Ain @ x - bin_ <= pad + 1e-6)) if len(bin_) else 0
+    return x, sinfo
 
-    # components: one per group of attached parts
-    parent = list(range(len(sheets)))
+
+def _fair(V, F, face_layer, face_kind, seam, ends, sheets, in_att, p, cache, timings):
+    """(V, safe, zone): the junctions faired (:mod:`.fair`) in the narrow zone, or the wide one
+    where the narrow leaves a fold; ``safe`` False when even the wide one crosses itself."""
+    t = time.perf_counter()
+    rings = int(p["fair"])
+    A, reach = seam_zone(F, len(V), seam, ends, rings)
+    wide = wide_zone(A, seam, rings)
+    # A free part resting on a face near a junction keeps the face under it as it was solved
+    # (fairing it away would leave the part floating, or sunk into it).
+    held = np.zeros(len(V), bool)
+    for k in sorted(set(range(len(sheets))) - in_att):
+        held |= supports(V, F, face_layer, face_kind, k, sheets[k].polygon().buffer(sheets[k].h), wide)
+    h_med = float(np.median([s.h for s in sheets]))
+
+    def faired(V=V, A=A, reach=reach, wide=wide, held=held):
+        spent = {"fair": 0.0, "fair_check": 0.0}
+
+        def attempt(moved, hold, bend_limit):
+            t1 = time.perf_counter()
+            V2 = fair_seams(V, F, moved, A, hold=hold)
+            t2 = time.perf_counter()
+            ok = fairing_is_fit(V2, F, moved, A, h_med, bend_limit)
+            spent["fair"] += t2 - t1
+            spent["fair_check"] += time.perf_counter() - t2
+            return V2, ok
+
+        # The narrow zone, held softly; where it leaves a fold or a crossing, the wide one
+        # (a bend it leaves is still far below the plain sleeve's, so only a crossing or a
+        # flat triangle there falls back to the plain sleeve).
+        V2, ok = attempt((reach < 1.0) & ~held, hold_weights(reach), MAX_BEND)
+        zone = "narrow"
+        if not ok:
+            V2, ok = attempt(wide & ~held, None, 180.0)
+            zone = "wide"
+        timings.update(spent)
+        return V2, ok, zone
+
+    # Through the cache by the stitched mesh itself: an undo, or an edit that leaves every
+    # junction's rings as they were, skips the fairing's solves and checks.
+    V, safe, zone = memo(cache, "fair", (V, F, seam, ends, held, rings, h_med), faired)
+    timings.setdefault("fair", time.perf_counter() - t)
+    timings.setdefault("fair_check", 0.0)
+    return V.copy(), bool(safe), zone  # the cached array stays as it was, whatever the caller does
+
+
+def _components(n: int, attachments: list) -> int:
+    """Connected components: one per group of attached parts, one per free part."""
+    parent = list(range(n))
 
     def root(a):
         while parent[a] != a:
@@ -327,23 +448,7 @@ def assemble_detailed(meshes: Sequence[Mesh | None], closed: Sequence[bool] | No
 
     for a in attachments:
         parent[root(a.upper)] = root(a.lower)
-    n_comp = len({root(i) for i in range(len(sheets))})
-    keep_arr = np.array(keep)
-    return AssemblyResult(
-        mesh=Mesh(V, F),
-        face_layer=keep_arr[face_layer],
-        face_kind=face_kind,
-        attachments=[Attachment(keep[a.upper], keep[a.lower], a.side) for a in attachments],
-        components=n_comp,
-        n_equalities=int(len(beq)),
-        n_inequalities=int(len(bin_)),
-        n_active=int(sinfo.get("active", 0)),
-        max_violation=viol,
-        glue_error=glue_error,
-        warnings=warnings,
-        timings=timings,
-        solver=sinfo,
-    )
+    return len({root(i) for i in range(n)})
 
 
 def assemble_meshes(meshes: list[Mesh], closed: list[bool] | None = None, params=None) -> Mesh:

@@ -95,9 +95,10 @@ def blend_junctions(sheets: list[Sheet], attachments: list[Attachment], front_of
     pull : float
         Weight of the springs that hold the part near its junction on the host (see
         ``springs``), relative to the part's Dirichlet energy.
-    locators : dict of int -> TriangleLocator, optional
-        Point location per sheet index, shared with :func:`.depth.build_problem` (a host
-        with several parts, the body, is located in once); filled as needed.
+    locators : dict, optional
+        Point location per sheet face (:func:`.depth.face_locator`), shared with
+        :func:`.depth.build_problem` (a host with several parts, the body, is located in
+        once); filled as needed.
 
     Returns
     -------
@@ -114,7 +115,7 @@ def blend_junctions(sheets: list[Sheet], attachments: list[Attachment], front_of
         weight that fades to 0 over the fillet, so the part's slope continues the host's,
         whatever the depth solve does to the host.
     """
-    from sketchforge.geometry.locate import TriangleLocator
+    from .depth import face_locator
 
     locators = {} if locators is None else locators
     lips, glues, springs = [], [], []
@@ -150,11 +151,9 @@ def blend_junctions(sheets: list[Sheet], attachments: list[Attachment], front_of
         # springs: mid-depth = host face under the vertex + the part's back clearance
         # (rising from the strip's top) + its half thickness
         zone = np.flatnonzero(phi > 0)
-        if at.lower not in locators:
-            locators[at.lower] = TriangleLocator(lo.xy, lo.F)
-        face, bary = locators[at.lower].locate(up.xy[zone])
+        face, bary = face_locator(locators, None, sheets, at.lower, at.side).locate(up.xy[zone])
         ok = face >= 0
-        zone, tri, bary = zone[ok], lo.F[face[ok]], np.clip(bary[ok], 0.0, 1.0)
+        zone, tri, bary = zone[ok], lo.face(at.side)[face[ok]], np.clip(bary[ok], 0.0, 1.0)
         bary /= bary.sum(axis=1, keepdims=True)
         facing = base_front[at.lower] if at.side == FRONT else base_back[at.lower]
         under = np.sum(bary * facing[tri], axis=1)

@@ -2,7 +2,10 @@
 
 Every layer is a height field over the drawing plane, so its front face (heights ``+z``) and
 back face (``-z``, reversed triangles) share one planar mesh; the assembly works on that planar
-mesh ("sheet") and only builds 3D faces at the end (:mod:`.stitch`).
+mesh ("sheet") and only builds 3D faces at the end (:mod:`.stitch`). A layer with parts glued
+to both faces (a near leg in front of the body, a far leg behind it, issue 34) has one
+triangulation per face over one vertex table (``F`` and ``Fb``), so the junctions cut into
+the front never meet those cut into the back.
 """
 
 from __future__ import annotations
@@ -41,6 +44,10 @@ class Sheet:
     chains : tuple of (c,) int64
         Junctions of other layers inserted into this sheet (see :mod:`.remesh`), in the order
         of the attachments that created them.
+    Fb : (mb, 3) int64 or None
+        The back face's own triangulation (counter-clockwise seen from +z, like ``F``) when
+        both faces have junctions cut in; None when the back face is ``F`` too. A vertex may
+        then be used by one face only (a junction's points are on their face alone).
     h : float
         Median edge length, the sheet's resolution.
     holes : tuple of (k_i,) int64
@@ -58,10 +65,25 @@ class Sheet:
     h: float
     chains: tuple = field(default_factory=tuple)
     holes: tuple = field(default_factory=tuple)
+    Fb: np.ndarray | None = None
 
     @property
     def n(self) -> int:
         return int(len(self.xy))
+
+    def face(self, side: int) -> np.ndarray:
+        """(m, 3) int64: the triangulation of the front face (``side`` 1) or the back face
+        (-1), counter-clockwise seen from +z."""
+        return self.F if side > 0 or self.Fb is None else self.Fb
+
+    def on_face(self, side: int) -> np.ndarray:
+        """(n,) bool: the vertices the face ``side`` uses (all of them on a sheet with one
+        triangulation)."""
+        if self.Fb is None:
+            return np.ones(self.n, bool)
+        used = np.zeros(self.n, bool)
+        used[self.face(side)] = True
+        return used
 
     def polygon(self) -> shapely.Polygon:
         """The layer's region Ω in the drawing plane, holes cut out (made valid by
