@@ -23,9 +23,9 @@ from .blend import blend_junctions
 from .cache import AssemblyCache, memo
 from .errors import AttachmentError, DepthOrderError
 from .depth import build_problem, settle_free_parts, solve_without_free_parts
-from .fair import fair_seams, fairing_is_fit, hold_weights, seam_zone, supports, wide_zone
+from .fair import fair_clear, hold_weights, seam_zone, supports, wide_zone
 from .remesh import insert_chains
-from .sheet import sheet_from_mesh, taper
+from .sheet import THIN_HEIGHT_EDGES, refine_thin, sheet_from_mesh, taper
 from .stitch import build_mesh
 
 #: Assembly options. ``margin``: front/back separation at the rim, in edge lengths of the
@@ -141,8 +141,8 @@ def _check_overlap_work(meshes: Sequence[Mesh]) -> None:
 
 def _sheet(cache: AssemblyCache | None, k: int, name: str, mesh: Mesh, free: bool):
     """:func:`.sheet.sheet_from_mesh` through the cache (keyed by the mesh's arrays)."""
-    sheet = memo(cache, "sheet", (mesh.V, mesh.F, mesh.boundary, mesh.junction, tuple(mesh.holes), free),
-                 lambda: sheet_from_mesh(k, name, mesh, free))
+    sheet = memo(cache, "sheet", (mesh.V, mesh.F, mesh.boundary, mesh.junction, tuple(mesh.holes), free, THIN_HEIGHT_EDGES),
+                 lambda: refine_thin(sheet_from_mesh(k, name, mesh, free)))
     return sheet.evolve(layer=k, name=name)
 
 
@@ -406,26 +406,17 @@ def _fair(V, F, face_layer, face_kind, seam, ends, sheets, in_att, p, cache, tim
     h_med = float(np.median([s.h for s in sheets]))
 
     def faired(V=V, A=A, reach=reach, wide=wide, held=held):
-        spent = {"fair": 0.0, "fair_check": 0.0}
-
-        def attempt(moved, hold, bend_limit):
-            t1 = time.perf_counter()
-            V2 = fair_seams(V, F, moved, A, hold=hold)
-            t2 = time.perf_counter()
-            ok = fairing_is_fit(V2, F, moved, A, h_med, bend_limit)
-            spent["fair"] += t2 - t1
-            spent["fair_check"] += time.perf_counter() - t2
-            return V2, ok
-
-        # The narrow zone, held softly; where it leaves a fold or a crossing, the wide one
-        # (a bend it leaves is still far below the plain sleeve's, so only a crossing or a
-        # flat triangle there falls back to the plain sleeve).
-        V2, ok = attempt((reach < 1.0) & ~held, hold_weights(reach), MAX_BEND)
+        t1 = time.perf_counter()
+        # The narrow zone, held softly; where it leaves a fold, the wide one (a bend it leaves
+        # is still far below the plain sleeve's). Where either crosses another part, the rings
+        # there are kept as solved (fair.fair_clear); only a crossing that cannot be cleared
+        # falls back to the plain sleeve.
+        V2, ok, _ = fair_clear(V, F, (reach < 1.0) & ~held, A, h_med, hold_weights(reach), MAX_BEND)
         zone = "narrow"
         if not ok:
-            V2, ok = attempt(wide & ~held, None, 180.0)
+            V2, ok, _ = fair_clear(V, F, wide & ~held, A, h_med)
             zone = "wide"
-        timings.update(spent)
+        timings["fair"] = time.perf_counter() - t1
         return V2, ok, zone
 
     # Through the cache by the stitched mesh itself: an undo, or an edit that leaves every

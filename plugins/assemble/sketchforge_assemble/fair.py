@@ -316,3 +316,51 @@ def fairing_is_safe(V: np.ndarray, F: np.ndarray, moved: np.ndarray, h: float) -
     if not np.all(np.isfinite(T)) or np.any(area < 1e-6 * h * h):
         return False
     return len(intersecting_pairs(V, F, among=touched)) == 0
+
+
+def fairing_faults(V: np.ndarray, F: np.ndarray, moved: np.ndarray, h: float) -> np.ndarray:
+    """(k,) int64: the vertices of the triangles that make the faired mesh V (n, 3), F (m, 3)
+    unfit to hand out (:func:`fairing_is_safe`): those with a moved vertex (``moved`` (n,)
+    bool) and an area below 1e-6 h², and both triangles of every crossing pair among the
+    triangles with a moved vertex. Empty when it is fit."""
+    touched = np.flatnonzero(moved[F].any(axis=1))
+    T = V[F[touched]]
+    area = 0.5 * np.linalg.norm(np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0]), axis=1)
+    bad = touched[~np.isfinite(area) | (area < 1e-6 * h * h)]
+    pairs = intersecting_pairs(V, F, among=touched)
+    return np.unique(F[np.r_[bad, pairs.ravel()]].ravel())
+
+
+#: Rounds of :func:`fair_clear`: each keeps back the rings around what the previous one left
+#: crossing.
+CLEAR_ROUNDS = 4
+#: Rings kept back around a crossing per round.
+CLEAR_RINGS = 2
+
+
+def fair_clear(V: np.ndarray, F: np.ndarray, moved: np.ndarray, A: sp.csr_matrix, h: float,
+               hold: np.ndarray | None = None, bend_limit: float = 180.0):
+    """(V2, fit, kept back): :func:`fair_seams` of ``moved``, where it crosses itself again
+    with the crossing's rings kept where they were, up to :data:`CLEAR_ROUNDS` times.
+
+    Why. Where two parts lie close (a far wing pressed against the body's back a gap apart,
+    twin ears side by side), the fairing of one junction moves vertices by more than the gap
+    and the faired surface crosses the other part. Those few rings are better left as the
+    depth solve placed them (which keeps every part clear of the others) than the whole model
+    handed out with plain folds; the rest of the junction is still faired. ``fit``: no
+    crossing or flat triangle left and every bend the moved vertices reach at most
+    ``bend_limit`` degrees; ``kept back``: (n,) bool, the vertices held back.
+    """
+    kept = np.zeros(len(V), bool)
+    for _ in range(CLEAR_ROUNDS):
+        now = moved & ~kept
+        V2 = fair_seams(V, F, now, A, hold=hold)
+        faults = fairing_faults(V2, F, now, h)
+        if len(faults) == 0:
+            fit = bend_limit >= 180.0 or largest_bend(V2, F, now, A) <= bend_limit
+            return V2, fit, kept
+        grow = ring_region(A, faults, CLEAR_RINGS) & moved
+        if not (grow & ~kept).any():
+            break
+        kept |= grow
+    return V2, False, kept

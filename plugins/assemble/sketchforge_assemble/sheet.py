@@ -193,3 +193,83 @@ def end_taper(xy: np.ndarray, ends: np.ndarray, radius: float) -> np.ndarray:
     ``radius`` on."""
     d = np.min(np.linalg.norm(xy[:, None, :] - ends[None, :, :], axis=2), axis=1)
     return np.clip(d / radius, 0.0, 1.0)
+
+
+#: A part whose height is less than this many of its edge lengths is re-meshed finer for the
+#: assembly (:func:`refine_thin`).
+THIN_HEIGHT_EDGES = 5.0
+#: ... but never finer than this share of its own edge length.
+MAX_REFINE = 4.0
+
+
+def refine_thin(sheet: Sheet, min_height_edges: float = THIN_HEIGHT_EDGES) -> Sheet:
+    """The sheet of a thin part, re-meshed so that its height spans ``min_height_edges`` edges.
+
+    Why. A tail, an ear or a beak drawn at the document's resolution is often only three or
+    four triangles across (its height z_max a few edge lengths). The junction's fillet and the
+    fairing work over rings of triangles, so on such a part they reach across all of it: the
+    fairing folded or crossed every thin part of the Monster-Mash-style corpus (issue 34; the
+    parts 5 edge lengths high and more never did). Finer triangles give the blend room. Only
+    the assembled model changes: the layer keeps its own mesh (and sculpt edits) in the
+    document.
+
+    How. The outline (and every hole) keeps its vertices and gets more between them, at the
+    new edge length h' = max(z_max / ``min_height_edges``, h / :data:`MAX_REFINE`); Triangle
+    meshes the inside at h' (:func:`sketchforge.geometry.triangulate.triangulate_polygon`); the
+    new vertices take u = z² interpolated linearly from the old mesh (u is smooth where z ~ √d
+    near the rim is not), z = √u. The junction is the same stretch of outline, with its new
+    points. A sheet that is not thin, or has no junction, is returned as it is.
+    """
+    from sketchforge.geometry.locate import TriangleLocator
+    from sketchforge.geometry.triangulate import triangulate_polygon
+
+    if len(sheet.junction) < 2 or sheet.chains or sheet.Fb is not None:
+        return sheet
+    zmax = float(sheet.z.max(initial=0.0))
+    h = sheet.h
+    if zmax <= 0 or zmax >= min_height_edges * h:
+        return sheet
+    h2 = max(zmax / min_height_edges, h / MAX_REFINE)
+
+    def densify(loop: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """(points (k', 2), position of each old loop vertex in it)."""
+        P = sheet.xy[loop]
+        Q = np.roll(P, -1, axis=0)
+        n = np.maximum(np.ceil(np.linalg.norm(Q - P, axis=1) / h2).astype(np.int64), 1)
+        t = np.concatenate([np.arange(k) / k for k in n])
+        src = np.repeat(np.arange(len(P)), n)
+        pts = P[src] + t[:, None] * (Q[src] - P[src])
+        return pts, np.r_[0, np.cumsum(n)[:-1]]
+
+    outline, at = densify(sheet.boundary)
+    rings = [densify(hole) for hole in sheet.holes]
+    tri = triangulate_polygon(outline, h2, holes=[r[0] for r in rings])
+    xy = np.ascontiguousarray(tri.V2)
+    F = ccw_triangles(xy, tri.F)
+    xy, F = guard.mesh(xy, F, f"the mesh of layer '{sheet.name}', refined", planar=True)
+    face, bary = TriangleLocator(sheet.xy, sheet.F).locate(xy, nearest=True)
+    u = np.sum(bary * (sheet.z[sheet.F[np.maximum(face, 0)]] ** 2), axis=1)
+    z = np.sqrt(np.maximum(u, 0.0))
+    k = len(outline)
+    z[:k] = 0.0  # the outline, junction included, stays at 0 like every inflated rim
+    boundary = np.arange(k, dtype=np.int64)
+    # the junction: the same stretch of the outline, walked the same way
+    pos = {int(v): i for i, v in enumerate(sheet.boundary)}
+    a, b = pos[int(sheet.junction[0])], pos[int(sheet.junction[1])]
+    forward = (b - a) % len(sheet.boundary) == 1
+    start, end = at[pos[int(sheet.junction[0])]], at[pos[int(sheet.junction[-1])]]
+    if forward:
+        junction = np.arange(start, start + (end - start) % k + 1) % k
+    else:
+        junction = (start - np.arange(0, (start - end) % k + 1)) % k
+    holes = []
+    first = k
+    for pts, _ in rings:
+        holes.append(oriented_loop(F, np.arange(first, first + len(pts), dtype=np.int64)))
+        first += len(pts)
+    if not has_directed_edge(F, boundary[0], boundary[1]):
+        boundary = boundary[::-1].copy()
+    E = directed_edges(F)
+    h_new = float(np.median(np.linalg.norm(xy[E[:, 0]] - xy[E[:, 1]], axis=1)))
+    return sheet.evolve(xy=xy, z=z, F=F, boundary=boundary, junction=junction.astype(np.int64), h=h_new,
+                        holes=tuple(holes))
