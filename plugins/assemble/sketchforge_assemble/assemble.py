@@ -23,10 +23,11 @@ from .blend import blend_junctions
 from .cache import AssemblyCache, memo
 from .errors import AttachmentError, DepthOrderError
 from .depth import build_problem, settle_free_parts, solve_without_free_parts
-from .fair import fair_clear, hold_weights, seam_zone, supports, wide_zone
+from .fair import fair_clear, hold_weights, ring_region, seam_zone, supports, wide_zone
 from .remesh import insert_chains
 from .sheet import THIN_HEIGHT_EDGES, refine_thin, sheet_from_mesh, taper
 from .stitch import build_mesh
+from .thickness import full_thickness
 
 #: Assembly options. ``margin``: front/back separation at the rim, in edge lengths of the
 #: layer (thesis 4.7's "small margin"); ``gap``: clearance between overlapping layers, in
@@ -308,6 +309,13 @@ def _assemble(sheets: list, knames: list[str], p: dict, cache, freed: dict[int, 
         if a.keep is not None:
             # only this stretch of the junction is glued; the rest is outline like any other
             sheets[a.upper] = sheets[a.upper].evolve(junction=sheets[a.upper].junction[a.keep[0]:a.keep[1] + 1])
+    for a in attachments:
+        # a part meets its host at its own thickness (thickness.full_thickness)
+        s = sheets[a.upper]
+        host = sheets[a.lower]
+        z = memo(cache, "thickness", (s.xy, s.F, s.z, s.boundary, s.holes, s.junction, host.xy, host.boundary,
+                                      host.holes), lambda s=s, host=host: full_thickness(s, host.polygon()))
+        sheets[a.upper] = s.evolve(z=z)
     timings["attach"] = time.perf_counter() - t
 
     t = time.perf_counter()
@@ -407,17 +415,27 @@ def _fair(V, F, face_layer, face_kind, seam, ends, sheets, in_att, p, cache, tim
 
     def faired(V=V, A=A, reach=reach, wide=wide, held=held):
         t1 = time.perf_counter()
-        # The narrow zone, held softly; where it leaves a fold, the wide one (a bend it leaves
-        # is still far below the plain sleeve's). Where either crosses another part, the rings
-        # there are kept as solved (fair.fair_clear); only a crossing that cannot be cleared
-        # falls back to the plain sleeve.
-        V2, ok, _ = fair_clear(V, F, (reach < 1.0) & ~held, A, h_med, hold_weights(reach), MAX_BEND)
+        # The narrow zone, held softly. Where it leaves a fold, the junctions near the fold get
+        # the wide zone (unheld), the others keep the narrow one: widening every junction for
+        # one fold reshaped thin parts elsewhere (a tail faired into a membrane). Where
+        # either crosses another part, the rings there are kept as solved (fair.fair_clear);
+        # only a crossing that cannot be cleared falls back to the plain sleeve.
+        narrow = (reach < 1.0) & ~held
+        hold = hold_weights(reach)
+        V2, clear, bent, _ = fair_clear(V, F, narrow, A, h_med, hold, MAX_BEND)
         zone = "narrow"
-        if not ok:
-            V2, ok, _ = fair_clear(V, F, wide & ~held, A, h_med)
+        if clear and len(bent):
+            near_seam = seam[ring_region(A, bent, 2 * rings)[seam]]
+            local = wide_zone(A, near_seam, rings) & ~held if len(near_seam) else np.zeros(len(V), bool)
+            if local.any():
+                V3, clear3, _, _ = fair_clear(V, F, narrow | local, A, h_med, hold)
+                if clear3:
+                    V2, zone = V3, "narrow+wide"
+        if not clear:
+            V2, clear, _, _ = fair_clear(V, F, wide & ~held, A, h_med)
             zone = "wide"
         timings["fair"] = time.perf_counter() - t1
-        return V2, ok, zone
+        return V2, clear, zone
 
     # Through the cache by the stitched mesh itself: an undo, or an edit that leaves every
     # junction's rings as they were, skips the fairing's solves and checks.

@@ -338,18 +338,39 @@ CLEAR_ROUNDS = 4
 CLEAR_RINGS = 2
 
 
+def bent_vertices(V: np.ndarray, F: np.ndarray, moved: np.ndarray, A: sp.csr_matrix, limit: float) -> np.ndarray:
+    """(k,) int64: the vertices of the edges, within one ring of the moved vertices (``moved``
+    (n,) bool), that bend by more than ``limit`` degrees in V (n, 3), F (m, 3)."""
+    from .diagnostics import dihedral_angles
+
+    near = ring_region(A, np.flatnonzero(moved), 1)
+    sub = F[near[F].any(axis=1)]
+    if len(sub) == 0:
+        return np.zeros(0, np.int64)
+    ang = dihedral_angles(V, sub)
+    E = np.sort(sub[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+    key, inv = np.unique(E, axis=0, return_inverse=True)
+    # dihedral_angles gives one angle per interior edge in np.unique order of the sorted edges
+    count = np.bincount(inv.ravel(), minlength=len(key))
+    interior = key[count == 2]
+    if len(interior) != len(ang):
+        return np.zeros(0, np.int64)
+    return np.unique(interior[ang > limit].ravel())
+
+
 def fair_clear(V: np.ndarray, F: np.ndarray, moved: np.ndarray, A: sp.csr_matrix, h: float,
                hold: np.ndarray | None = None, bend_limit: float = 180.0):
-    """(V2, fit, kept back): :func:`fair_seams` of ``moved``, where it crosses itself again
-    with the crossing's rings kept where they were, up to :data:`CLEAR_ROUNDS` times.
+    """(V2, clear, bent, kept back): :func:`fair_seams` of ``moved``, where it crosses itself
+    again with the crossing's rings kept where they were, up to :data:`CLEAR_ROUNDS` times.
 
     Why. Where two parts lie close (a far wing pressed against the body's back a gap apart,
     twin ears side by side), the fairing of one junction moves vertices by more than the gap
     and the faired surface crosses the other part. Those few rings are better left as the
     depth solve placed them (which keeps every part clear of the others) than the whole model
-    handed out with plain folds; the rest of the junction is still faired. ``fit``: no
-    crossing or flat triangle left and every bend the moved vertices reach at most
-    ``bend_limit`` degrees; ``kept back``: (n,) bool, the vertices held back.
+    handed out with plain folds; the rest of the junction is still faired. ``clear``: no
+    crossing or flat triangle left; ``bent``: (k,) int64 the vertices of the edges the moved
+    vertices reach that bend by more than ``bend_limit`` degrees; ``kept back``: (n,) bool,
+    the vertices held back.
     """
     kept = np.zeros(len(V), bool)
     for _ in range(CLEAR_ROUNDS):
@@ -357,10 +378,10 @@ def fair_clear(V: np.ndarray, F: np.ndarray, moved: np.ndarray, A: sp.csr_matrix
         V2 = fair_seams(V, F, now, A, hold=hold)
         faults = fairing_faults(V2, F, now, h)
         if len(faults) == 0:
-            fit = bend_limit >= 180.0 or largest_bend(V2, F, now, A) <= bend_limit
-            return V2, fit, kept
+            bent = bent_vertices(V2, F, now, A, bend_limit) if bend_limit < 180.0 else np.zeros(0, np.int64)
+            return V2, True, bent, kept
         grow = ring_region(A, faults, CLEAR_RINGS) & moved
         if not (grow & ~kept).any():
             break
         kept |= grow
-    return V2, False, kept
+    return V2, False, np.zeros(0, np.int64), kept
