@@ -34,6 +34,8 @@ from sketchforge_assemble import assemble_detailed  # noqa: E402
 from sketchforge_assemble.drawn import drawn_creature  # noqa: E402
 from sketchforge_assemble.testing import meshes_from_journal  # noqa: E402
 
+#: Assembly parameters (--params '{"fair": 8}').
+PARAMS: dict = {}
 #: Edges within this many median edge lengths of a glued seam count as "across a junction".
 ZONE_EDGES = 8.0
 
@@ -49,7 +51,7 @@ def measure(seed: int):
     parts = sum(1 for l, m in zip(layers, meshes) if not l.closed and len(m.junction))
     c0, w0 = time.process_time(), time.perf_counter()
     try:
-        r = assemble_detailed(meshes, closed, names=names)
+        r = assemble_detailed(meshes, closed, names=names, params=PARAMS)
     except Exception as exc:  # noqa: BLE001 - a benchmark reports every failure and goes on
         return {"seed": seed, "ok": False, "error": f"{type(exc).__name__}: {exc}", "parts": parts}
     cpu, wall = time.process_time() - c0, time.perf_counter() - w0
@@ -87,7 +89,11 @@ def main(argv=None) -> None:
     ap.add_argument("--seeds", type=int, default=60)
     ap.add_argument("--first", type=int, default=0)
     ap.add_argument("--pictures", type=Path, default=None, help="write three views of the first creatures here")
+    ap.add_argument("--params", default="{}", help="assembly parameters, JSON")
     args = ap.parse_args(argv)
+    import json
+
+    PARAMS.update(json.loads(args.params))
     print(f"load {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores; seeds {args.first}..{args.first + args.seeds - 1}")
     rows = []
     for seed in range(args.first, args.first + args.seeds):

@@ -69,7 +69,7 @@ from sketchforge.errors import (
     SolverError,
     UnknownSolverError,
 )
-from sketchforge.geometry.mesh import Mesh
+from sketchforge.geometry.mesh import AssembledMesh, Mesh
 from sketchforge.geometry.reflectance_model import ReflectanceModel, Shader
 from sketchforge.plugins.hookspecs import hookimpl
 from sketchforge.plugins.registry import Exporter, Panel
@@ -87,6 +87,7 @@ from sketchforge.plugins.solvers import (
 from sketchforge.tools.base import Tool
 
 __all__ = [
+    "AssembledMesh",
     "Assembler",
     "Command",
     "ContourError",

@@ -82,6 +82,9 @@ class AssemblyResult:
     glue_error : float
         Largest residual of a glue row (the glued vertices are shared, so this only measures
         the solver's accuracy, never a crack).
+    free : list of int
+        Input indices of the parts with a junction that are assembled free (each named in
+        ``warnings``).
     warnings : list of str
         One per part that could not be glued (it is free) or other degradation.
     notes : list of str
@@ -101,6 +104,7 @@ class AssemblyResult:
     n_active: int
     max_violation: float
     glue_error: float = 0.0
+    free: list = field(default_factory=list)
     warnings: list = field(default_factory=list)
     notes: list = field(default_factory=list)
     timings: dict = field(default_factory=dict)
@@ -252,6 +256,7 @@ def assemble_detailed(meshes: Sequence[Mesh | None], closed: Sequence[bool] | No
         n_active=int(res.solver.get("active", 0)),
         max_violation=res.max_violation,
         glue_error=res.glue_error,
+        free=[keep[u] for u in range(len(sheets)) if len(sheets[u].junction) and u not in {a.upper for a in res.attachments}],
         warnings=warnings,
         notes=res.notes,
         timings=timings,

@@ -112,6 +112,10 @@ def find_attachments(sheets: list[Sheet], names: list[str], on_bad_junction: str
                 notes.append(found.note)
         elif found.problem is not None:
             bad_junction(found.problem)
+        else:
+            # over empty space: a free part, as drawn; never an error, but said (a part that was
+            # glued and lost its host when a layer moved must not go free without a word)
+            warnings.append(f"the junction of layer '{names[u]}' lies on no part, so it is assembled as a free part")
     return _break_loops(attachments, names, bad_junction), warnings, notes
 
 

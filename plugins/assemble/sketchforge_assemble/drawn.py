@@ -177,9 +177,14 @@ def _quadruped(d: _Drawing) -> None:
     tail_root = _on(ax, ay, np.pi + rng.uniform(-0.3, 0.4), 0.85)
     d.stroke("tail", _limb(tail_root, np.pi + rng.uniform(0.2, 0.8), rng.uniform(0.4, 0.7), 0.05, 0.025,
                            bend=rng.uniform(-0.8, 0.8)), behind=rng.random() < 0.5)
-    # an eye: closed, on the head
+    # a snout: open, on the front of the head
+    snout_root = hc + 0.55 * hr * np.array([np.cos(-0.3), np.sin(-0.3)])
+    d.stroke("snout", _limb(snout_root, rng.uniform(-0.5, 0.1), rng.uniform(0.12, 0.2), rng.uniform(0.08, 0.11),
+                            rng.uniform(0.06, 0.09)))
+    # eyes: closed, on the head (the far one drawn behind it, peeking over its outline)
     e = hc + 0.45 * hr * np.array([np.cos(0.5), np.sin(0.5)])
     d.stroke("eye", _blob(e, 0.05, 0.04, rng, n=24), wobble=0.0)
+    d.stroke("eye_far", _blob(e + np.array([0.12, 0.02]), 0.035, 0.035, rng, n=24), behind=True, wobble=0.0)
 
 
 def _bird(d: _Drawing) -> None:

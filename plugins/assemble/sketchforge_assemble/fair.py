@@ -385,3 +385,4 @@ def fair_clear(V: np.ndarray, F: np.ndarray, moved: np.ndarray, A: sp.csr_matrix
             break
         kept |= grow
     return V2, False, np.zeros(0, np.int64), kept
+

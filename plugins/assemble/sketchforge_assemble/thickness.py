@@ -96,3 +96,4 @@ def fade_over_host(xy: np.ndarray, junction_xy: np.ndarray, host_region) -> np.n
             shapely.distance(host_region.boundary, pts[inside])
     t = np.where(inside, a / np.maximum(a + b, 1e-300), 1.0)
     return t * t * (3.0 - 2.0 * t)
+
