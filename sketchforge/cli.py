@@ -1,4 +1,5 @@
-"""Command line: ``sketchforge [DOC]`` (the app), ``replay``, ``info``, ``render``.
+"""Command line: ``sketchforge [DOC]`` (the app), ``replay``, ``info``, ``render``, and
+``batch`` and ``dataset`` (:mod:`sketchforge.batch`).
 
 Errors a user can cause print one line on stderr and exit with status 2; no traceback.
 """
@@ -13,7 +14,7 @@ from pathlib import Path
 from sketchforge.atomic import check_target, refuse_input_as_output, same_file
 from sketchforge.errors import SketchforgeError, quote, shorten
 
-SUBCOMMANDS = ("replay", "info", "render")
+SUBCOMMANDS = ("replay", "info", "render", "batch", "dataset")
 #: ``render --isophotes``: more lines than this are closer than a pixel apart at any size.
 MAX_ISOPHOTES = 255
 
@@ -62,6 +63,24 @@ def whole_number(text: str) -> int:
         return int(t)
     except (ValueError, OverflowError):
         raise argparse.ArgumentTypeError(f"expected a whole number, got {quote(text, 40)}") from None
+
+
+def light_argument(text: str):
+    """``--light x,y,z`` (or ``x,y``: in the drawing plane): a direction towards the light on
+    the hemisphere facing the viewer (z >= 0), normalised; refused in one bounded line."""
+    from sketchforge.document.layer import Light
+
+    t = text.strip()
+    try:
+        if len(t) > 200:
+            raise ValueError
+        parts = [float(v) for v in t.split(",")]
+    except ValueError:
+        raise SketchforgeError(f"--light must be 2 or 3 numbers x,y[,z] separated by commas, got {quote(text, 40)}") from None
+    try:
+        return Light.from_vector(parts)
+    except SketchforgeError as exc:
+        raise SketchforgeError(f"--light {quote(text, 40)}: {exc}") from None
 
 
 def cmd_replay(args) -> int:
@@ -134,7 +153,8 @@ def cmd_info(args) -> int:
 
     doc = ff.load(args.doc)
     l = doc.light
-    print(f"{printable(args.doc)}: {len(doc.layers)} layers, light ({l.x:.4f}, {l.y:.4f}, 0), {len(doc.journal())} journal entries")
+    print(f"{printable(args.doc)}: {len(doc.layers)} layers, light ({l.x:.4f}, {l.y:.4f}, {l.z:.4g}; elevation "
+          f"{l.elevation:.1f}°), {len(doc.journal())} journal entries")
     for i, layer in enumerate(doc.layers):
         nv = layer.mesh.n_vertices if layer.mesh is not None else 0
         nf = layer.mesh.n_faces if layer.mesh is not None else 0
@@ -154,13 +174,15 @@ def cmd_render(args) -> int:
         raise SketchforgeError(f"--size must be between 16 and 8192, got {args.size}")
     if not 0 <= args.isophotes <= MAX_ISOPHOTES:
         raise SketchforgeError(f"--isophotes must be between 0 and {MAX_ISOPHOTES}, got {args.isophotes}")
+    light = None if args.light is None else light_argument(args.light)
     refuse_input_as_output(args.png, [args.doc], "PNG")
     check_target(args.png)
     doc = ff.load(args.doc)
     meshes = [l.mesh for l in doc.layers if l.visible and l.mesh is not None]
     if not meshes:
         raise SketchforgeError(f"{args.doc}: no visible layer with a mesh to render")
-    img = render_top(meshes, doc.light.direction, size=args.size, isophotes=args.isophotes, cel=args.cel)
+    # --light shades the picture only: the document (and its sculpt edits) keep their own.
+    img = render_top(meshes, (light or doc.light).direction, size=args.size, isophotes=args.isophotes, cel=args.cel)
     write_png(args.png, img)
     print(f"wrote {printable(args.png)} ({img.shape[1]}x{img.shape[0]})", file=sys.stderr)
     return 0
@@ -188,7 +210,13 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--size", type=whole_number, default=512)
     d.add_argument("--isophotes", type=whole_number, default=0, help="draw K isophote lines")
     d.add_argument("--cel", action="store_true", help="three-tone cel shading")
+    d.add_argument("--light", metavar="X,Y[,Z]",
+                   help="shade with this light instead of the document's: a direction towards it, z >= 0 "
+                        "(0,0,1 straight overhead; write --light=-1,0,1 when x is negative)")
     d.set_defaults(func=cmd_render)
+    from sketchforge.batch.cli import add_parsers
+
+    add_parsers(sub, whole_number)
     return p
 
 

@@ -1,8 +1,11 @@
 """The sketchforge document file: JSON, saved atomically.
 
-``{"format": "sketchforge", "version": 1, "light": [x, y, 0], "journal": [...],
+``{"format": "sketchforge", "version": 2, "light": [x, y, z], "journal": [...],
 "snapshot": {...}}``
 
+- ``version``: 2 since lights may leave the drawing plane (z > 0). A version 1 file keeps
+  meaning what it meant: its lights lay in the plane, a z component was dropped, so reading it
+  drops z from its ``light`` fields and its ``set_light`` entries (:func:`upgrade_v1`).
 - ``light``: the light at the start of the journal.
 - ``journal``: command dicts, each with a ``"command"`` name, in order; each acts with the light
   current at its place (``set_light`` entries change it).
@@ -42,7 +45,9 @@ from sketchforge.geometry.mesh import Mesh
 from sketchforge.plugins.solvers import SOLVER_KINDS, SolverChoice
 
 FORMAT_NAME = "sketchforge"
-FORMAT_VERSION = 1
+FORMAT_VERSION = 2
+#: Before this version a light lay in the drawing plane: its z component was dropped.
+FIRST_VERSION_WITH_3D_LIGHTS = 2
 #: Journals longer than this are refused (each entry may run a solver).
 MAX_JOURNAL_ENTRIES = 100_000
 #: Files larger than this are refused before parsing.
@@ -155,7 +160,7 @@ def decode_mesh(d: Any, where: str) -> Mesh:
 
 
 def _light_list(light: Light) -> list[float]:
-    return [light.x, light.y, 0.0]
+    return light.to_list()
 
 
 def _layer_to_dict(layer: Layer) -> dict:
@@ -191,13 +196,13 @@ def document_to_dict(doc: Document, snapshot: bool = True) -> dict:
     return out
 
 
-def _parse_light(v: Any, where: str) -> Light:
+def _parse_light(v: Any, where: str, version: int = FORMAT_VERSION) -> Light:
     if not isinstance(v, list) or len(v) not in (2, 3) or not all(
         isinstance(x, (int, float)) and not isinstance(x, bool) for x in v
     ):
         raise DocumentFormatError(f"{where}: must be a list of 2 or 3 numbers")
     try:
-        return Light.from_vector(v)
+        return Light.from_vector(v if version >= FIRST_VERSION_WITH_3D_LIGHTS else v[:2])
     except SketchforgeError as exc:
         raise DocumentFormatError(f"{where}: {exc}") from None
 
@@ -238,11 +243,13 @@ def _check_edits(edits: list, where: str, registry, host=None) -> None:
             raise DocumentFormatError(f"{at}: {exc}") from None
         if "light" in e:
             lv = e["light"]
+            # The light the edit used, as it used it (a 3-vector: in-plane edits since the
+            # first version, z > 0 since lights may leave the plane).
             if not (
                 isinstance(lv, list)
                 and len(lv) == 3
                 and all(isinstance(x, float) and math.isfinite(x) for x in lv)
-                and math.hypot(lv[0], lv[1]) > 0.5
+                and (math.hypot(lv[0], lv[1]) > 0.5 or (lv[2] >= 0.0 and math.hypot(*lv) > 0.5))
             ):
                 raise DocumentFormatError(f"{at}.light: must be a unit direction of 3 finite numbers")
 
@@ -298,6 +305,28 @@ def _layer_from_dict(d: Any, where: str, registry=None, host=None) -> Layer:
                  holes=tuple(holes), solver=solver)
 
 
+def _flatten_set_light(entry: Any, depth: int = 0) -> Any:
+    """A version 1 journal entry as it was read then: a ``set_light`` direction's z dropped
+    (also inside macros). Anything malformed is left for the command's own check."""
+    if not isinstance(entry, dict) or depth > MAX_JSON_DEPTH:
+        return entry
+    d = entry.get("direction")
+    # z = 0 means the same in both versions: such entries (all the app ever wrote) stay as written.
+    if entry.get("command") == "set_light" and isinstance(d, list) and len(d) == 3 and d[2] != 0:
+        return {**entry, "direction": d[:2]}
+    if entry.get("command") == "macro" and isinstance(entry.get("children"), list):
+        return {**entry, "children": [_flatten_set_light(c, depth + 1) for c in entry["children"]]}
+    return entry
+
+
+def upgrade_v1(journal: list) -> list:
+    """The journal of a version 1 file in today's terms: every light lay in the drawing plane
+    then (``Light`` dropped z), so a ``set_light`` entry with z != 0 keeps only [x, y], which
+    gives the very light it gave, bit for bit. Stored sculpt edits' ``light`` was always used as the 3-vector
+    it is and needs nothing."""
+    return [_flatten_set_light(e) for e in journal]
+
+
 def validate_header(data: Any, source: str) -> tuple[Light, list]:
     if not isinstance(data, dict):
         raise DocumentFormatError(f"{source}: not a sketchforge document (the top level is not an object)")
@@ -312,12 +341,14 @@ def validate_header(data: Any, source: str) -> tuple[Light, list]:
         )
     if version < 1:
         raise DocumentFormatError(f"{source}: field 'version' must be >= 1")
-    light = _parse_light(data.get("light", [1.0, 0.0, 0.0]), f"{source}: field 'light'")
+    light = _parse_light(data.get("light", [1.0, 0.0, 0.0]), f"{source}: field 'light'", version)
     journal = data.get("journal", [])
     if not isinstance(journal, list):
         raise DocumentFormatError(f"{source}: field 'journal' must be a list")
     if len(journal) > MAX_JOURNAL_ENTRIES:
         raise LimitError(f"{source}: the journal has {len(journal)} entries; the limit is {MAX_JOURNAL_ENTRIES}")
+    if version < FIRST_VERSION_WITH_3D_LIGHTS:
+        journal = upgrade_v1(journal)
     return light, journal
 
 
@@ -352,7 +383,8 @@ def document_from_dict(data: Any, source: str = "document", host=None, use_snaps
     ids = [l.id for l in layers]
     if len(set(ids)) != len(ids):
         raise DocumentFormatError(f"{source}: snapshot.layers has duplicate ids")
-    cur_light = _parse_light(snap.get("light", data.get("light", [1.0, 0.0, 0.0])), f"{source}: snapshot.light")
+    cur_light = _parse_light(snap.get("light", data.get("light", [1.0, 0.0, 0.0])), f"{source}: snapshot.light",
+                             data["version"])
     plugin_data = snap.get("plugin_data", {})
     if not isinstance(plugin_data, dict) or not all(isinstance(k, str) for k in plugin_data):
         raise DocumentFormatError(f"{source}: snapshot.plugin_data must be an object")
@@ -483,7 +515,15 @@ def read_regular_file(path, limit: int | None = None) -> bytes:
 
 def read_json(path) -> Any:
     path = Path(path)
-    raw = read_regular_file(path)
+    return parse_json(read_regular_file(path), path)
+
+
+def parse_json(raw: bytes, path) -> Any:
+    """A document file's bytes as JSON, with the checks and one-line errors of :func:`read_json`
+    (``path`` names the file in them): for bytes read elsewhere (a batch worker on another
+    machine gets the document's bytes, not its path)."""
+    if len(raw) > MAX_FILE_BYTES:
+        raise LimitError(f"cannot open {path}: {len(raw)} bytes is over the limit of {MAX_FILE_BYTES}")
     try:
         text = raw.decode("utf-8")
     except UnicodeDecodeError as exc:

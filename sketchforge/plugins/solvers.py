@@ -90,7 +90,18 @@ class SculptSolver:
     the cleaned stroke and services such as the shading of candidate heights); the host clamps
     heights at 0, keeps the rim at 0, refuses non-finite values and, unless switched off,
     keeps the edit only if the isophote ends no farther from the stroke (trying half and a
-    quarter of δz)."""
+    quarter of δz).
+
+    The light (``problem.light``) is anywhere on the hemisphere facing the viewer (z >= 0), not
+    only in the drawing plane: a solver that cannot handle a tilted light raises a
+    ``SculptError`` saying so in one line, never returns a wrong surface.
+
+    ``several_isophotes``: whether ``solve`` takes a joint edit of several isophotes (the
+    ``sculpt_isophotes`` command): then ``problem.parts`` holds one problem per isophote and
+    ``problem.sample_values`` the shading each stroke sample asks for (see
+    :class:`~sketchforge.plugins.sculpt_problem.SculptProblem`). A solver that leaves it False is
+    never given one: the host refuses such an edit in one line naming the solver ("the sculpt
+    solver 'strips' redraws one isophote per edit: ...")."""
 
     name: str
     solve: Callable
@@ -102,6 +113,8 @@ class SculptSolver:
     #: Optional ``warm_up()``: compile or build what the first solve would (the app calls it
     #: on a worker thread when the person chooses the solver).
     warm_up: Callable | None = None
+    #: Takes several isophotes in one edit (``problem.parts``); False: one per edit.
+    several_isophotes: bool = False
 
 
 @dataclass(frozen=True)

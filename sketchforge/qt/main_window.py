@@ -372,6 +372,11 @@ class MainWindow(QMainWindow):
         self.act_redo = self._action(e, "Redo", self.redo, ["Ctrl+Shift+Z", "Ctrl+Y"])
         e.addSeparator()
         self.act_cancel = self._action(e, "Cancel", self.cancel_current, "Esc")
+        # Enter applies the strokes drawn for several picked isophotes; only while the drawing
+        # has the focus (elsewhere Enter belongs to the fields).
+        self.act_apply_strokes = self._action(e, "Apply sculpt strokes", self.apply_sculpt_strokes, ["Return", "Enter"])
+        self.act_apply_strokes.setShortcutContext(Qt.ShortcutContext.WidgetWithChildrenShortcut)
+        self.canvas.addAction(self.act_apply_strokes)
 
         lm = mb.addMenu("&Layer")
         self._action(lm, "&Add layer", self.add_layer, "Ctrl+Shift+N")
@@ -501,6 +506,10 @@ class MainWindow(QMainWindow):
         )
         self.sculpt_panel.tool_selected.connect(self.select_tool)
         self.light_panel.angle_edited.connect(self.set_light_angle)
+        self.light_panel.elevation_edited.connect(self.set_light_elevation)
+        self.light_panel.disc.pressed.connect(self._light_drag_started)
+        self.light_panel.disc.dragged.connect(self._light_dragged)
+        self.light_panel.disc.released.connect(self._light_drag_ended)
 
         lp = self.layers_panel
         lp.add_requested.connect(self.add_layer)
@@ -748,10 +757,37 @@ class MainWindow(QMainWindow):
             return
         self._run_params(layer_id, params)
 
+    def _azimuth(self) -> float:
+        """The light's azimuth; straight overhead (which has none), the one the panel shows."""
+        light = self.doc.light
+        return self.light_panel.angle.value() if light.elevation >= 90.0 else light.angle
+
     def set_light_angle(self, degrees: float) -> None:
-        light = Light.from_angle(degrees)
+        """A typed azimuth: the light turns about the view axis, keeping its elevation."""
+        light = Light.from_angle(degrees, 0.0 if self.doc.light.in_plane else self.doc.light.elevation)
         if light != self.doc.light:
-            self.push(C.SetLight(direction=[light.x, light.y, 0.0]))
+            self.push(C.SetLight(direction=light.to_list()))
+
+    def set_light_elevation(self, degrees: float) -> None:
+        """A typed elevation (0: in the drawing plane, 90: overhead), keeping the azimuth."""
+        light = Light.from_angle(self._azimuth(), degrees)
+        if light != self.doc.light:
+            self.push(C.SetLight(direction=light.to_list()))
+
+    def _light_drag_started(self) -> None:
+        self._light_gesture = C.new_gesture_id()
+
+    def _light_dragged(self, light) -> None:
+        """A step of a drag on the light disc: commands of one drag share a gesture id, so the
+        drag is one undo step."""
+        gesture = getattr(self, "_light_gesture", None)
+        if gesture is not None and light != self.doc.light:
+            if not self.push(C.SetLight(direction=light.to_list(), gesture=gesture)):
+                self._light_gesture = None  # refused (a solve runs): the rest of the drag too
+                self.light_panel.show_light(self.doc.light)
+
+    def _light_drag_ended(self) -> None:
+        self._light_gesture = None
 
     # --- parts drawn and arranged with the mouse and keys (Monster Mash) ------------------------
     def _outlines(self) -> list:
@@ -1132,6 +1168,14 @@ class MainWindow(QMainWindow):
             act = self.recent_menu.addAction(f)
             act.triggered.connect(lambda _=False, f=f: self.open_path(Path(f)))
         self.recent_menu.setEnabled(bool(files))
+
+    def apply_sculpt_strokes(self) -> None:
+        """Enter in SCULPTURE: apply the strokes drawn for the picked isophotes as one edit."""
+        if self.canvas.interaction != "sculpt":
+            return
+        if self._refuse_if_busy():
+            return
+        self.sculpt.apply_drawn()
 
     def cancel_current(self) -> None:
         """Esc: close the help, stop the running solve, and drop a sculpt stroke being drawn

@@ -268,6 +268,69 @@ def build_problem(ld: LayerData, c: float, pick, iso, band_geom, in_band: np.nda
     )
 
 
+@dataclass
+class PreparedStroke:
+    """One redrawn isophote, ready for a solver: the pick's isovalue ``c``, isophote ``iso``
+    and band (``band``, ``in_band`` (n,) bool, ``radius``), the cleaned stroke clipped to the
+    band (``pieces``, ``stroke_geom``), the samples where an isophote is promised
+    (``honoured``), the mean distance from them to the isophote now (``before``) and how much
+    of the drawn stroke was left out (``ignored`` of ``drawn``, drawing units)."""
+
+    c: float
+    iso: object
+    band: object
+    in_band: np.ndarray
+    radius: float
+    pieces: list
+    stroke_geom: object
+    honoured: np.ndarray
+    before: float
+    ignored: float
+    drawn: float
+
+
+def _prepare(ld: LayerData, pick, r: float, stroke) -> PreparedStroke:
+    """Pick, band and stroke of one isophote edit on ``ld`` (band radius ``r``). Raises
+    SculptError for a stroke with no part inside the band or only within the rim margin."""
+    pd, h = ld.planar, ld.h
+    c, iso, band_geom, in_band = _pick(ld, pick, r)
+    cleaned = prepare_stroke(stroke, h)
+    pieces = clip_to_band(cleaned, band_geom, h)
+    drawn = float(np.sum(np.linalg.norm(np.diff(cleaned, axis=0), axis=1)))
+    used = float(sum(np.sum(np.linalg.norm(np.diff(p, axis=0), axis=1)) for p in pieces))
+    ignored = max(0.0, drawn - used)
+    stroke_geom = shapely.MultiLineString(pieces) if len(pieces) > 1 else shapely.LineString(pieces[0])
+    honoured = honoured_samples(pd, pieces, band_geom)
+    if len(honoured) == 0:
+        local = float(np.max(np.minimum(pd.margin_at(np.concatenate(pieces)), pd.margin)))
+        raise SculptError(
+            f"the stroke runs within the rim margin ({local:.2g} from the outline here), where the surface "
+            "turns vertical and cannot follow a redrawn isophote: draw it further inside the shape"
+        )
+    before = mean_distance(honoured, iso)
+    return PreparedStroke(c, iso, band_geom, in_band, r, pieces, stroke_geom, honoured, before, ignored, drawn)
+
+
+def _run_solver(solver, problem: SculptProblem, full: dict, provider, n: int):
+    """``solver.solve(problem, full)`` as (SculptSolution, dz (n,) float64): a solver's bug is
+    a PluginError naming it, a wrong shape too, non-finite heights a SolverError."""
+    try:
+        answer = solver.solve(problem, full)
+    except SketchforgeError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - a solver's bug: named, never a crash of the app
+        who = f" of plugin {provider!r}" if provider else ""
+        raise PluginError(f"the sculpt solver {solver.name!r}{who} failed: {type(exc).__name__}: {exc}") from exc
+    solution = answer if isinstance(answer, SculptSolution) else SculptSolution(np.asarray(answer))
+    dz = np.asarray(solution.dz, dtype=np.float64)
+    if dz.shape != (n,):
+        raise PluginError(f"the sculpt solver {solver.name!r} returned heights of shape {dz.shape}; the layer has "
+                          f"{n} vertices")
+    if not np.isfinite(dz).all():
+        raise SolverError(f"the sculpt solver {solver.name!r} produced non-finite heights; the layer was left unchanged")
+    return solution, dz
+
+
 def _default_solver():
     from .gauss_newton import GAUSS_NEWTON
 
@@ -348,39 +411,14 @@ def sculpt(
     T["layer"] = time.perf_counter() - t0
 
     t = time.perf_counter()
-    c, iso, band_geom, in_band = _pick(ld, pick, r)
-    cleaned = prepare_stroke(stroke, h)
-    pieces = clip_to_band(cleaned, band_geom, h)
-    drawn = float(np.sum(np.linalg.norm(np.diff(cleaned, axis=0), axis=1)))
-    used = float(sum(np.sum(np.linalg.norm(np.diff(p, axis=0), axis=1)) for p in pieces))
-    ignored = max(0.0, drawn - used)
-    stroke_geom = shapely.MultiLineString(pieces) if len(pieces) > 1 else shapely.LineString(pieces[0])
-    honoured = honoured_samples(pd, pieces, band_geom)
-    if len(honoured) == 0:
-        local = float(np.max(np.minimum(pd.margin_at(np.concatenate(pieces)), pd.margin)))
-        raise SculptError(
-            f"the stroke runs within the rim margin ({local:.2g} from the outline here), where the surface "
-            "turns vertical and cannot follow a redrawn isophote: draw it further inside the shape"
-        )
-    before = mean_distance(honoured, iso)
+    e = _prepare(ld, pick, r, stroke)
+    c, iso, band_geom, in_band, pieces, honoured, before = e.c, e.iso, e.band, e.in_band, e.pieces, e.honoured, e.before
+    ignored, drawn, stroke_geom = e.ignored, e.drawn, e.stroke_geom
     problem = build_problem(ld, c, pick, iso, band_geom, in_band, r, pieces, honoured, before)
     T["stroke"] = time.perf_counter() - t
 
     t = time.perf_counter()
-    try:
-        answer = solver.solve(problem, full)
-    except SketchforgeError:
-        raise
-    except Exception as exc:  # noqa: BLE001 - a solver's bug: named, never a crash of the app
-        who = f" of plugin {provider!r}" if provider else ""
-        raise PluginError(f"the sculpt solver {solver.name!r}{who} failed: {type(exc).__name__}: {exc}") from exc
-    solution = answer if isinstance(answer, SculptSolution) else SculptSolution(np.asarray(answer))
-    dz = np.asarray(solution.dz, dtype=np.float64)
-    if dz.shape != (len(pd.V2),):
-        raise PluginError(f"the sculpt solver {solver.name!r} returned heights of shape {dz.shape}; the layer has "
-                          f"{len(pd.V2)} vertices")
-    if not np.isfinite(dz).all():
-        raise SolverError(f"the sculpt solver {solver.name!r} produced non-finite heights; the layer was left unchanged")
+    solution, dz = _run_solver(solver, problem, full, provider, len(pd.V2))
     # The solver's own stages (zones, shading, heights...) beside the host's.
     T.update({(k if k not in ("layer", "stroke", "solve", "check", "total") else f"solver.{k}"): float(v)
               for k, v in solution.info.get("timings", {}).items()})
