@@ -183,29 +183,33 @@ def find_host(junction, index: int, regions: list, edge_lengths: list, names: li
     over = [(i, s) for i, s in order if line.intersection(regions[i]).length > tol]
     if not over:
         return JunctionHost(None)
-    best = None  # (length, rank, host, side, first, stop)
+    best = None  # (length, rank, host, side, first, stop, why)
     for rank, (c, side) in enumerate(over):
         inner = regions[c].buffer(-CLEARANCE_EDGES * edge_lengths[c])
         shapely.prepare(inner)
-        ok = shapely.within(segs, inner) if not inner.is_empty else np.zeros(len(segs), bool)
+        inside = shapely.within(segs, inner) if not inner.is_empty else np.zeros(len(segs), bool)
+        ok = inside.copy()
+        met = []  # the layers between the part and this candidate that the junction meets
         between = [i for i in (range(c + 1, index) if side == FRONT else range(index + 1, c))
                    if regions[i] is not None and i not in twins]
         for i in between:
             if not ok.any():
                 break
-            near = regions[i].buffer(BETWEEN_EDGES * part_h)
-            ok &= ~shapely.intersects(segs, near)
+            hit = shapely.intersects(segs, regions[i].buffer(BETWEEN_EDGES * part_h))
+            if (hit & ok).any():
+                met.append(i)
+            ok &= ~hit
         first, stop, length = longest_run(ok, seg_len)
         if best is None or length > best[0] * (1 + 1e-9) + tol:
-            best = (length, rank, c, side, first, stop)
-    length, _, c, side, first, stop = best
+            best = (length, rank, c, side, first, stop, (bool((~inside).any()), met))
+    length, _, c, side, first, stop, (off, met) = best
     part = names[index]
     if stop - first < MIN_GLUE_SEGMENTS or length < MIN_GLUE_EDGES * part_h - tol:
         near = over[0][0] if length <= 0 else c
         return JunctionHost(None, 0, _short_problem(part, names[near], over, names), near)
     note = None
     if stop - first < len(seg_len):
-        note = _partial_note(part, names[c], length / total, c, over, names)
+        note = _partial_note(part, c, length / total, over, met, off, names)
     return JunctionHost(c, side, None, c, (first, stop), note)
 
 
@@ -216,12 +220,17 @@ def _short_problem(part: str, lower: str, over, names) -> str:
             f"inside one of them, so it is assembled as a free part; redraw its ends so that they lie inside one part")
 
 
-def _partial_note(part: str, host: str, share: float, c, over, names) -> str:
-    others = [names[i] for i, _ in over if i != c]
+def _partial_note(part: str, c: int, share: float, over, met, off: bool, names) -> str:
+    """One sentence: which stretch of a junction is glued, and why not all of it."""
+    host = names[c]
     pct = f"{100 * share:.0f}%"
+    others = [names[i] for i, _ in over if i != c and i not in met]
     if others:
         return (f"the junction of layer {part} spans {host} and {others[0]}: it is glued to {host}, which holds most "
                 f"of it ({pct})")
+    if met:
+        return (f"the junction of layer {part} meets {names[met[0]]}, which lies between it and {host}: only the "
+                f"{pct} of it clear of {names[met[0]]} is glued to {host}")
     return f"the junction of layer {part} runs off {host}: only the {pct} of it inside {host} is glued"
 
 

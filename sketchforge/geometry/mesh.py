@@ -103,8 +103,8 @@ class AssembledMesh(Mesh):
     Attributes
     ----------
     free : tuple of str
-        Ids of the layers whose junction could not be glued: they are in the model as free
-        parts.
+        Ids of the layers whose junction could not be glued (they are in the model as free
+        parts) or that had no room where they were drawn (left out of it).
     warnings : tuple of str
         One sentence per such part (naming it and why), and any other degradation (a junction
         glued with a plain fold).

@@ -85,6 +85,9 @@ class AssemblyResult:
     free : list of int
         Input indices of the parts with a junction that are assembled free (each named in
         ``warnings``).
+    left_out : list of int
+        Input indices of the free parts left out of the model because there is no room for
+        them where they are drawn (each named in ``warnings``).
     warnings : list of str
         One per part that could not be glued (it is free) or other degradation.
     notes : list of str
@@ -105,6 +108,7 @@ class AssemblyResult:
     max_violation: float
     glue_error: float = 0.0
     free: list = field(default_factory=list)
+    left_out: list = field(default_factory=list)
     warnings: list = field(default_factory=list)
     notes: list = field(default_factory=list)
     timings: dict = field(default_factory=dict)
@@ -210,27 +214,34 @@ def assemble_detailed(meshes: Sequence[Mesh | None], closed: Sequence[bool] | No
     n_in = len(meshes)
     closed = [False] * n_in if closed is None else list(closed)
     names = [f"layer {i}" for i in range(n_in)] if names is None else list(names)
-    keep = [i for i, m in enumerate(meshes) if m is not None and m.n_faces > 0]
-    if not keep:
+    present = [i for i, m in enumerate(meshes) if m is not None and m.n_faces > 0]
+    if not present:
         raise ParameterError("there is no layer with a mesh to assemble")
-    knames = [names[i] for i in keep]
-    _check_overlap_work([meshes[i] for i in keep])  # before any work, so a refusal is quick
-    sheets = [_sheet(cache, k, knames[k], meshes[i], bool(closed[i])) for k, i in enumerate(keep)]
-    freed: dict[int, str] = {}  # sheet index -> why it is assembled free
+    _check_overlap_work([meshes[i] for i in present])  # before any work, so a refusal is quick
+    freed: dict[int, str] = {}  # input index -> why it is assembled free
+    left_out: dict[int, str] = {}  # input index -> why it is not in the model (a free part with no room)
     fell_back = []
     while True:
+        keep = [i for i in present if i not in left_out]
+        knames = [names[i] for i in keep]
+        sheets = [_sheet(cache, k, knames[k], meshes[i], bool(closed[i])) for k, i in enumerate(keep)]
         try:
-            res = _assemble(list(sheets), knames, p, cache, freed)
+            res = _assemble(sheets, knames, p, cache, {keep.index(i): why for i, why in freed.items()})
         except _PartsFailed as failure:
             if p["on_bad_junction"] == "raise":
                 raise failure.error from None
-            fresh = [k for k in failure.parts if k not in freed]
+            blamed = [keep[k] for k in failure.parts]
+            if failure.leave_out:
+                for i in blamed:
+                    left_out[i] = failure.reason(names[i], left_out=True)
+                continue
+            fresh = [i for i in blamed if i not in freed]
             if not fresh:  # nothing left to blame: every part free, which always assembles
-                fresh = [k for k in range(len(sheets)) if len(sheets[k].junction) and k not in freed]
+                fresh = [keep[k] for k in range(len(sheets)) if len(sheets[k].junction) and keep[k] not in freed]
                 if not fresh:
                     raise failure.error from None
-            for k in fresh:
-                freed[k] = failure.reason(knames[k])
+            for i in fresh:
+                freed[i] = failure.reason(names[i])
             continue
         if res.faired is False:
             # The blended junction would cross itself (or flatten a triangle): the plain
@@ -240,11 +251,12 @@ def assemble_detailed(meshes: Sequence[Mesh | None], closed: Sequence[bool] | No
                              "its parts are glued with a plain fold (assembly parameter 'fillet')")
             continue
         break
-    warnings = res.warnings + fell_back
+    warnings = [left_out[i] for i in sorted(left_out)] + res.warnings + fell_back
     timings = res.timings
     timings["total"] = time.perf_counter() - t0
     keep_arr = np.array(keep)
     res.solver["free_shift"] = {keep[i]: v for i, v in res.solver.get("free_shift", {}).items()}
+    glued = {a.upper for a in res.attachments}
     return AssemblyResult(
         mesh=Mesh(res.V, res.F),
         face_layer=keep_arr[res.face_layer],
@@ -256,7 +268,8 @@ def assemble_detailed(meshes: Sequence[Mesh | None], closed: Sequence[bool] | No
         n_active=int(res.solver.get("active", 0)),
         max_violation=res.max_violation,
         glue_error=res.glue_error,
-        free=[keep[u] for u in range(len(sheets)) if len(sheets[u].junction) and u not in {a.upper for a in res.attachments}],
+        free=[keep[u] for u in range(len(sheets)) if len(sheets[u].junction) and u not in glued],
+        left_out=sorted(left_out),
         warnings=warnings,
         notes=res.notes,
         timings=timings,
@@ -265,16 +278,19 @@ def assemble_detailed(meshes: Sequence[Mesh | None], closed: Sequence[bool] | No
 
 
 class _PartsFailed(Exception):
-    """A failure the assembly can get round by assembling ``parts`` (sheet indices) free."""
+    """A failure the assembly can get round by assembling ``parts`` (sheet indices) free, or,
+    with ``leave_out``, without them (free parts with no room where they are drawn)."""
 
-    def __init__(self, error: Exception, parts):
+    def __init__(self, error: Exception, parts, leave_out: bool = False):
         super().__init__(str(error))
         self.error = error
         self.parts = list(parts)
+        self.leave_out = leave_out
 
-    def reason(self, name: str) -> str:
+    def reason(self, name: str, left_out: bool = False) -> str:
         text = str(self.error).rstrip(".")
-        return f"layer '{name}' is assembled as a free part: {text[0].lower() + text[1:]}"
+        what = "is left out of the assembled model" if left_out else "is assembled as a free part"
+        return f"layer '{name}' {what}: {text[0].lower() + text[1:]}"
 
 
 @dataclass
@@ -309,11 +325,11 @@ def _assemble(sheets: list, knames: list[str], p: dict, cache, freed: dict[int, 
     for u in range(len(sheets)):
         if u not in attached and len(sheets[u].junction):
             # junction over empty space, or a bad one: a free part whose whole outline is a rim
-            sheets[u] = sheets[u].evolve(junction=np.zeros(0, np.int64))
+            sheets[u] = sheets[u].evolve(junction=np.zeros(0, np.int64), marks=None)
     for a in attachments:
         if a.keep is not None:
             # only this stretch of the junction is glued; the rest is outline like any other
-            sheets[a.upper] = sheets[a.upper].evolve(junction=sheets[a.upper].junction[a.keep[0]:a.keep[1] + 1])
+            sheets[a.upper] = sheets[a.upper].evolve(junction=sheets[a.upper].glue_stretch(*a.keep), marks=None)
     for a in attachments:
         # a part meets its host at its own thickness (thickness.full_thickness)
         s = sheets[a.upper]
@@ -390,6 +406,8 @@ def _solve_depth_order(P, q, Aeq, beq, Ain, bin_, offsets, free, pinfo, gap, p, 
         x, sinfo = solve_without_free_parts(P, q, Aeq, beq, Ain, bin_, offsets, free, pinfo["rest_depth"],
                                             method=p["qp_solver"], pad=pad, cache=cache)
     except DepthOrderError as exc:
+        if exc.free:  # free parts squeezed where there is no room: they are left out
+            raise _PartsFailed(exc, exc.layers, leave_out=True) from None
         involved = set(exc.layers)
         parts = [a.upper for a in attachments if not involved or a.upper in involved or a.lower in involved]
         raise _PartsFailed(exc, parts) from None

@@ -92,12 +92,12 @@ def find_attachments(sheets: list[Sheet], names: list[str], on_bad_junction: str
             # The sheet's coordinates are checked (sheet_from_mesh), so this refuses only a
             # junction whose points all coincide (a hand-edited snapshot): a junction problem
             # like the others, not a reason to stop the whole assembly.
-            guard.linestring(s.xy[s.junction], f"the junction of layer '{names[u]}'")
+            guard.linestring(s.xy[s.drawn_junction()], f"the junction of layer '{names[u]}'")
         except GeometryError as exc:
             bad_junction(f"{exc}, so it cannot be glued to a layer; redraw the part")
             junctions.append(None)
             continue
-        junctions.append(s.xy[s.junction])
+        junctions.append(s.xy[s.drawn_junction()])
     ends = [t.xy[t.junction[[0, -1]]] if len(t.junction) >= 2 else None for t in sheets]
     plans = plan_attachments(junctions, polys, [t.h for t in sheets], [f"'{n}'" for n in names], ends)
     attachments: list[Attachment] = []
@@ -106,7 +106,7 @@ def find_attachments(sheets: list[Sheet], names: list[str], on_bad_junction: str
         if found is None:
             continue
         if found.host is not None:
-            whole = found.keep == (0, len(sheets[u].junction) - 1)
+            whole = found.keep == (0, len(sheets[u].drawn_junction()) - 1)
             attachments.append(Attachment(u, found.host, found.side, None if whole else tuple(found.keep)))
             if found.note:
                 notes.append(found.note)

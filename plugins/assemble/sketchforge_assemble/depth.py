@@ -934,12 +934,21 @@ def solve_without_free_parts(P, q, Aeq, beq, Ain, bin_, offsets, free, rest, met
             er = np.flatnonzero(np.isin(eq_lo, members))
             ir = np.flatnonzero(~touch & np.isin(in_lo, members))
             sub = (P[cols][:, cols], q[cols], Aeq[er][:, cols], beq[er], Ain[ir][:, cols], bin_[ir])
-            if cache is None:
-                if tuple(members) not in local:
-                    local[tuple(members)] = solve_depth(*sub, method=method, pad=pad)
-                xg, gi = local[tuple(members)]
-            else:
-                xg, gi = _memo_solve(cache, sub, method, pad)
+            try:
+                if cache is None:
+                    if tuple(members) not in local:
+                        local[tuple(members)] = solve_depth(*sub, method=method, pad=pad)
+                    xg, gi = local[tuple(members)]
+                else:
+                    xg, gi = _memo_solve(cache, sub, method, pad)
+            except DepthOrderError as exc:
+                squeezed = [int(f) for f in free if not out[f] and f in members]
+                if not squeezed:
+                    raise
+                # a free part drawn where there is no room for it (between two layers glued
+                # together, or onto a twin): it, not the glued model, is what cannot be placed
+                raise DepthOrderError("there is no room for it between the layers it is drawn between; move it "
+                                      "in depth (Page Up / Page Down) or aside", layers=squeezed, free=True) from None
             x[cols] = xg
             info["groups"] += 1
             for key in ("osqp_iterations", "iterations", "osqp_rounds", "osqp_rows", "active"):

@@ -21,8 +21,10 @@ class AttachmentError(SketchforgeError, ValueError):
 class DepthOrderError(SolverError):
     """The depth-order constraints cannot all hold (e.g. a part squeezed between two layers
     it is glued to). ``layers``: the layers (sheet indices) of the rows that could not hold,
-    when known."""
+    when known; ``free``: they are free parts drawn where there is no room for them (the
+    assembly leaves them out of the model rather than move the glued ones)."""
 
-    def __init__(self, message: str, layers=()):
+    def __init__(self, message: str, layers=(), free: bool = False):
         super().__init__(message)
         self.layers = tuple(int(p) for p in layers)
+        self.free = bool(free)

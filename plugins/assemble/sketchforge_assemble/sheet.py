@@ -15,6 +15,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import shapely
 
+from sketchforge.errors import SketchforgeError
 from sketchforge.geometry import guard
 from sketchforge.geometry.mesh import Mesh
 
@@ -44,6 +45,10 @@ class Sheet:
     chains : tuple of (c,) int64
         Junctions of other layers inserted into this sheet (see :mod:`.remesh`), in the order
         of the attachments that created them.
+    marks : (j0,) int64 or None
+        Where each vertex of the junction as drawn (the layer's mesh) sits in ``junction``
+        when the sheet was re-meshed finer (:func:`refine_thin`); None: the junction is the
+        one drawn.
     Fb : (mb, 3) int64 or None
         The back face's own triangulation (counter-clockwise seen from +z, like ``F``) when
         both faces have junctions cut in; None when the back face is ``F`` too. A vertex may
@@ -66,6 +71,7 @@ class Sheet:
     chains: tuple = field(default_factory=tuple)
     holes: tuple = field(default_factory=tuple)
     Fb: np.ndarray | None = None
+    marks: np.ndarray | None = None
 
     @property
     def n(self) -> int:
@@ -93,6 +99,18 @@ class Sheet:
             return outer
         cut = shapely.union_all([guard.polygon(self.xy[h], f"a hole of layer '{self.name}'") for h in self.holes])
         return guard.geometry(shapely.difference(outer, cut), f"the outline of layer '{self.name}'")
+
+    def drawn_junction(self) -> np.ndarray:
+        """(j0,) int64: the vertices of the junction as drawn (every one of ``junction`` unless
+        the sheet was re-meshed finer)."""
+        return self.junction if self.marks is None else self.junction[self.marks]
+
+    def glue_stretch(self, first: int, last: int) -> np.ndarray:
+        """(k,) int64: the junction from drawn vertex ``first`` to ``last`` (inclusive), with the
+        vertices a finer re-meshing put between them."""
+        if self.marks is None:
+            return self.junction[first:last + 1]
+        return self.junction[self.marks[first]:self.marks[last] + 1]
 
     def evolve(self, **changes) -> "Sheet":
         return replace(self, **changes)
@@ -243,7 +261,14 @@ def refine_thin(sheet: Sheet, min_height_edges: float = THIN_HEIGHT_EDGES) -> Sh
 
     outline, at = densify(sheet.boundary)
     rings = [densify(hole) for hole in sheet.holes]
-    tri = triangulate_polygon(outline, h2, holes=[r[0] for r in rings])
+    if not shapely.Polygon(outline, [r[0] for r in rings]).is_valid:
+        return sheet  # a hand-edited snapshot's outline: the assembly's own checks say what is wrong
+    try:
+        tri = triangulate_polygon(outline, h2, holes=[r[0] for r in rings])
+    except (SketchforgeError, RuntimeError):
+        # Triangle refused a valid-looking outline (it raises here, after guard.pslg): the
+        # part is assembled at its own resolution, as before this refinement existed
+        return sheet
     xy = np.ascontiguousarray(tri.V2)
     F = ccw_triangles(xy, tri.F)
     xy, F = guard.mesh(xy, F, f"the mesh of layer '{sheet.name}', refined", planar=True)
@@ -255,6 +280,8 @@ def refine_thin(sheet: Sheet, min_height_edges: float = THIN_HEIGHT_EDGES) -> Sh
     boundary = np.arange(k, dtype=np.int64)
     # the junction: the same stretch of the outline, walked the same way
     pos = {int(v): i for i, v in enumerate(sheet.boundary)}
+    if any(int(v) not in pos for v in sheet.junction[[0, 1, -1]]):
+        return sheet
     a, b = pos[int(sheet.junction[0])], pos[int(sheet.junction[1])]
     forward = (b - a) % len(sheet.boundary) == 1
     start, end = at[pos[int(sheet.junction[0])]], at[pos[int(sheet.junction[-1])]]
@@ -262,6 +289,12 @@ def refine_thin(sheet: Sheet, min_height_edges: float = THIN_HEIGHT_EDGES) -> Sh
         junction = np.arange(start, start + (end - start) % k + 1) % k
     else:
         junction = (start - np.arange(0, (start - end) % k + 1)) % k
+    where = {int(v): i for i, v in enumerate(junction)}
+    marks = np.array([where.get(int(at[pos[int(v)]]), -1) if int(v) in pos else -1 for v in sheet.junction], np.int64)
+    if np.any(marks < 0) or np.any(np.diff(marks) <= 0):
+        # the junction is not one stretch of the outline walked in order (a hand-edited
+        # snapshot): left as it is, for the attachment's checks to name
+        return sheet
     holes = []
     first = k
     for pts, _ in rings:
@@ -272,4 +305,4 @@ def refine_thin(sheet: Sheet, min_height_edges: float = THIN_HEIGHT_EDGES) -> Sh
     E = directed_edges(F)
     h_new = float(np.median(np.linalg.norm(xy[E[:, 0]] - xy[E[:, 1]], axis=1)))
     return sheet.evolve(xy=xy, z=z, F=F, boundary=boundary, junction=junction.astype(np.int64), h=h_new,
-                        holes=tuple(holes))
+                        holes=tuple(holes), marks=marks)
