@@ -6,9 +6,10 @@ The temp file lives in the target's folder (so the final rename is atomic) under
 file behind; the next save of the same file removes those whose writer is no longer running
 (and the ``.NAME.XXXXXXXX.tmp`` files of the previous release once they are a minute old).
 
-An existing target keeps its permission bits; a new one gets the user's umask (the temp file is
-created with mode 0666 and the kernel applies the umask). A target without any write bit is
-read-only: it is refused, even for root, who could otherwise overwrite it.
+An existing target keeps its permission bits (rwx, not setuid, setgid or sticky); a new one
+gets the user's umask (the temp file is created with mode 0666 and the kernel applies the
+umask). A target without any write bit is read-only: it is refused, even for root, who could
+otherwise overwrite it.
 """
 
 from __future__ import annotations
@@ -168,7 +169,9 @@ def write_bytes_atomic(path, data: bytes) -> None:
         # 0o666: the kernel applies the umask, as for any new file the user makes.
         fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_CLOEXEC", 0), 0o666)
         if old is not None:
-            os.fchmod(fd, stat.S_IMODE(old.st_mode))
+            # The permission bits only: setuid, setgid and sticky do not pass to new contents
+            # (a write to a file clears setuid too); an export over a setuid file kept the bit.
+            os.fchmod(fd, stat.S_IMODE(old.st_mode) & 0o777)
         with os.fdopen(fd, "wb") as fh:
             fd = None  # the file object owns it now
             _write_all(fh, data)

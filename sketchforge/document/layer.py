@@ -167,6 +167,8 @@ class Light:
             return cls(float(v[0]), float(v[1]))
         except OverflowError:
             raise ParameterError("the light direction must be numbers within float range") from None
+        except ParameterError:
+            raise  # Light's own sentence (the zero vector): not wrapped in "must be numbers: ..."
         except (TypeError, ValueError) as exc:
             raise ParameterError(f"the light direction must be numbers: {exc}") from None
 
