@@ -17,7 +17,7 @@ import logging
 from pathlib import Path
 
 import numpy as np
-from PySide6.QtCore import QSettings, Qt, QTimer
+from PySide6.QtCore import QSettings, Qt, QTimer, Signal
 from PySide6.QtGui import QAction, QActionGroup, QIcon, QKeySequence
 from PySide6.QtWidgets import (
     QFileDialog,
@@ -101,6 +101,9 @@ class _AutosaveGuard:
 
 
 class MainWindow(QMainWindow):
+    #: one line from the solver process's watchdog (any thread): shown in the status bar
+    solver_process_note = Signal(str)
+
     def __init__(self, doc, host=None, settings: QSettings | None = None, parent=None,
                  offload_inflation: bool = False) -> None:
         super().__init__(parent)
@@ -108,12 +111,13 @@ class MainWindow(QMainWindow):
         self.host = host or doc.host
         #: With ``offload_inflation`` (the app), inflations run in a child process: their
         #: native factorisation holds the GIL, which froze this window for up to 1.5 s even
-        #: though the solve runs on a worker thread (see sketchforge.offload).
+        #: though the solve runs on a worker thread (see sketchforge.offload). Its watchdog's
+        #: notes (a restart after a crash, a timeout, a cancel) come through a queued signal.
         self.offload = None
         if offload_inflation:
             from sketchforge.offload import OffloadedInflation
 
-            self.offload = OffloadedInflation(doc.host)
+            self.offload = OffloadedInflation(doc.host, notify=self.solver_process_note.emit)
             doc.host = self.offload
         self.settings = settings or QSettings()
         self.path: Path | None = None
@@ -513,6 +517,9 @@ class MainWindow(QMainWindow):
         lp.current_changed.connect(self._current_layer_changed)
 
         self.runner.busy_changed.connect(self._busy)
+        self.solver_process_note.connect(self.show_message)
+        if self.offload is not None:
+            self.runner.cancelled.connect(self.offload.cancel)  # Cancel stops the child's job too
         self.runner.failed.connect(lambda exc, tb, cmd: show_error(self, f"{cmd.text()} failed", exc, tb))
         self.jobs.busy_changed.connect(self._progress)
 
