@@ -98,6 +98,33 @@ def remove_stale_temps(path) -> list[Path]:
     return removed
 
 
+#: Any temp name this module makes: ``.<name>.<10 hex>.<pid>.<8 hex>.tmp``.
+_TEMP_NAME = re.compile(r"\A\..*\.[0-9a-f]{10}\.(\d+)\.[0-9a-f]{8}\.tmp\Z", re.DOTALL)
+
+
+def remove_stale_temps_in(folder) -> list[Path]:
+    """Remove every temp file in ``folder`` that a killed save left (its writer process is
+    gone), whatever file it was for. For folders whose targets change name at each session
+    (the autosaves: a fresh name each time, so "the next save of the same file" never
+    comes). A live writer's temp is left alone. Returns what was removed; never raises."""
+    removed = []
+    try:
+        entries = list(os.scandir(folder))
+    except OSError:
+        return removed
+    for e in entries:
+        m = _TEMP_NAME.match(e.name)
+        if m is None or pid_alive(int(m.group(1))):
+            continue
+        try:
+            if e.is_file(follow_symlinks=False):
+                os.unlink(e.path)
+                removed.append(Path(e.path))
+        except OSError:
+            pass
+    return removed
+
+
 def check_writable(path) -> os.stat_result | None:
     """Refuse a target that is a directory, a non-regular file or read-only (no write bit at
     all, checked on the mode so root is refused too). Returns the target's stat, or None when
@@ -150,8 +177,10 @@ def refuse_input_as_output(out, inputs, what: str = "output") -> None:
             raise ExportError(f"cannot write {out}: it is the input document {src}; choose another {what} file")
 
 
-def write_bytes_atomic(path, data: bytes) -> None:
+def write_bytes_atomic(path, data: bytes) -> os.stat_result:
     """Write ``data`` to ``path`` via a temp file in the same folder, fsync, then rename.
+    Returns the written file's ``fstat`` (the rename keeps its inode and times), so a caller
+    can tell later whether someone else replaced it (no window for a race in between).
 
     Raises ExportError (an OSError) with a readable message when the folder does not exist or
     refuses new files, the path is a directory or read-only, or the write fails; the old file,
@@ -177,6 +206,7 @@ def write_bytes_atomic(path, data: bytes) -> None:
             _write_all(fh, data)
             fh.flush()
             os.fsync(fh.fileno())
+            written = os.fstat(fh.fileno())
         os.replace(tmp, path)
     except BaseException as exc:
         if fd is not None:
@@ -199,6 +229,7 @@ def write_bytes_atomic(path, data: bytes) -> None:
             os.close(dfd)
     except OSError:
         pass
+    return written
 
 
 def _write_all(fh, data: bytes) -> None:

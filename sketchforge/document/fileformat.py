@@ -23,6 +23,7 @@ without one, the journal is replayed. :func:`replay` recomputes from the journal
 from __future__ import annotations
 
 import base64
+import hashlib
 import json
 import math
 import os
@@ -527,11 +528,12 @@ def scan_items(raw: bytes, limit: int) -> int:
     return count
 
 
-def read_regular_file(path, limit: int | None = None) -> bytearray:
+def read_regular_file(path, limit: int | None = None, info: dict | None = None) -> bytearray:
     """The bytes of ``path`` (a bytearray), a regular file of at most ``limit`` bytes. A FIFO, a
     device (``/dev/zero``), a socket or a directory is refused before reading (opening a FIFO does not
     block: O_NONBLOCK), and at most ``limit + 1`` bytes are ever read, so a file that grows
-    while being read cannot exhaust memory. Raises DocumentFormatError or LimitError."""
+    while being read cannot exhaust memory. With ``info`` (a dict), ``info["stat"]`` is the
+    file's ``fstat`` as it was opened. Raises DocumentFormatError or LimitError."""
     path = Path(path)
     limit = MAX_FILE_BYTES if limit is None else limit
     try:
@@ -546,6 +548,8 @@ def read_regular_file(path, limit: int | None = None) -> bytearray:
         raise DocumentFormatError(f"cannot open {path}: {exc.strerror or exc}") from None
     try:
         st = os.fstat(fd)
+        if info is not None:
+            info["stat"] = st
         if stat.S_ISDIR(st.st_mode):
             raise DocumentFormatError(f"cannot open {path}: it is a directory")
         if not stat.S_ISREG(st.st_mode):
@@ -573,9 +577,15 @@ def read_regular_file(path, limit: int | None = None) -> bytearray:
         os.close(fd)
 
 
-def read_json(path) -> Any:
+def read_json(path, info: dict | None = None) -> Any:
+    """The JSON value of the document file ``path``, through every bound (size, items, text
+    memory, nesting). With ``info`` (a dict): ``info["stat"]``, the file's fstat, and
+    ``info["sha256"]``, the digest of the very bytes parsed (the app tells later whether the
+    file changed on disk since, :func:`changed_on_disk`)."""
     path = Path(path)
-    raw = read_regular_file(path)
+    raw = read_regular_file(path, info=info)
+    if info is not None:
+        info["sha256"] = hashlib.sha256(raw).hexdigest()
     items = count_json_items(raw)
     if items > MAX_JSON_ITEMS:
         raise LimitError(
@@ -608,20 +618,53 @@ def read_json(path) -> Any:
     return data
 
 
-def load(path, host=None, use_snapshot: bool = True) -> Document:
-    """Open a document file (snapshot if present, else replay)."""
-    return document_from_dict(read_json(path), str(path), host=host, use_snapshot=use_snapshot)
+def load(path, host=None, use_snapshot: bool = True, info: dict | None = None) -> Document:
+    """Open a document file (snapshot if present, else replay). ``info``: see :func:`read_json`."""
+    return document_from_dict(read_json(path, info=info), str(path), host=host, use_snapshot=use_snapshot)
 
 
 def dumps(doc: Document, snapshot: bool = True) -> bytes:
     return json.dumps(document_to_dict(doc, snapshot), separators=(",", ":")).encode("utf-8")
 
 
-def save(doc: Document, path, mark_clean: bool = True) -> None:
-    """Atomic save; marks the undo stack clean on success."""
+def save(doc: Document, path, mark_clean: bool = True) -> tuple:
+    """Atomic save; marks the undo stack clean on success. Returns the file's stamp (see
+    :func:`stamp_of`): a window compares it with the file before its next save."""
+    data = dumps(doc)
     try:
-        write_bytes_atomic(path, dumps(doc))
+        written = write_bytes_atomic(path, data)
     except ExportError as exc:
         raise ExportError(str(exc).replace("cannot write", "cannot save")) from None
     if mark_clean:
         doc.undo_stack.set_clean()
+    return stamp_of(written, hashlib.sha256(data).hexdigest())
+
+
+def stamp_of(st: os.stat_result, sha256: str) -> tuple:
+    """What a window remembers of its file once it opened or saved it: its identity and times
+    (device, inode, size, modification time in ns, from the very descriptor that read or wrote
+    it) and the SHA-256 of its contents. :func:`changed_on_disk` compares a later look."""
+    return (st.st_dev, st.st_ino, st.st_size, st.st_mtime_ns, sha256)
+
+
+def changed_on_disk(path, stamp: tuple | None) -> tuple[bool, tuple | None]:
+    """Whether ``path`` holds other contents than when ``stamp`` was taken (another window or
+    program saved it, or replaced it), and the stamp to keep. Same identity and times: not
+    changed, nothing read. Otherwise the contents decide (a ``touch`` or a copy of the same
+    bytes is no change). A file that is gone, or no stamp, is no change (a save loses nobody's
+    work). Never raises."""
+    if stamp is None:
+        return False, None
+    try:
+        st = os.stat(path)
+    except OSError:
+        return False, stamp
+    if (st.st_dev, st.st_ino, st.st_size, st.st_mtime_ns) == stamp[:4]:
+        return False, stamp
+    try:
+        digest = hashlib.sha256(read_regular_file(path)).hexdigest()
+    except SketchforgeError:
+        return True, stamp  # unreadable now (too big, not a file): not what this window saved
+    if digest == stamp[4]:
+        return False, stamp_of(st, digest)
+    return True, stamp
