@@ -5,7 +5,8 @@ accepted values ran 145 s before refusing).
 Run: .venv/bin/python benchmarks/bench_param_extremes.py [gauss_newton] [strips] [assemble] [inflate]
 Prints, per case, wall and CPU seconds (time.process_time, all threads) and the outcome. Every
 parameter is set, alone, to each end of its accepted range (the bound from the solver's
-``check_params``), then the combination of the dearest ends. The first strips edit of the
+``check_params``), then the combination of the dearest ends, with a short stroke and with one
+along the whole isophote (the most strips). The first strips edit of the
 process compiles (JAX): a warm-up edit with the defaults runs first, and is shown.
 """
 
@@ -67,7 +68,9 @@ def bench_sculpt(solver_name: str) -> None:
     print(f"{solver_name}: ellipse of {mesh.n_vertices} vertices, one edit (band 0.3)")
     print(f"  {'parameters':52s} {'wall s':>7s} {'cpu s':>7s}  outcome")
 
-    def edit(params, band=0.3):
+    long_stroke = isophote_stroke(mesh, PICK, offset=0.1, half=1.0)[0]  # the whole isophote
+
+    def edit(params, band=0.3, stroke=stroke):
         def run():
             r = sculpt(mesh, LIGHT, PICK, band, stroke, solver=solver, params=params)
             return f"applied x{r.fraction:g}, {r.before / r.h:.2f} -> {r.after / r.h:.2f} h"
@@ -79,6 +82,10 @@ def bench_sculpt(solver_name: str) -> None:
     dear = DEAREST.get(solver_name, {})
     for label, params in sculpt_cases(solver_name, ranges, dear):
         report(label, timed(edit(params)))
+    length = float(np.linalg.norm(np.diff(long_stroke, axis=0), axis=1).sum())
+    report(f"defaults, a stroke along the whole isophote ({length:.2f} long)", timed(edit({}, stroke=long_stroke)))
+    for k in range(2):
+        report(f"all dearest, the whole isophote ({'first' if k == 0 else 'again'})", timed(edit(dict(dear), stroke=long_stroke)))
     report("band 1e9 (the whole layer), defaults", timed(edit({}, band=1e9)))
 
 

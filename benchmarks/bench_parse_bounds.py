@@ -3,7 +3,8 @@ documents under the 512 MiB size cap that make a JSON parser build many objects 
 bombs), and on large legitimate documents near the cap.
 
 Run: .venv/bin/python benchmarks/bench_parse_bounds.py [--quick] [--ceiling-mb 3500]
-Prints figures only. The files are generated in a temporary folder and removed. Each run is a
+(``BENCH_SKETCHFORGE_FROM=/path/to/other/checkout`` times that checkout's core instead: the
+figures before a change.) Prints figures only. The files are generated in a temporary folder and removed. Each run is a
 fresh subprocess; its peak resident memory (VmHWM) is sampled every 20 ms, and a run that
 passes the ceiling is killed (a 500 MB document of ``{},`` would otherwise take ~10 GB of a
 shared machine): it is reported as "> ceiling".
@@ -50,6 +51,21 @@ def bomb_dicts(path: Path, size: int) -> None:
 def bomb_journal_dicts(path: Path, size: int) -> None:
     """A document whose journal holds the bomb (the parser builds it before any field is read)."""
     _write_repeated(path, b'{"format":"sketchforge","version":1,"journal":[', b'{"a":0},', b'{"a":0}', b"]}", size)
+
+
+def wide_string(path: Path, size: int) -> None:
+    """A name of ASCII with one emoji at its end: Python stores the whole text, and the parsed
+    string, 4 bytes a character."""
+    head = b'{"format":"sketchforge","version":1,"name":"'
+    tail = "\U0001F600".encode() + b'"}'
+    with open(path, "wb") as fh:
+        fh.write(head)
+        left = size - len(head) - len(tail)
+        block = b"x" * (8 << 20)
+        while left > 0:
+            fh.write(block[: min(left, len(block))])
+            left -= len(block)
+        fh.write(tail)
 
 
 def worst_accepted(path: Path, size: int) -> None:
@@ -114,7 +130,10 @@ def big_stroke_journal(path: Path, size: int) -> None:
 
 
 CHILD = r"""
-import sys, time, io, contextlib
+import os, sys, time, io, contextlib
+if os.environ.get("BENCH_SKETCHFORGE_FROM"):  # another checkout's core (the figures before a change)
+    sys.meta_path = [f for f in sys.meta_path if getattr(f, "__module__", "") != "__editable___sketchforge_0_1_0_finder"]
+    sys.path.insert(0, os.environ["BENCH_SKETCHFORGE_FROM"])
 from sketchforge.cli import main
 t = time.perf_counter()
 err = io.StringIO()
@@ -161,7 +180,7 @@ def run_info(path: Path, ceiling_mb: float, timeout_s: float = 600) -> tuple[str
 
 def main() -> None:
     ap = argparse.ArgumentParser()
-    ap.add_argument("--quick", action="store_true", help="smaller files (10 MB bombs)")
+    ap.add_argument("--quick", action="store_true", help="only the files of at most 60 MB")
     ap.add_argument("--ceiling-mb", type=float, default=3500.0)
     args = ap.parse_args()
     mb = 1 << 20
@@ -170,12 +189,14 @@ def main() -> None:
         ("[[],[],...] 60 MB", bomb_lists, 60 * mb),
         ("[{},{},...] 500 MB", bomb_dicts, 500 * mb),
         ('journal of {"a":0} 200 MB', bomb_journal_dicts, 200 * mb),
+        ("one emoji in a 128 MB name", wide_string, 128 * mb),
+        ("one emoji in a 500 MB name", wide_string, 500 * mb),
         ("worst accepted: 8M items + a 490 MB string", worst_accepted, 512 * mb - 1),
         ("snapshot mesh 1M vertices (legitimate)", big_snapshot, 100 * mb),
         ("journal of 20k-point strokes, 40 MB (legitimate)", big_stroke_journal, 40 * mb),
     ]
     if args.quick:
-        cases = [(n.replace("60 MB", "10 MB").replace("500 MB", "10 MB").replace("200 MB", "10 MB"), f, min(s, 10 * mb)) for n, f, s in cases]
+        cases = [(n, f, s) for n, f, s in cases if s <= 60 * mb]
     print(f"load: {os.getloadavg()[0]:.2f} {os.getloadavg()[1]:.2f} {os.getloadavg()[2]:.2f} (1/5/15 min)")
     print(f"{'document':52s} {'size':>8s} {'wall s':>7s} {'peak MB':>8s}  result")
     with tempfile.TemporaryDirectory() as tmp:

@@ -193,7 +193,7 @@ class MainWindow(QMainWindow):
         set_aside_notes: list[str] = []
         items = find_recoverable(set_aside_notes=set_aside_notes)  # also removes killed autosaves' temps
         if set_aside_notes:
-            QMessageBox.information(self, "An autosave was set aside", "\n\n".join(set_aside_notes))
+            QMessageBox.information(self, "An autosave was set aside", "\n\n".join(n[:1].upper() + n[1:] for n in set_aside_notes))
         reports = [i for i in items if not i.has_document]
         if reports:
             # A crash during a solve on a document without unsaved changes: nothing to
@@ -1112,9 +1112,10 @@ class MainWindow(QMainWindow):
         choice = errors_ui.ask_choice(
             self,
             "The file changed on disk",
-            f"{path} was changed on disk since this window opened or saved it (by another window or program). "
-            "Overwrite it with this window's document (the other changes are lost), save this document as "
-            "another file, or reload the file from disk (this window's unsaved changes are lost)?",
+            f"{path} was changed on disk since this window opened or saved it (by another window or program).\n\n"
+            "Overwrite: replace it with this window's document (the other changes are lost).\n"
+            "Save As: save this window's document as another file (nothing is lost).\n"
+            "Reload: open the file as it is on disk (this window's unsaved changes are lost).",
             ["Overwrite", "Save As…", "Reload", "Cancel"],
             default=1,
             cancel=3,

@@ -149,6 +149,7 @@ def test_a_malformed_autosave_is_set_aside_with_one_message_never_a_crash(make_w
     assert w.offer_recovery() is False
     info = dialogs.of("information")
     assert len(info) == 1 and why in info[0][2] and "set-aside" in info[0][2] and "\n" not in info[0][2]
+    assert info[0][2].startswith("The autosave 0123abcd.json cannot be used")
     assert dialogs.of("question") == []  # nothing offered
     assert not bad.exists() and (folder / "set-aside" / bad.name).exists()  # kept for the user
     dialogs.calls.clear()
