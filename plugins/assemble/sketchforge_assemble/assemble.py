@@ -254,7 +254,7 @@ def assemble_detailed(meshes: Sequence[Mesh | None], closed: Sequence[bool] | No
         knames = [names[i] for i in keep]
         sheets = [_sheet(cache, k, knames[k], meshes[i], bool(closed[i])) for k, i in enumerate(keep)]
         try:
-            res = _assemble(sheets, knames, p, cache, {keep.index(i): why for i, why in freed.items()})
+            res = _assemble(list(sheets), knames, p, cache, {keep.index(i): why for i, why in freed.items()})
         except _PartsFailed as failure:
             if p["on_bad_junction"] == "raise":
                 raise failure.error from None
