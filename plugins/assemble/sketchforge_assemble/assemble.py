@@ -19,6 +19,7 @@ import numpy as np
 
 from sketchforge.errors import GeometryError, LimitError, ParameterError, quote
 from sketchforge.plugin_api import number
+from sketchforge.geometry.laplacian import laplacian_and_mass
 from sketchforge.geometry.mesh import Mesh
 
 from .attach import Attachment, find_attachments
@@ -26,7 +27,7 @@ from .blend import blend_junctions
 from .cache import AssemblyCache, memo
 from .errors import AttachmentError, DepthOrderError
 from .depth import build_problem, settle_free_parts, solve_without_free_parts
-from .fair import fair_clear, hold_weights, ring_region, seam_zone, supports, wide_zone
+from .fair import fair_clear, hold_weights, interior_edges, ring_region, seam_zone, supports, wide_zone
 from .remesh import insert_chains
 from .sheet import THIN_HEIGHT_EDGES, refine_thin, sheet_from_mesh, taper
 from .stitch import build_mesh
@@ -362,8 +363,13 @@ def _assemble(sheets: list, knames: list[str], p: dict, cache, freed: dict[int, 
         # a part meets its host at its own thickness (thickness.full_thickness)
         s = sheets[a.upper]
         host = sheets[a.lower]
+
+        def thick(s=s, host=host):
+            ops = memo(cache, "laplacian", (s.xy, s.F, s.Fb), lambda: laplacian_and_mass(s.xy, s.F, checked=True))
+            return full_thickness(s, host.polygon(), ops)
+
         z = memo(cache, "thickness", (s.xy, s.F, s.z, s.boundary, s.holes, s.junction, host.xy, host.boundary,
-                                      host.holes), lambda s=s, host=host: full_thickness(s, host.polygon()))
+                                      host.holes), thick)
         sheets[a.upper] = s.evolve(z=z)
     timings["attach"] = time.perf_counter() - t
 
@@ -473,7 +479,8 @@ def _fair(V, F, face_layer, face_kind, seam, ends, sheets, in_att, p, cache, tim
         # only a crossing that cannot be cleared falls back to the plain sleeve.
         narrow = (reach < 1.0) & ~held
         hold = hold_weights(reach)
-        V2, clear, bent, _ = fair_clear(V, F, narrow, A, h_med, hold, MAX_BEND)
+        edges = interior_edges(F)
+        V2, clear, bent, _ = fair_clear(V, F, narrow, A, h_med, hold, MAX_BEND, edges)
         zone = "narrow"
         if clear and len(bent):
             near_seam = seam[ring_region(A, bent, 2 * rings)[seam]]

@@ -93,7 +93,14 @@ class Sheet:
 
     def polygon(self) -> shapely.Polygon:
         """The layer's region Ω in the drawing plane, holes cut out (made valid by
-        :func:`guard.polygon` if its outline touches itself)."""
+        :func:`guard.polygon` if its outline touches itself); made once per sheet value."""
+        got = self.__dict__.get("_polygon")
+        if got is None:
+            got = self._make_polygon()
+            object.__setattr__(self, "_polygon", got)
+        return got
+
+    def _make_polygon(self) -> shapely.Polygon:
         outer = guard.polygon(self.xy[self.boundary], f"the outline of layer '{self.name}'")
         if not self.holes:
             return outer
