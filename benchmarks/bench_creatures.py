@@ -65,11 +65,11 @@ def measure(seed: int):
                                     region(meshes[a.lower]), guard_h(meshes[a.upper]))
         if np.isfinite(ratio):
             ratios.append((ratio, names[a.upper]))
-    free_expected = sum(1 for l in layers if l.closed or not len(l.mesh.junction))
     return {
         "seed": seed, "ok": True, "parts": parts, "glued": len(r.attachments), "free": len(r.warnings),
         "notes": len(r.notes), "components": mc.components(F, len(V)),
-        "components_expected": free_expected + (1 if r.attachments else 0) + len(r.warnings),
+        # a forest: every glued part joins its host's component; a part left out is not there
+        "components_expected": len(layers) - len(r.attachments) - len(r.left_out),
         "boundary": mc.boundary_edges(F), "inter": mc.self_intersections(V, F),
         "j_max": float(ang_j.max(initial=0.0)), "j_999": float(np.percentile(ang_j, 99.9)) if len(ang_j) else 0.0,
         "j_over90": int(np.sum(ang_j > 90)), "j_le45": float(np.mean(ang_j <= 45)) if len(ang_j) else 1.0,
