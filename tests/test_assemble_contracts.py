@@ -124,9 +124,13 @@ def test_a_blended_junction_builds_its_lip_and_keeps_the_mesh_clean(side):
     else:  # its front face the highest
         off = np.array([z.max() for z in stacked]) - lip[:, 2] - thick
     assert off.min() >= -1e-6 and off.max() > 0.02
-    # and nothing crosses anything (the fillet's known defect at a junction's ends aside)
+    # and nothing crosses anything (the fillet's known defect at a junction's ends aside: with
+    # the fillet alone, the arm's front face can cross its own rim bridge there, 2 pairs before
+    # the full-thickness correction of issue 34, 3 after; the default fairing leaves none)
     pairs = dg.intersecting_pairs(V, F)
-    assert len(pairs) <= 2
+    assert len(pairs) <= 4
+    default = assemble_detailed(meshes)
+    assert len(dg.intersecting_pairs(default.mesh.V, default.mesh.F)) == 0
     _, count = dg.edge_counts(F)
     assert np.all(count == 2) and dg.signed_volume(V, F) > 0
 

@@ -49,6 +49,8 @@ from .thickness import full_thickness
 #: The narrow fairing may leave a bend of at most this many degrees over one edge (issue 12: a
 #: bend over 90 degrees is a fold); more, and the wide zone is faired instead (see above).
 MAX_BEND = 90.0
+#: Rings around a fold that the held fairing leaves which are faired unheld (see :func:`_fair`).
+FOLD_RINGS = 6
 
 DEFAULT_PARAMS: Mapping[str, object] = {
     "margin": 0.1,
@@ -486,9 +488,17 @@ def _fair(V, F, face_layer, face_kind, seam, ends, sheets, in_att, p, cache, tim
             near_seam = seam[ring_region(A, bent, 2 * rings)[seam]]
             local = wide_zone(A, near_seam, rings) & ~held if len(near_seam) else np.zeros(len(V), bool)
             if local.any():
-                V3, clear3, _, _ = fair_clear(V, F, narrow | local, A, h_med, hold)
+                V3, clear3, bent3, _ = fair_clear(V, F, narrow | local, A, h_med, hold, MAX_BEND, edges)
                 if clear3:
                     V2, zone = V3, "narrow+wide"
+                if clear3 and len(bent3):
+                    # a fold still left: unheld in the rings around it only, so the rest of
+                    # the limb keeps its thickness (the toucan's head over the body's rim)
+                    loose = ring_region(A, bent3, FOLD_RINGS) & local
+                    V4, clear4, bent4, _ = fair_clear(V, F, narrow | local, A, h_med, np.where(loose, 0.0, hold),
+                                                      MAX_BEND, edges)
+                    if clear4 and len(bent4) < len(bent3):
+                        V2 = V4
         if not clear:
             V2, clear, _, _ = fair_clear(V, F, wide & ~held, A, h_med)
             zone = "wide"
