@@ -275,12 +275,16 @@ def plan_attachments(junctions: Sequence, regions: list, edge_lengths: list, nam
             ok = np.zeros(len(seg_len), bool)
             ok[first:stop] = True
             segs = _segments(J)
+            close = []  # the parts whose glued stretch this junction comes too close to
             for other, glued in taken:
                 sep = SEPARATION_EDGES * max(edge_lengths[k], edge_lengths[other], edge_lengths[found.host])
-                ok &= shapely.distance(segs, glued) >= sep
+                clear = shapely.distance(segs, glued) >= sep
+                if not clear[first:stop].all():
+                    close.append(other)
+                ok &= clear
             a, b, length = longest_run(ok, seg_len)
             if (a, b) != (first, stop):
-                who = names[taken[0][0]] if len(taken) == 1 else ", ".join(names[o] for o, _ in taken)
+                who = " and ".join(names[o] for o in close[:2]) + (f" and {len(close) - 2} more" if len(close) > 2 else "")
                 if b - a < MIN_GLUE_SEGMENTS or length < MIN_GLUE_EDGES * edge_lengths[k]:
                     out[k] = JunctionHost(None, 0, f"the junction of layer {names[k]} lies where the junction of "
                                                    f"{who} is glued on the same side of {names[found.host]}, so it is "
