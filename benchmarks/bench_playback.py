@@ -91,12 +91,11 @@ def _shots(app, w, ctl, out: Path) -> None:
     import numpy as np
 
     ctl.set_playing(False)
-    idle = lambda: ctl.worker._pending is None and not ctl.worker.busy  # noqa: E731
-    ctl.set_frame(0)
-    _wait(app, idle)
-    for f in range(1, 13):
+    for f in range(13):
+        # each frame warm-starts from the pose on display: wait for this one to arrive
+        shown = ctl._pose
         ctl.set_frame(f)
-        _wait(app, idle)
+        _wait(app, lambda: ctl._pose is not shown and ctl.worker._pending is None and not ctl.worker.busy)
     _run_loop(app, 200)
     out.mkdir(parents=True, exist_ok=True)
     for style in ("shaded", "cel", "isophotes"):
@@ -127,7 +126,7 @@ def child(seconds: float, size: tuple[int, int], style: str, shots: str | None) 
     settle(w, app)
     panel = w.plugin_panels["animation"]
     ctl = panel.c
-    _wait(app, lambda: w.view3d.model_item is not None and ctl._pose is not None
+    _wait(app, lambda: w.view3d.model_item is not None and ctl._animator is not None  # the first pose arrived
           and ctl.worker._pending is None and not ctl.worker.busy)
     _run_loop(app, 300)
     if shots:
