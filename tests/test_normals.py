@@ -202,3 +202,37 @@ def test_a_box_has_one_shading_vertex_per_corner_and_side():
     # without creases (crease angle above 90°) every vertex is one shading vertex
     src, _, _ = shading_vertices(F, crease_groups(V, F, 100.0))
     assert len(src) == 8
+
+
+def test_faces_outward_only_for_a_closed_surface_wound_outwards():
+    """The 3D view skips triangles facing away only on such a surface (issue 34): a box and
+    a seeded random convex hull pass; turned inside out, with a face missing or flipped, with
+    a degenerate triangle, or an open sheet (a layer's surface) they do not."""
+    from scipy.spatial import ConvexHull
+
+    from sketchforge.geometry.normals import faces_outward
+
+    V = np.array([[x, y, z] for x in (0.0, 1.0) for y in (0.0, 2.0) for z in (0.0, 0.5)])
+    F = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
+                  [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]])
+    if not faces_outward(V, F):
+        F = F[:, ::-1]  # whichever way the box was written, one winding is outward
+    assert faces_outward(V, F) and not faces_outward(V, F[:, ::-1])
+    assert not faces_outward(V, F[1:])  # a hole
+    flipped = F.copy()
+    flipped[3] = flipped[3, ::-1]
+    assert not faces_outward(V, flipped)
+    assert not faces_outward(V, np.r_[F, [[0, 0, 1]]])
+    assert not faces_outward(V, np.r_[F, F])  # every edge twice
+    rng = np.random.default_rng(34)
+    P = rng.normal(size=(300, 3))
+    hull = ConvexHull(P)
+    H = hull.simplices.copy()
+    # orient every hull triangle away from the centroid, as a closed outward surface is
+    c = P.mean(axis=0)
+    n = np.cross(P[H[:, 1]] - P[H[:, 0]], P[H[:, 2]] - P[H[:, 0]])
+    inward = np.einsum("ij,ij->i", n, P[H[:, 0]] - c) < 0
+    H[inward] = H[inward][:, ::-1]
+    assert faces_outward(P, H) and not faces_outward(P, H[:, ::-1])
+    m = hemisphere(1.0, 0.12)
+    assert not faces_outward(m.V, m.F)

@@ -63,6 +63,43 @@ def face_normals(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return N, 0.5 * norm
 
 
+def faces_outward(V: np.ndarray, F: np.ndarray) -> bool:
+    """Whether (V, F) is a closed surface with every triangle facing out: each directed edge
+    belongs to one triangle and its reverse to one other (closed, consistently wound, no
+    triangle with a repeated corner), and the volume it winds around is positive.
+
+    Then, if the surface does not cut through itself, a viewer outside never sees a triangle
+    from its back (a ray from outside first crosses the surface inwards), which is what lets
+    a renderer skip the triangles that face away (the 3D view does, issue 34).
+
+    Parameters
+    ----------
+    V : (n, 3) float64
+    F : (m, 3) int64
+
+    Returns
+    -------
+    bool
+    """
+    V = np.asarray(V, dtype=np.float64)
+    F = np.asarray(F, dtype=np.int64)
+    if F.ndim != 2 or F.shape[1] != 3 or len(F) == 0 or F.min() < 0 or F.max() >= len(V):
+        return False
+    if np.any((F[:, 0] == F[:, 1]) | (F[:, 1] == F[:, 2]) | (F[:, 2] == F[:, 0])):
+        return False
+    n = len(V)
+    a, b = F.ravel(), F[:, [1, 2, 0]].ravel()
+    edges = np.sort(a * n + b)
+    if np.any(edges[1:] == edges[:-1]):
+        return False  # an edge walked twice the same way: not one consistent orientation
+    reverse = b * n + a
+    at = np.minimum(np.searchsorted(edges, reverse), len(edges) - 1)
+    if not np.array_equal(edges[at], reverse):
+        return False  # an edge without its twin: the surface has a boundary
+    volume = np.einsum("ij,ij->", V[F[:, 0]], _face_cross(V, F)) / 6.0  # a·((b−a)×(c−a)) = a·(b×c)
+    return bool(volume > 0.0)
+
+
 def vertex_normals(V: np.ndarray, F: np.ndarray) -> np.ndarray:
     """Area-weighted unit vertex normals.
 
