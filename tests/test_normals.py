@@ -234,5 +234,10 @@ def test_faces_outward_only_for_a_closed_surface_wound_outwards():
     inward = np.einsum("ij,ij->i", n, P[H[:, 0]] - c) < 0
     H[inward] = H[inward][:, ::-1]
     assert faces_outward(P, H) and not faces_outward(P, H[:, ::-1])
+    # two pieces (a part left free): each must face out, a bigger one cannot hide the other
+    Q = np.r_[P, V + 10.0]
+    box = F + len(P)
+    assert faces_outward(Q, np.r_[H, box])
+    assert not faces_outward(Q, np.r_[H, box[:, ::-1]])
     m = hemisphere(1.0, 0.12)
     assert not faces_outward(m.V, m.F)

@@ -66,7 +66,8 @@ def face_normals(V: np.ndarray, F: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 def faces_outward(V: np.ndarray, F: np.ndarray) -> bool:
     """Whether (V, F) is a closed surface with every triangle facing out: each directed edge
     belongs to one triangle and its reverse to one other (closed, consistently wound, no
-    triangle with a repeated corner), and the volume it winds around is positive.
+    triangle with a repeated corner), and each connected piece winds around a positive
+    volume (a model with a part left free is several pieces; one inside out fails it).
 
     Then, if the surface does not cut through itself, a viewer outside never sees a triangle
     from its back (a ray from outside first crosses the surface inwards), which is what lets
@@ -96,8 +97,14 @@ def faces_outward(V: np.ndarray, F: np.ndarray) -> bool:
     at = np.minimum(np.searchsorted(edges, reverse), len(edges) - 1)
     if not np.array_equal(edges[at], reverse):
         return False  # an edge without its twin: the surface has a boundary
-    volume = np.einsum("ij,ij->", V[F[:, 0]], _face_cross(V, F)) / 6.0  # a·((b−a)×(c−a)) = a·(b×c)
-    return bool(volume > 0.0)
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    _, piece = connected_components(coo_matrix((np.ones(len(a)), (a, b)), shape=(n, n)), directed=False)
+    # a·((b−a)×(c−a)) = a·(b×c): six times the signed volume of the tetrahedron (0, a, b, c)
+    signed = np.einsum("ij,ij->i", V[F[:, 0]], _face_cross(V, F))
+    volume = np.bincount(piece[F[:, 0]], weights=signed)
+    return bool(np.all(volume[np.unique(piece[F[:, 0]])] > 0.0))
 
 
 def vertex_normals(V: np.ndarray, F: np.ndarray) -> np.ndarray:
