@@ -1,5 +1,5 @@
 """Playback cost of an animation in the app: the real window, OBSERVATION mode, the 3D view
-(pyqtgraph GLViewWidget) playing examples/animated.json (16k vertices, 4 pins, 2 s loop) at
+(pyqtgraph's 3D view) playing examples/animated.json (16k vertices, 4 pins, 2 s loop) at
 24 fps, on software OpenGL (Mesa llvmpipe) under Xvfb.
 
 Run: .venv/bin/python benchmarks/bench_playback.py [--seconds 5] [--threads default,1,2]
