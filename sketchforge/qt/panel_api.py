@@ -50,7 +50,8 @@ class AppContext(QObject):
         The 2D drawing view (``canvas.set_overlay(name, polylines)`` draws (k, 2) document
         polylines over the shapes).
     view3d : View3D
-        The OBSERVATION view: ``gl`` (the pyqtgraph GLViewWidget, None without OpenGL),
+        The OBSERVATION view: ``gl`` (pyqtgraph's 3D view with GLViewWidget's API, rendered
+        offscreen: :class:`sketchforge.qt.glview.GLView`; None without OpenGL),
         ``model_item`` (the shown mesh item) and the signal ``assembled_shown(mesh or None)``
         each time an assembled model is put on screen.
     sculpt : SculptController
