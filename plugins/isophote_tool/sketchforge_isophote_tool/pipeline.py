@@ -44,8 +44,13 @@ from .stroke import clip_to_band, prepare_stroke, resample_polyline, stroke_samp
 #: stroke than before.
 FALLBACK_FRACTIONS = (0.5, 0.25)
 #: Distances below this many edge lengths are below what first-order vertex normals resolve:
-#: an edit that ends within it of the stroke is not "farther", whatever it started from.
+#: a stroke within it of the isophote asks for no change where it runs (its "moving part" is
+#: the rest).
 RESOLUTION_EDGES = 0.25
+#: The largest height change an edit may make, as a fraction of the layer's peak: a larger one
+#: is scaled down to it (and then halved, quartered, as any edit that overshoots), and refused
+#: with the figure if no scaled version brings the isophote closer.
+MAX_CHANGE = 0.6
 
 
 @dataclass
@@ -89,6 +94,9 @@ class SculptResult:
         Length (drawing units) and share of the cleaned stroke that was not used: outside the
         band, or in pieces inside it shorter than half an edge length. The person is told
         (:meth:`describe`), since drawing outside the band changes nothing there.
+    bounded_from : float
+        0, or the largest height change of the solver's full answer as a fraction of the peak
+        when it was over :data:`MAX_CHANGE` and the edit was scaled down (the person is told).
     """
 
     mesh: Mesh
@@ -110,6 +118,7 @@ class SculptResult:
     solution: object = field(default=None, repr=False)
     ignored_length: float = 0.0
     ignored_fraction: float = 0.0
+    bounded_from: float = 0.0
 
     @property
     def options(self) -> dict:
@@ -145,7 +154,11 @@ class SculptResult:
     def describe(self) -> str:
         """One line for the person: how far the isophote was and is from the stroke, and what
         of the stroke was ignored."""
-        part = "" if self.fraction == 1.0 else f" ({self.fraction:.0%} of the change: the whole of it overshot)"
+        if self.bounded_from:
+            part = (f" ({self.fraction:.0%} of the change: the whole of it would have changed heights by "
+                    f"{self.bounded_from:.0%} of the peak, at most {MAX_CHANGE:.0%} is allowed)")
+        else:
+            part = "" if self.fraction == 1.0 else f" ({self.fraction:.0%} of the change: the whole of it overshot)"
         text = f"isophote {self.before / self.h:.1f} → {self.after / self.h:.1f} edge lengths from the stroke{part}"
         # Less than half an edge length left out is the clipping's own rounding at the ends.
         if self.ignored_length >= 0.5 * self.h:
@@ -235,6 +248,18 @@ def _slopes(ld: LayerData):
         got = (p, q, E, Rp, Rq)
         ld._slopes_cache = got
     return got
+
+
+def _moves_outside_margin(pd, pieces: list[np.ndarray], iso, h: float) -> bool:
+    """Whether the stroke asks for a change outside the rim margin: some point of it farther
+    than the resolution from the isophote lies outside the margin. A stroke whose only moving
+    part lies in the margin is refused like one drawn entirely there (it once got "lies on
+    the isophote already" from one solver and a change of 9% of the peak that barely moved the
+    isophote from the other)."""
+    P = np.concatenate(pieces)
+    off = shapely.distance(shapely.points(P), iso) > RESOLUTION_EDGES * h
+    inside = pd.rim_distance(P) >= pd.margin_at(P)
+    return bool(np.any(off & inside)) or not np.any(off)
 
 
 def build_problem(ld: LayerData, c: float, pick, iso, band_geom, in_band: np.ndarray, r: float, pieces: list,
@@ -346,6 +371,11 @@ def sculpt(
     ld = layer_data(mesh, light, model)
     pd, h = ld.planar, ld.h
     T["layer"] = time.perf_counter() - t0
+    if r < h:
+        # Narrower than one edge length the band holds no vertex to change across it: the edit
+        # would do nothing visible.
+        raise SculptError(f"the band ({r:.3g}) is narrower than one edge length of this layer ({h:.3g}): "
+                          f"widen it to at least {h:.3g}")
 
     t = time.perf_counter()
     c, iso, band_geom, in_band = _pick(ld, pick, r)
@@ -356,7 +386,7 @@ def sculpt(
     ignored = max(0.0, drawn - used)
     stroke_geom = shapely.MultiLineString(pieces) if len(pieces) > 1 else shapely.LineString(pieces[0])
     honoured = honoured_samples(pd, pieces, band_geom)
-    if len(honoured) == 0:
+    if len(honoured) == 0 or not _moves_outside_margin(pd, pieces, iso, h):
         local = float(np.max(np.minimum(pd.margin_at(np.concatenate(pieces)), pd.margin)))
         raise SculptError(
             f"the stroke runs within the rim margin ({local:.2g} from the outline here), where the surface "
@@ -387,20 +417,31 @@ def sculpt(
     T["solve"] = time.perf_counter() - t
 
     t = time.perf_counter()
-    fraction, z, after = 1.0, None, np.inf
-    for frac in (1.0,) + (FALLBACK_FRACTIONS if never_worse else ()):
+    peak = float(ld.z.max())
+    largest = float(np.abs(np.where(pd.is_contour, 0.0, dz)).max(initial=0.0)) / max(peak, 1e-300)
+    scale = min(1.0, MAX_CHANGE / largest) if largest > 0.0 else 1.0
+    fraction, z, after = scale, None, np.inf
+    for frac in (scale,) + (tuple(scale * f for f in FALLBACK_FRACTIONS) if never_worse else ()):
         zf = np.maximum(ld.z + frac * dz, 0.0)  # heights >= 0 by contract
         zf[pd.is_contour] = 0.0
         af = problem.distance_after(zf)
         if z is None or af < after:
             fraction, z, after = frac, zf, af
-        if not never_worse or af <= max(before, RESOLUTION_EDGES * h):
+        if not never_worse or af <= before:
             break
     T["check"] = time.perf_counter() - t
-    if never_worse and after > max(before, RESOLUTION_EDGES * h):
+    if never_worse and after > before:
+        if before <= RESOLUTION_EDGES * h:
+            # A stroke within the resolution of the isophote: no version of the edit may leave
+            # it farther (the tolerance once let an edit through that moved heights by 24% of
+            # the peak and took the isophote from 0.11 to 0.16 edge lengths).
+            raise NothingToDoError(f"the stroke lies on the isophote already ({before / h:.2f} edge lengths from it, "
+                                   "within what the shading resolves): nothing to change")
+        bound = (f" (the full edit would change heights by {largest:.0%} of the peak; at most "
+                 f"{MAX_CHANGE:.0%} is applied)") if scale < 1.0 else ""
         raise SculptError(
             f"the surface cannot take this shading here: every version of the edit left the isophote farther "
-            f"from the stroke ({after / h:.1f} edge lengths) than it was ({before / h:.1f}); draw the new "
+            f"from the stroke ({after / h:.1f} edge lengths) than it was ({before / h:.1f}){bound}; draw the new "
             "isophote closer to the old one, or further from the rim"
         )
     if not np.isfinite(z).all():
@@ -414,5 +455,5 @@ def sculpt(
     reach = float(solution.info.get("reach", r))
     return SculptResult(
         new_mesh, changed, c, iso, band_geom, stroke_geom, dE, before, after, fraction, T, full, ld, r, reach,
-        solver.name, solution, ignored, ignored / drawn if drawn > 0 else 0.0,
+        solver.name, solution, ignored, ignored / drawn if drawn > 0 else 0.0, largest if scale < 1.0 else 0.0,
     )
