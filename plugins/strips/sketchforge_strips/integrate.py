@@ -193,23 +193,22 @@ def integrate_paths(seeds: np.ndarray, coeffs: np.ndarray, origin: np.ndarray, s
             sg = np.ones(BATCH)
             sg[:len(idx)] = sign[idx]
             ys, n_steps = fn(jnp.asarray(y0), jnp.asarray(sg), *args)
-            ys = np.asarray(ys)[:len(idx)]
+            ys = np.asarray(ys)[:len(idx)]  # (b, SEGMENT, 2)
             most = max(most, int(np.max(np.asarray(n_steps)[:len(idx)])))
-            for j, i in enumerate(idx):
-                pts = ys[j]
-                fin = np.isfinite(pts).all(axis=1)
-                if not fin.all():  # cut off at MAX_STEPS: keep what it reached
-                    pts = pts[:np.argmin(fin)] if not fin[0] else pts[:0]
-                prev = np.vstack([start[i:i + 1], pts[:-1]]) if len(pts) else pts
-                moving = np.linalg.norm(pts - prev, axis=1) >= 0.1 * step
-                if len(pts) == 0 or not moving.any():
-                    alive[i] = False
-                    continue
-                last = int(np.nonzero(moving)[0][-1])
-                paths[i].append(pts[:last + 1])
-                start[i] = pts[last]
-                # Still moving at the end of the segment: it goes on; otherwise it stopped here.
-                alive[i] = last == len(pts) - 1 and fin.all()
+            # A strip cut off at MAX_STEPS keeps what it reached: its rows from the first
+            # non-finite one on are standing still.
+            fin = np.isfinite(ys).all(axis=2)
+            upto = np.where(fin.all(axis=1), SEGMENT, np.argmin(fin, axis=1))
+            prev = np.concatenate([start[idx][:, None, :], ys[:, :-1]], axis=1)
+            moving = (np.linalg.norm(np.nan_to_num(ys - prev), axis=2) >= 0.1 * step) & (np.arange(SEGMENT) < upto[:, None])
+            any_moving = moving.any(axis=1)
+            last = SEGMENT - 1 - np.argmax(moving[:, ::-1], axis=1)
+            for j in np.nonzero(any_moving)[0]:
+                i = idx[j]
+                paths[i].append(ys[j, :last[j] + 1])
+                start[i] = ys[j, last[j]]
+            # Still moving at the end of the segment: it goes on; otherwise it stopped here.
+            alive[idx] = any_moving & (last == SEGMENT - 1) & (upto == SEGMENT)
     out = [np.concatenate(p) if p else np.zeros((0, 2)) for p in paths]
     return out[:k], out[k:], most
 

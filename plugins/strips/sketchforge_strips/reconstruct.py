@@ -69,9 +69,8 @@ def rbf_weights(points: np.ndarray, weights: np.ndarray, queries: np.ndarray, h:
         # distances from the Gram matrix lose nothing to cancellation.
         Xr = (P[nb] - queries[s:s + chunk, None, :]) * eps  # (c, k, 2)
         sq = np.einsum("ckd,ckd->ck", Xr, Xr)
-        A = np.empty((c, k + 1, k + 1))
-        K = A[:, :k, :k]
-        np.matmul(Xr, Xr.transpose(0, 2, 1), out=K)
+        # In place on a contiguous block (on the strided view of A it took 4× as long).
+        K = np.matmul(Xr, Xr.transpose(0, 2, 1))
         K *= -2.0
         K += sq[:, :, None]
         K += sq[:, None, :]
@@ -80,6 +79,8 @@ def rbf_weights(points: np.ndarray, weights: np.ndarray, queries: np.ndarray, h:
         np.sqrt(K, out=K)
         np.negative(K, out=K)
         K[:, np.arange(k), np.arange(k)] += lam[nb]
+        A = np.empty((c, k + 1, k + 1))
+        A[:, :k, :k] = K
         A[:, :k, k] = 1.0
         A[:, k, :k] = 1.0
         A[:, k, k] = 0.0
