@@ -214,6 +214,10 @@ def solve(problem: SculptProblem, params: dict) -> SculptSolution:
     # carried shift (measured: 32° across a limb, beside a short stroke). Faded out over the
     # outer half of the band (δE · (1 − smoothstep)) it ends C¹; the stroke's half is kept.
     dE = dE * (1.0 - _smoothstep((d_s - 0.5 * r) / (0.5 * r)))
+    # Likewise toward the rim margin, over MARGIN_FADE edge lengths: a change of slope asked
+    # right at the margin's edge, where the surface is steep and 1/|∇R| large, tipped the
+    # margin's first triangles over (folds after chains of edits on thin limbs and stars).
+    dE = dE * _smoothstep((problem.d_rim - margin) / (MARGIN_FADE * h))
     T["shading"] = time.perf_counter() - t
     curves = _curves(strips)
     if not free.any() or not np.any(dE):
@@ -394,6 +398,8 @@ CONVERGENCE = 0.75
 #: Rim mask below which a strip's samples are ending: no weight in the RBF, a full end in the
 #: rim margin (above the mask at which a stopping strip is cut, ~0.1).
 ENDING = 0.15
+#: Edge lengths inside the rim margin over which the shading change fades in.
+MARGIN_FADE = 2.0
 #: |∇R| below which the shading is taken not to respond to the slope (see ``respond``).
 FLAT = 0.02
 #: Weight of the squared Laplacian in the final smoothing of δz, in units of h².
