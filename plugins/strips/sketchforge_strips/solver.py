@@ -183,7 +183,6 @@ def solve(problem: SculptProblem, params: dict) -> SculptSolution:
     d_S, nearest = cKDTree(X).query(V2, distance_upper_bound=reach_q)
     inner_X = X[~edge[owner]]
     d_in = cKDTree(inner_X).query(V2, distance_upper_bound=near)[0] if len(inner_X) else np.full(n, np.inf)
-    in_S = (d_S <= near) & interior
     T["regions"] = time.perf_counter() - t
 
     # 4.4: the shading change on B•* = band ∩ {d_s < r} ∩ Ω* ∩ S•, S• without its two edge
@@ -229,14 +228,6 @@ def solve(problem: SculptProblem, params: dict) -> SculptSolution:
     seg = np.linalg.norm(np.diff(X, axis=0), axis=1)
     first = np.concatenate([[0], np.cumsum(sizes)[:-1]])
     last = first + sizes - 1
-    # SfS fixes δz only up to a function constant along the characteristics: δz = a − J with
-    # any a per strip. The thesis takes a = 0 (upstream kept, the whole shift carried
-    # downstream). Here the shift is shared between the two ends in proportion to how well
-    # each can take it: an end in the rim margin can (the shift returns to 0 across the
-    # margin, below), an end where the flow vanishes (a tilted light's brightest point, where
-    # every strip meets) or cut off by the length cap cannot (its shift must be 0 there, or the
-    # strips meeting there would disagree). Both in the rim margin: half each way, which halves
-    # the largest height change of the thesis' choice.
     # The samples located once: every later field is read on them by the same weights.
     face, bary = problem.locate(X)
     inside = face >= 0
@@ -247,6 +238,14 @@ def solve(problem: SculptProblem, params: dict) -> SculptSolution:
         """Per-vertex values (n,) or (n, k) at the samples, 0 outside the layer."""
         return np.einsum("sj,sj...->s...", bary, values[corners])
 
+    # SfS fixes δz only up to a function constant along the characteristics: δz = a − J with
+    # any a per strip. The thesis takes a = 0 (upstream kept, the whole shift carried
+    # downstream). Here the shift is shared between the two ends in proportion to how well
+    # each can take it: an end in the rim margin can (the shift returns to 0 across the
+    # margin, below), an end where the flow vanishes (a tilted light's brightest point, where
+    # every strip meets) or cut off by the length cap cannot (its shift must be 0 there, or the
+    # strips meeting there would disagree). Both in the rim margin: half each way, which halves
+    # the largest height change of the thesis' choice.
     end_mask = at_samples(mask)
     # A strip stopping in the margin crawls (its speed is the mask's) and is cut where it no
     # longer moves, at a mask near 0.1 that round-off can shift by a sample: read through
