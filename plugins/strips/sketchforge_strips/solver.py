@@ -19,7 +19,9 @@
    tapered to 0 across the rim margin and beside the sweep, and lightly smoothed on the mesh.
 5. **Newton** — the strips integrate the change linearised about the old surface; a second
    pass integrates, along the same strips, the shading still missing on B•* at the new
-   surface (damped: the whole correction, half or a quarter, whichever misses least).
+   surface (damped: the whole correction if it helps, else half, else a quarter).
+6. **Shape limit** — the change scaled down, as little as needed, so that no interior edge
+   creases beyond 30° (or what it had) and no triangle of the rim margin folds.
 
 The host then bounds the change (at most 60% of the peak), clamps heights at 0, keeps the
 rim at 0, refuses non-finite values, and keeps the edit only if the isophote ends no farther
@@ -377,13 +379,24 @@ def solve(problem: SculptProblem, params: dict) -> SculptSolution:
     dz[problem.is_rim] = 0.0
     T["passes"] = time.perf_counter() - t
 
+    # The strips follow the PDE without regard for the shape: beside a stroke drawn near the
+    # rim margin or into the notch between two lobes, where the shading barely responds to
+    # the slope, they ask for steep changes (a star's single edit: a 93° crease). The change is
+    # scaled down, as little as needed, so that no interior edge creases beyond CREASE_MAX
+    # degrees (or what it had) and no triangle of the margin that rose toward the inside
+    # falls; the host then keeps it only if the isophote ends closer.
+    t = time.perf_counter()
+    limit = _shape_limit(problem, dz)
+    dz *= limit
+    T["limit"] = time.perf_counter() - t
+
     changed = np.abs(dz) > 1e-9 * max(float(np.abs(problem.z).max()), 1e-300)
     return SculptSolution(
         dz, dE,
         shading_region=lambda: triangles_region(V2, F, free, smooth=h),
         height_region=lambda: triangles_region(V2, F, changed, touching=True, smooth=h),
         curves=curves,
-        info={**_info(T, seeds, int(keep.sum()), most_steps),
+        info={**_info(T, seeds, int(keep.sum()), most_steps), "limit": float(limit),
               "reach": float(np.max(problem.distance_to_stroke(V2[changed], 3.0 * extent), initial=r))},
     )
 
@@ -444,6 +457,83 @@ class _Smoother:
             p = z + (rz_new / rz) * p
             rz = rz_new
         return x
+
+
+#: The largest dihedral angle (degrees) an edit may leave across an interior edge (both ends
+#: at least INTERIOR h from the rim) that had less: a fresh inflated layer's largest is ~15°
+#: (corpus median), and issue 36 asks that chains of edits stay within 2.5 times the fresh
+#: layer's.
+CREASE_MAX = 30.0
+INTERIOR = 3.0
+#: Bisection steps for the scale of a change that creases or folds (a fixed count: the scale
+#: is then a fixed function of the change).
+LIMIT_STEPS = 10
+
+
+def _shape_limit(problem: SculptProblem, dz: np.ndarray) -> float:
+    """The largest scale f in [0, 1] (to 1/2^LIMIT_STEPS) such that z + f·dz creases no
+    interior edge beyond max(CREASE_MAX, its angle now) and folds no triangle of the rim margin
+    that rises toward the inside now (see :func:`solve`)."""
+    V2, F, h = problem.V[:, :2], problem.F, problem.h
+    z = problem.z
+    touched = np.abs(dz) > 0.0
+    faces = np.nonzero(touched[F].any(axis=1))[0]
+    if len(faces) == 0:
+        return 1.0
+    Fs = F[faces]
+    # Interior edges among the touched triangles: pairs of triangles sharing an edge.
+    e = np.concatenate([Fs[:, [0, 1]], Fs[:, [1, 2]], Fs[:, [2, 0]]])
+    owner = np.tile(np.arange(len(Fs)), 3)
+    key = np.sort(e, axis=1)
+    order = np.lexsort((key[:, 1], key[:, 0]))
+    key, owner = key[order], owner[order]
+    twin = np.nonzero((key[1:] == key[:-1]).all(axis=1))[0]
+    inner = (problem.d_rim[key[twin]] >= INTERIOR * h).all(axis=1)
+    pairs = np.column_stack([owner[twin], owner[twin + 1]])[inner]
+    # Triangles of the margin and their inward direction (the gradient of the rim distance).
+    P = V2[Fs]
+    e1, e2 = P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]
+    det = e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]
+    det = np.where(np.abs(det) < 1e-300, 1e-300, det)
+
+    def grad(f):  # per-face gradient (m, 2) of a per-vertex field f (n,)
+        a = f[Fs]
+        d1, d2 = a[:, 1] - a[:, 0], a[:, 2] - a[:, 0]
+        return np.column_stack([(d1 * e2[:, 1] - d2 * e1[:, 1]) / det, (d2 * e1[:, 0] - d1 * e2[:, 0]) / det])
+
+    inward = grad(problem.d_rim)
+    margin = np.asarray(problem.rim_margin)[Fs].mean(axis=1)
+    in_margin = problem.d_rim[Fs].mean(axis=1) < margin
+    rising_now = np.einsum("kd,kd->k", grad(z), inward)
+    watch = in_margin & (rising_now > 0.0) & (np.hypot(inward[:, 0], inward[:, 1]) > 0.5)
+
+    def normals(zz):
+        g = grad(zz)
+        n = np.column_stack([-g, np.ones(len(g))])
+        return n / np.linalg.norm(n, axis=1, keepdims=True)
+
+    def angles(zz):
+        n = normals(zz)
+        return np.degrees(np.arccos(np.clip(np.einsum("kd,kd->k", n[pairs[:, 0]], n[pairs[:, 1]]), -1.0, 1.0)))
+
+    allowed = np.maximum(angles(z), CREASE_MAX) + 1e-9
+
+    def fine(f):
+        zz = z + f * dz
+        if len(pairs) and np.any(angles(zz) > allowed):
+            return False
+        return not np.any(np.einsum("kd,kd->k", grad(zz), inward)[watch] <= 0.0)
+
+    if fine(1.0):
+        return 1.0
+    lo, hi = 0.0, 1.0
+    for _ in range(LIMIT_STEPS):
+        mid = 0.5 * (lo + hi)
+        if fine(mid):
+            lo = mid
+        else:
+            hi = mid
+    return lo
 
 
 def _halves(f: np.ndarray, seg: np.ndarray, owner: np.ndarray) -> np.ndarray:
