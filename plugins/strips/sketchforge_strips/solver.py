@@ -70,14 +70,16 @@ DEFAULT_PARAMS = {
     "ring": 3.0,  # width of the ring of untouched vertices (δz = 0) around the impacted region (h)
 }
 
-# Finite ranges whose worst corner still keeps an edit on a 5k-vertex layer well under a
-# minute (measured: see the README's parameters); the issue-38 bounds of every solver.
+# Finite ranges, the tighter of issue 38's (merged on main: rtol >= 1e-8, atol >= 1e-11,
+# strip_spacing >= 1, rbf_neighbors <= 128) and this solver's own: a corner looser than these
+# (kvaerno5 at rtol 1e-9, strip_spacing 0.5, sample_spacing 0.25, 64 neighbours, ring 20) took
+# 7.4 s CPU, 13 s wall at load ~6, for one edit on a 4.5k-vertex layer.
 _CHECKS = {
     "integrator": choice("integrator", ("tsit5", "kvaerno5")),
     "step_control": choice("step_control", ("fixed", "pid")),
-    "rtol": number("rtol", 1e-9, 1e-2),
-    "atol": number("atol", 1e-12, 1e-2),
-    "strip_spacing": number("strip_spacing", 0.5, 8.0),
+    "rtol": number("rtol", 1e-8, 1e-2),
+    "atol": number("atol", 1e-11, 1e-2),
+    "strip_spacing": number("strip_spacing", 1.0, 8.0),
     "sample_spacing": number("sample_spacing", 0.25, 4.0),
     "rbf_smoothing": number("rbf_smoothing", 0.0, 10.0),
     "rbf_scale": number("rbf_scale", 0.25, 20.0),
