@@ -1,8 +1,9 @@
 """The isophote edit on a randomized corpus nobody here drew, both sculpt solvers side by side
 (issue 16, point 7; issue 29, point 3).
 
-Run: ``.venv/bin/python benchmarks/bench_sculpt_corpus.py [layers_per_shape] [edits_per_layer] [seed]``
-(default 10, 8 and 2026: 320 edits on 40 layers). Shapes and edits: see
+Run: ``.venv/bin/python benchmarks/bench_sculpt_corpus.py [layers_per_shape] [edits_per_layer] [seed]
+[--parts solvers,elevations,pairs] [--pairs N]`` (default 10, 8 and 2026: 320 edits on 40 layers,
+every part, 3 pairs per layer). Shapes and edits: see
 ``sketchforge_isophote_tool.corpus`` (random blobs, stars, thin limbs 0.2–0.3 wide, letter
 shapes; strokes = the isophote shifted or bumped by 1–5 edge lengths, with a small loop, or
 partly outside the band). Fixed seeds: the same corpus on every run, and the very same edits
@@ -31,13 +32,26 @@ is counted instead of ending the benchmark. Prints, per solver:
   each shape kind runs in a new process, so its first edits pay JAX's tracing (and its
   compilation, unless the persistent compilation cache holds it); target for ``strips``: at most
   3× ``gauss_newton``.
+
+Beyond the thesis (issue 35), with ``gauss_newton``:
+
+- ``elevations``: the same kind of corpus under a light raised 30, 60 and 80 degrees above the
+  drawing plane (azimuth 45°; the edits are drawn on that light's isophotes); the same figures
+  per elevation (target: >= 90% of the valid edits land, none worse);
+- ``pairs``: pairs of edits of two different isophotes near each other (their bands overlap;
+  ``corpus.random_pair``), in the plane and at 60°, made jointly (``sculpt_isophotes``) and
+  one after the other (the same two edits, the second on the first's result): the share of
+  valid pairs where both isophotes land, where one ends farther from its stroke than it
+  started, each stroke's distance after (median, p95), the fallbacks the joint edit took and
+  its refusals (targets: both land >= 80%, none worse, better than one after the other).
 """
 
 from __future__ import annotations
 
+import argparse
 import multiprocessing as mp
 import os
-import sys
+import re
 import time
 from collections import Counter
 
@@ -45,6 +59,12 @@ import numpy as np
 
 SEED = 2026
 SOLVERS = ("gauss_newton", "strips")
+#: Elevations of the raised lights (degrees above the drawing plane) and their azimuth.
+ELEVATIONS = (30.0, 60.0, 80.0)
+AZIMUTH = 45.0
+#: Lights of the pairs: in the plane (the thesis') and raised.
+PAIR_ELEVATIONS = (0.0, 60.0)
+PARTS = ("solvers", "elevations", "pairs")
 
 
 def _solver(name):
@@ -71,6 +91,40 @@ def _shape_worker(shape: str, layers: int, edits: int, seed: int, queue) -> None
             null = _null_drift(mesh, rng, LIGHT, solver)
             acc = _accumulated_drift(shape, mesh, rng, LIGHT, solver) if i < 3 else None
             queue.put(("edits", name, shape, outcomes, null, acc))
+    queue.put(("done", None, shape, None, None, None))
+
+
+def _light(elevation: float) -> np.ndarray:
+    from sketchforge.document.layer import Light
+
+    return Light.from_angle(AZIMUTH, elevation).direction
+
+
+def _elevation_worker(shape: str, layers: int, edits: int, seed: int, queue) -> None:
+    """The single-edit corpus under each raised light (gauss_newton)."""
+    from sketchforge_isophote_tool.corpus import corpus_layers, draw_edits, run_edit
+
+    for _, i, mesh, rng in corpus_layers((shape,), per_shape=layers, seed=seed):
+        for el in ELEVATIONS:
+            light = _light(el)
+            # One stream per light, seeded from the layer's: the same shapes, each light's own
+            # isophotes.
+            sub = np.random.default_rng([seed, int(el), i, len(shape)])
+            outcomes = [run_edit(mesh, light, e) for e in draw_edits(shape, mesh, sub, light, edits)]
+            queue.put(("edits", f"elevation {el:g}", shape, outcomes, _null_drift(mesh, sub, light, _solver("gauss_newton")), None))
+    queue.put(("done", None, shape, None, None, None))
+
+
+def _pairs_worker(shape: str, layers: int, pairs: int, seed: int, queue) -> None:
+    """Pairs of edits, jointly and one after the other (gauss_newton)."""
+    from sketchforge_isophote_tool.corpus import corpus_layers, draw_pairs, run_pair
+
+    for _, i, mesh, rng in corpus_layers((shape,), per_shape=layers, seed=seed):
+        for el in PAIR_ELEVATIONS:
+            light = _light(el)
+            sub = np.random.default_rng([seed, int(el), i, len(shape), 2])
+            got = [run_pair(mesh, light, pair) for pair in draw_pairs(shape, mesh, sub, light, pairs)]
+            queue.put(("edits", f"pairs at {el:g}°", shape, got, None, None))
     queue.put(("done", None, shape, None, None, None))
 
 
@@ -229,21 +283,25 @@ def report(name: str, outcomes, nulls, accum, crashed, first=()) -> None:
         print(f"first edit of each process (compiling): {', '.join(f'{1e3 * t:.0f}' for t in first)} ms")
 
 
-def main(layers: int = 10, edits: int = 8, seed: int = SEED) -> None:
-    from sketchforge_isophote_tool.corpus import SHAPES, Outcome
+def _run(worker, names, layers: int, per_layer: int, seed: int, missing_outcome):
+    """Run ``worker(shape, layers, per_layer, seed, queue)`` for each shape kind in its own
+    child process (it reports one batch of ``per_layer`` outcomes per layer and name); collect
+    the outcomes by name, and the wall time of each process's first edit by name. A child that
+    dies (a native crash) is counted: ``missing_outcome(shape, exitcode)`` stands for each of
+    its edits that never reported."""
+    from sketchforge_isophote_tool.corpus import SHAPES
 
-    t0 = time.perf_counter()
     ctx = mp.get_context("fork")
-    outcomes: dict = {s: [] for s in SOLVERS}
-    nulls: dict = {s: [] for s in SOLVERS}
-    accum: dict = {s: [] for s in SOLVERS}
-    first: dict = {s: [] for s in SOLVERS}
+    outcomes: dict = {s: [] for s in names}
+    nulls: dict = {s: [] for s in names}
+    accum: dict = {s: [] for s in names}
+    first: dict = {s: [] for s in names}
     crashed = []
     for shape in SHAPES:
         q = ctx.Queue()
-        p = ctx.Process(target=_shape_worker, args=(shape, layers, edits, seed, q))
+        p = ctx.Process(target=worker, args=(shape, layers, per_layer, seed, q))
         p.start()
-        got = {s: 0 for s in SOLVERS}
+        got = {s: 0 for s in names}
         finished = False
         while not finished:
             try:
@@ -255,8 +313,8 @@ def main(layers: int = 10, edits: int = 8, seed: int = SEED) -> None:
             if kind == "done":
                 finished = True
                 continue
-            if got[name] == 0 and outs:
-                first[name].append(outs[0].seconds)
+            if got[name] == 0 and outs:  # the first edit of the process (of a pair: the joint edit)
+                first[name].append((outs[0][0] if isinstance(outs[0], tuple) else outs[0]).seconds)
             got[name] += 1
             outcomes[name].extend(outs)
             if null is not None:
@@ -266,20 +324,116 @@ def main(layers: int = 10, edits: int = 8, seed: int = SEED) -> None:
         p.join()
         if p.exitcode != 0:
             crashed.append((shape, p.exitcode))
-            for name in SOLVERS:
-                missing = (layers - got[name]) * edits
-                outcomes[name].extend(Outcome(shape, "?", np.nan, "crash", f"process died ({p.exitcode})", *[np.nan] * 3, 0.0, 0)
-                                      for _ in range(missing))
-    verts = np.array([o.vertices for o in outcomes[SOLVERS[0]] if o.vertices])
-    print(f"corpus: {len(SHAPES)} shape kinds x {layers} layers x {edits} edits = {len(outcomes[SOLVERS[0]])} edits per solver, "
-          f"seed {seed} ({verts.min()}-{verts.max()} vertices, median {int(np.median(verts))}); {time.perf_counter() - t0:.0f} s")
-    means = {}
-    for name in SOLVERS:
-        report(name, outcomes[name], nulls[name], accum[name], crashed, first[name])
-        means[name] = float(np.nanmean([o.cpu for o in outcomes[name] if o.status != "crash"]))
-    print(f"\nmean CPU time per edit in fresh processes, strips / gauss_newton: {means['strips'] / means['gauss_newton']:.2f}x "
-          f"(target <= 3x); load {os.getloadavg()[0]:.1f}")
+            for name in names:
+                outcomes[name].extend(missing_outcome(shape, p.exitcode) for _ in range((layers - got[name]) * per_layer))
+    return outcomes, nulls, accum, crashed, first
+
+
+def _crashed_edit(shape, code):
+    from sketchforge_isophote_tool.corpus import Outcome
+
+    return Outcome(shape, "?", np.nan, "crash", f"process died ({code})", *[np.nan] * 3, 0.0, 0)
+
+
+def _crashed_pair(shape, code):
+    from sketchforge_isophote_tool.corpus import PairOutcome
+
+    nan2 = np.full(2, np.nan)
+    out = PairOutcome(shape, "crash", f"process died ({code})", nan2, nan2, nan2, 0.0)
+    return (out, out)
+
+
+def report_elevations(outcomes: dict, nulls: dict, crashed) -> None:
+    from sketchforge_isophote_tool.corpus import refusal_reason
+
+    invalid = {"stroke outside the band", "stroke in the rim margin"}
+    print("\n== gauss_newton under raised lights (azimuth 45°) ==")
+    print("elevation | valid edits | land (of valid) | worse | crashes | after median / p95 (h) | refused unreachable | null drift max | time p50 / p95")
+    for name, outs in outcomes.items():
+        ok = [o for o in outs if o.status == "ok"]
+        valid = [o for o in outs if not (o.status == "refused" and refusal_reason(o.reason) in invalid)]
+        lands = sum(o.lands for o in outs)
+        worse = sum(o.after > max(o.before, 0.25) for o in ok)
+        after = np.array([o.after for o in ok])
+        unreachable = sum(o.status == "refused" and refusal_reason(o.reason) == "no closer isophote reachable" for o in outs)
+        times = np.array([o.seconds for o in outs if o.status != "crash"])
+        nd = np.array(nulls.get(name, []) or [np.nan])
+        print(f"{name:>15} | {len(valid):4d} | {lands:4d} = {lands / max(len(valid), 1):.1%} | {worse} | "
+              f"{sum(o.status == 'crash' for o in outs)} | {np.median(after):.2f} / {_pct(after, 95):.2f} | {unreachable} | "
+              f"{np.nanmax(nd):.3%} | {1e3 * np.median(times):.0f} / {1e3 * _pct(times, 95):.0f} ms")
+    for name, outs in outcomes.items():
+        report(f"gauss_newton, {name}", outs, nulls.get(name, []), [], crashed)
+
+
+def report_pairs(outcomes: dict, crashed) -> None:
+    from sketchforge_isophote_tool.corpus import refusal_reason
+
+    print("\n== pairs of isophotes: jointly (sculpt_isophotes) against one after the other ==")
+    if crashed:
+        print(f"processes died: {crashed}")
+    for name, got in outcomes.items():
+        joint = [j for j, _ in got]
+        seq = [s for _, s in got]
+        # A pair is valid when each of its strokes is one a single edit takes (a part inside its
+        # band, outside the rim margin); refusals for those reasons are the corpus', not the edit's.
+        invalid = {"stroke outside the band", "stroke in the rim margin"}
+        valid = [k for k, j in enumerate(joint)
+                 if not (j.status == "refused" and refusal_reason(re.sub(r"^stroke \d+: ", "", j.reason)) in invalid)]
+        print(f"\n-- {name}: {len(got)} pairs drawn, {len(valid)} valid --")
+        for label, outs in (("joint", joint), ("one after the other", seq)):
+            v = [outs[k] for k in valid]
+            both = sum(o.both_land for o in v)
+            worse = sum(o.worse for o in v)
+            ok = [o for o in v if o.status == "ok"]
+            a1 = np.array([o.after[0] for o in ok])
+            a2 = np.array([o.after[1] for o in ok])
+            t = np.array([o.seconds for o in v if o.status != "crash"])
+            print(f"{label:>20}: both land {both}/{len(v)} = {both / max(len(v), 1):.1%}; one ends worse: {worse}; "
+                  f"crashes {sum(o.status == 'crash' for o in v)}; refused {sum(o.status == 'refused' for o in v)}; "
+                  f"stroke 1 after median {np.median(a1):.2f}h p95 {_pct(a1, 95):.2f}h, stroke 2 median {np.median(a2):.2f}h "
+                  f"p95 {_pct(a2, 95):.2f}h; time p50 {1e3 * np.median(t):.0f} ms, p95 {1e3 * _pct(t, 95):.0f} ms (both edits)")
+        v = [joint[k] for k in valid]
+        fr = Counter(tuple(float(f) for f in o.fractions) for o in v if o.status == "ok")
+        print(f"{'':>20}  joint fallbacks (share of each stroke's change kept): "
+              + ", ".join(f"{k}: {n}" for k, n in sorted(fr.items(), reverse=True)))
+        reasons = Counter(o.reason.split(":")[0][:60] for o in v if o.status == "refused")
+        if reasons:
+            print(f"{'':>20}  joint refusals: " + "; ".join(f"{n}x {r}" for r, n in reasons.most_common()))
+
+
+def main(layers: int = 10, edits: int = 8, seed: int = SEED, parts=PARTS, pairs: int = 3) -> None:
+    from sketchforge_isophote_tool.corpus import SHAPES
+
+    t0 = time.perf_counter()
+    c0 = time.process_time()
+    if "solvers" in parts:
+        outcomes, nulls, accum, crashed, first = _run(_shape_worker, SOLVERS, layers, edits, seed, _crashed_edit)
+        verts = np.array([o.vertices for o in outcomes[SOLVERS[0]] if o.vertices])
+        print(f"corpus: {len(SHAPES)} shape kinds x {layers} layers x {edits} edits = {len(outcomes[SOLVERS[0]])} edits per solver, "
+              f"seed {seed} ({verts.min()}-{verts.max()} vertices, median {int(np.median(verts))}); {time.perf_counter() - t0:.0f} s")
+        means = {}
+        for name in SOLVERS:
+            report(name, outcomes[name], nulls[name], accum[name], crashed, first[name])
+            means[name] = float(np.nanmean([o.cpu for o in outcomes[name] if o.status != "crash"]))
+        print(f"\nmean CPU time per edit in fresh processes, strips / gauss_newton: "
+              f"{means['strips'] / means['gauss_newton']:.2f}x (target <= 3x); load {os.getloadavg()[0]:.1f}")
+    if "elevations" in parts:
+        names = [f"elevation {el:g}" for el in ELEVATIONS]
+        outcomes, nulls, _, crashed, _ = _run(_elevation_worker, names, layers, edits, seed, _crashed_edit)
+        report_elevations(outcomes, nulls, crashed)
+    if "pairs" in parts:
+        names = [f"pairs at {el:g}°" for el in PAIR_ELEVATIONS]
+        outcomes, _, _, crashed, _ = _run(_pairs_worker, names, layers, pairs, seed, _crashed_pair)
+        report_pairs(outcomes, crashed)
+    print(f"\n{time.perf_counter() - t0:.0f} s wall, {time.process_time() - c0:.0f} s CPU in this process (children apart)")
 
 
 if __name__ == "__main__":
-    main(*(int(a) for a in sys.argv[1:]))
+    ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    ap.add_argument("layers", type=int, nargs="?", default=10)
+    ap.add_argument("edits", type=int, nargs="?", default=8)
+    ap.add_argument("seed", type=int, nargs="?", default=SEED)
+    ap.add_argument("--parts", default=",".join(PARTS), help="which parts to run: " + ", ".join(PARTS))
+    ap.add_argument("--pairs", type=int, default=3, help="pairs of edits per layer and light")
+    a = ap.parse_args()
+    main(a.layers, a.edits, a.seed, tuple(a.parts.split(",")), a.pairs)

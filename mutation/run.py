@@ -47,6 +47,7 @@ SCOPES: dict[str, tuple[str, str, list[str], list[str]]] = {
         "tests/test_holes.py", "tests/test_contour.py", "tests/test_parts.py",
         "tests/test_tools.py", "tests/test_fuzz_loader.py", "tests/attack",
         "tests/test_plugin_platform.py", "tests/test_document_survivors.py", "tests/test_transform_edits.py",
+        "tests/test_light_3d.py",
     ]),
     "geometry": ("sketchforge", "sketchforge", ["sketchforge/geometry/*"], [
         "tests/test_contour.py", "tests/test_inflate.py", "tests/test_laplacian.py",
@@ -74,7 +75,8 @@ SCOPES: dict[str, tuple[str, str, list[str], list[str]]] = {
                           "tests/test_sculpt_display.py", "tests/test_sculpt_pick.py",
                           "tests/test_sculpt_command_format.py", "tests/test_sculpt_tool_state.py",
                           "tests/test_sculpt_stroke_band.py", "tests/test_sculpt_heights.py",
-                          "tests/test_sculpt_report.py", "tests/test_transform_edits.py"]),
+                          "tests/test_sculpt_report.py", "tests/test_transform_edits.py",
+                          "tests/test_sculpt_joint.py", "tests/test_sculpt_corpus_beyond.py", "tests/test_light_3d.py"]),
     "assemble": ("plugins/assemble/sketchforge_assemble", "sketchforge_assemble",
                  ["sketchforge_assemble/*"], [
                      "tests/test_assemble.py", "tests/test_assemble_blend.py",

@@ -1,4 +1,5 @@
-"""Command line: ``sketchforge [DOC]`` (the app), ``replay``, ``info``, ``render``.
+"""Command line: ``sketchforge [DOC]`` (the app), ``replay``, ``info``, ``render``, and
+``batch`` and ``dataset`` (:mod:`sketchforge.batch`).
 
 Errors a user can cause print one line on stderr and exit with status 2; no traceback.
 """
@@ -6,14 +7,16 @@ Errors a user can cause print one line on stderr and exit with status 2; no trac
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import unicodedata
+import warnings
 from pathlib import Path
 
 from sketchforge.atomic import check_target, refuse_input_as_output, same_file
 from sketchforge.errors import SketchforgeError, quote, shorten
 
-SUBCOMMANDS = ("replay", "info", "render")
+SUBCOMMANDS = ("replay", "info", "render", "batch", "dataset")
 #: ``render --isophotes``: more lines than this are closer than a pixel apart at any size.
 MAX_ISOPHOTES = 255
 
@@ -64,6 +67,24 @@ def whole_number(text: str) -> int:
         raise argparse.ArgumentTypeError(f"expected a whole number, got {quote(text, 40)}") from None
 
 
+def light_argument(text: str):
+    """``--light x,y,z`` (or ``x,y``: in the drawing plane): a direction towards the light on
+    the hemisphere facing the viewer (z >= 0), normalised; refused in one bounded line."""
+    from sketchforge.document.layer import Light
+
+    t = text.strip()
+    try:
+        if len(t) > 200:
+            raise ValueError
+        parts = [float(v) for v in t.split(",")]
+    except ValueError:
+        raise SketchforgeError(f"--light must be 2 or 3 numbers x,y[,z] separated by commas, got {quote(text, 40)}") from None
+    try:
+        return Light.from_vector(parts)
+    except SketchforgeError as exc:
+        raise SketchforgeError(f"--light {quote(text, 40)}: {exc}") from None
+
+
 def cmd_replay(args) -> int:
     from sketchforge.document import fileformat as ff
     from sketchforge.document.provenance import check_available
@@ -88,6 +109,11 @@ def cmd_replay(args) -> int:
         host.exporter_for(Path(args.export))  # an unknown format, before the replay
     data = ff.read_json(args.doc)
     light, journal = ff.validate_header(data, str(args.doc))
+    if args.check and data.get("snapshot") is None:
+        # Exit 0 with nothing said read as a pass; without a snapshot nothing was compared.
+        raise SketchforgeError(
+            f"{args.doc} has no snapshot: nothing to compare (--check compares the replay with the saved snapshot)"
+        )
     check_available(data, host, str(args.doc))  # names every missing plugin at once
 
     def progress(i, n):
@@ -95,7 +121,7 @@ def cmd_replay(args) -> int:
             print(f"replayed {i}/{n}", file=sys.stderr)
 
     doc = ff.replay_journal(light, journal, str(args.doc), host=host, progress=progress)
-    if args.check and data.get("snapshot") is not None:
+    if args.check:
         snap = ff.document_from_dict(data, str(args.doc))
         diffs = ff.compare(snap, doc)
         if diffs:
@@ -130,7 +156,8 @@ def cmd_info(args) -> int:
 
     doc = ff.load(args.doc)
     l = doc.light
-    print(f"{printable(args.doc)}: {len(doc.layers)} layers, light ({l.x:.4f}, {l.y:.4f}, 0), {len(doc.journal())} journal entries")
+    print(f"{printable(args.doc)}: {len(doc.layers)} layers, light ({l.x:.4f}, {l.y:.4f}, {l.z:.4g}; elevation "
+          f"{l.elevation:.1f}°), {len(doc.journal())} journal entries")
     for i, layer in enumerate(doc.layers):
         nv = layer.mesh.n_vertices if layer.mesh is not None else 0
         nf = layer.mesh.n_faces if layer.mesh is not None else 0
@@ -150,13 +177,15 @@ def cmd_render(args) -> int:
         raise SketchforgeError(f"--size must be between 16 and 8192, got {args.size}")
     if not 0 <= args.isophotes <= MAX_ISOPHOTES:
         raise SketchforgeError(f"--isophotes must be between 0 and {MAX_ISOPHOTES}, got {args.isophotes}")
+    light = None if args.light is None else light_argument(args.light)
     refuse_input_as_output(args.png, [args.doc], "PNG")
     check_target(args.png)
     doc = ff.load(args.doc)
     meshes = [l.mesh for l in doc.layers if l.visible and l.mesh is not None]
     if not meshes:
         raise SketchforgeError(f"{args.doc}: no visible layer with a mesh to render")
-    img = render_top(meshes, doc.light.direction, size=args.size, isophotes=args.isophotes, cel=args.cel)
+    # --light shades the picture only: the document (and its sculpt edits) keep their own.
+    img = render_top(meshes, (light or doc.light).direction, size=args.size, isophotes=args.isophotes, cel=args.cel)
     write_png(args.png, img)
     print(f"wrote {printable(args.png)} ({img.shape[1]}x{img.shape[0]})", file=sys.stderr)
     return 0
@@ -184,7 +213,13 @@ def build_parser() -> argparse.ArgumentParser:
     d.add_argument("--size", type=whole_number, default=512)
     d.add_argument("--isophotes", type=whole_number, default=0, help="draw K isophote lines")
     d.add_argument("--cel", action="store_true", help="three-tone cel shading")
+    d.add_argument("--light", metavar="X,Y[,Z]",
+                   help="shade with this light instead of the document's: a direction towards it, z >= 0 "
+                        "(0,0,1 straight overhead; write --light=-1,0,1 when x is negative)")
     d.set_defaults(func=cmd_render)
+    from sketchforge.batch.cli import add_parsers
+
+    add_parsers(sub, whole_number)
     return p
 
 
@@ -196,13 +231,49 @@ def build_app_parser() -> argparse.ArgumentParser:
     return p
 
 
+def _warning_note(caught) -> str:
+    """The numeric warnings (RuntimeWarning: numpy's "overflow encountered in multiply") a
+    failed command raised, folded into its error line: " (on the way: ...)", or "". Other
+    warnings (a library's deprecations) say nothing about the user's input: dropped."""
+    texts = list(dict.fromkeys(str(w.message).strip().splitlines()[0] for w in caught
+                               if issubclass(w.category, RuntimeWarning) and str(w.message).strip()))
+    if not texts:
+        return ""
+    more = f" and {len(texts) - 2} more" if len(texts) > 2 else ""
+    return f" (on the way: {'; '.join(texts[:2])}{more})"
+
+
+def _stdout_gone() -> int:
+    """The reader of stdout went away (``info | head -1``): the rest of the output has nowhere
+    to go, which is no error. Later writes (the interpreter's own flush at exit) go to
+    /dev/null, so no BrokenPipeError traceback follows; the status is a SIGPIPE death's."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError, AttributeError):
+        pass
+    return 141
+
+
 def main(argv=None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     try:
         if argv and argv[0] in SUBCOMMANDS:
             args = build_parser().parse_args(argv)
             _warn_plugin_problems()
-            return args.func(args)
+            # One line, always: a solver's numeric warnings (RuntimeWarning lines before the
+            # error line) are collected; a failure folds them into its line, a success has
+            # been checked for non-finite results by the core and drops them.
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                try:
+                    rc = args.func(args)
+                except SketchforgeError as exc:
+                    print(f"sketchforge: error: {printable(shorten(str(exc) + _warning_note(caught)))}", file=sys.stderr)
+                    return 2
+            sys.stdout.flush()  # here, where a closed pipe is caught, not at exit
+            return rc
         args = build_app_parser().parse_args(argv)
         if args.screenshot and args.doc is not None:
             refuse_input_as_output(args.screenshot, [args.doc], "screenshot")
@@ -212,6 +283,8 @@ def main(argv=None) -> int:
     except SketchforgeError as exc:
         print(f"sketchforge: error: {printable(shorten(str(exc)))}", file=sys.stderr)
         return 2
+    except BrokenPipeError:
+        return _stdout_gone()
     except KeyboardInterrupt:
         print("sketchforge: interrupted", file=sys.stderr)
         return 130

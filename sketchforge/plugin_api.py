@@ -75,6 +75,7 @@ from sketchforge.plugins.hookspecs import hookimpl
 from sketchforge.plugins.registry import Exporter, Panel
 from sketchforge.plugins.sculpt_problem import SculptProblem, SculptSolution
 from sketchforge.plugins.solvers import (
+    MAX_PARAMETER,
     Assembler,
     Inflater,
     SculptSolver,
@@ -87,6 +88,7 @@ from sketchforge.plugins.solvers import (
 from sketchforge.tools.base import Tool
 
 __all__ = [
+    "MAX_PARAMETER",
     "Assembler",
     "Command",
     "ContourError",

@@ -37,3 +37,13 @@ def real_host():
 @pytest.fixture
 def examples_dir():
     return ROOT / "examples"
+
+
+@pytest.fixture(scope="session")
+def dask_engine():
+    """A real local Dask cluster of one worker process, shared by the batch and dataset tests
+    (starting one costs a few seconds)."""
+    from sketchforge.batch.engine import Engine
+
+    with Engine(workers=1) as engine:
+        yield engine

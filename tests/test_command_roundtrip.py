@@ -27,6 +27,11 @@ EXAMPLES = [
     {"command": "set_assembly", "solver": "depth_qp", "params": {}},
     {"command": "set_light", "direction": [0.6, 0.8, 0.0]},
     {"command": "sculpt_isophote", "layer": "body", "pick": [0.2, 0.1], "band": 0.3, "stroke": [[0.1, -0.3], [0.3, 0.3]]},
+    {"command": "set_light", "direction": [0.0, 0.0, 1.0]},
+    {"command": "sculpt_isophotes", "layer": "body", "edits": [
+        {"pick": [0.2, 0.1], "band": 0.3, "stroke": [[0.1, -0.3], [0.3, 0.3]]},
+        {"pick": [-0.2, 0.0], "band": 0.2, "stroke": [[-0.3, -0.3], [-0.25, 0.3]]}],
+     "solver": "gauss_newton", "params": {"joint_stroke_weight": 50.0}},
     {"command": "add_pin", "id": "pin1", "at": [0.5, 0.25, 0.75]},
     {"command": "move_pin", "pin": "pin1", "to": [0.5, 0.5, 1.0]},
     {"command": "remove_pin", "pin": "pin1"},

@@ -1046,8 +1046,10 @@ class TranslateLayer(ReplaceLayerCommand):
 
 @dataclass
 class SetLight(Command):
-    """Set the light direction. Commands of one drag (same ``gesture``) merge into one undo
-    step; the gesture id is not saved (the journal keeps the final direction)."""
+    """Set the light direction: [x, y] (in the drawing plane) or [x, y, z] with z >= 0 (the
+    hemisphere facing the viewer; [0, 0, 1] straight overhead), normalised once and journaled
+    as used. Commands of one drag (same ``gesture``) merge into one undo step; the gesture id
+    is not saved (the journal keeps the final direction)."""
 
     name: ClassVar[str] = "set_light"
     merge_id: ClassVar[str | None] = "set_light"

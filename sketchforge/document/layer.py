@@ -132,54 +132,77 @@ class Layer:
 #: is within 2 ulps of unit length).
 _UNIT_TOL = 8 * 2.0**-52
 
+BEHIND = ("the light must face the viewer (z >= 0): a light from behind the drawing would leave every "
+          "front surface in shadow")
+
 
 @dataclass(frozen=True)
 class Light:
-    """A directional light in the drawing plane: unit vector (x, y, 0) pointing towards the light."""
+    """A directional light: the unit vector (x, y, z) pointing towards the light, anywhere on the
+    hemisphere facing the viewer (z >= 0; z = 1 is straight overhead). z = 0 is the thesis'
+    light in the drawing plane (ch. 4), the default and what the in-plane drag sets."""
 
     x: float = 1.0 / math.sqrt(2.0)
     y: float = 1.0 / math.sqrt(2.0)
+    z: float = 0.0
 
     def __post_init__(self) -> None:
-        x, y = float(self.x), float(self.y)
-        if not (math.isfinite(x) and math.isfinite(y)):
+        x, y, z = float(self.x), float(self.y), float(self.z)
+        if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(z)):
             raise ParameterError("the light direction must be finite numbers")
-        norm = math.hypot(x, y)
+        if z < 0.0:
+            raise ParameterError(BEHIND)
+        z += 0.0  # -0.0 is 0.0: an in-plane light is written and compared as one
+        # An in-plane light is normalised exactly as before lights could leave the plane
+        # (hypot of two), so files written then replay bit for bit.
+        norm = math.hypot(x, y) if z == 0.0 else math.hypot(x, y, z)
         if norm < 1e-12:
             raise ParameterError("the light direction must not be the zero vector")
         # A vector that is already unit (to rounding) is kept bit for bit: normalising it again
         # moves it by an ulp for about 1 direction in 5, and a journal replay would then shade
         # and sculpt with a different light than the session that wrote it.
         if abs(norm - 1.0) > _UNIT_TOL:
-            object.__setattr__(self, "x", x / norm)
-            object.__setattr__(self, "y", y / norm)
-        else:
-            object.__setattr__(self, "x", x)
-            object.__setattr__(self, "y", y)
+            x, y, z = x / norm, y / norm, z / norm
+        object.__setattr__(self, "x", x)
+        object.__setattr__(self, "y", y)
+        object.__setattr__(self, "z", z)
 
     @classmethod
     def from_vector(cls, v) -> "Light":
-        """From a (2,) or (3,) vector; any z component is dropped (the light lies in the plane)."""
+        """From a (2,) vector (a light in the drawing plane) or a (3,) one (z >= 0)."""
         v = list(v)
         if len(v) not in (2, 3):
             raise ParameterError(f"a light direction has 2 or 3 components, got {len(v)}")
         try:
-            return cls(float(v[0]), float(v[1]))
+            comps = [float(c) for c in v]
         except OverflowError:
             raise ParameterError("the light direction must be numbers within float range") from None
+        except ParameterError:
+            raise  # Light's own sentence (the zero vector): not wrapped in "must be numbers: ..."
         except (TypeError, ValueError) as exc:
             raise ParameterError(f"the light direction must be numbers: {exc}") from None
+        return cls(*comps)
 
     @classmethod
-    def from_angle(cls, degrees: float) -> "Light":
-        """Counter-clockwise angle from +x in the drawing plane."""
+    def from_angle(cls, degrees: float, elevation: float = 0.0) -> "Light":
+        """Azimuth ``degrees`` counter-clockwise from +x in the drawing plane, ``elevation``
+        degrees above it (0: in the plane, 90: straight overhead, whatever the azimuth)."""
+        e = float(elevation)
+        if not (math.isfinite(e) and 0.0 <= e <= 90.0):
+            raise ParameterError(f"the light's elevation must be between 0 and 90 degrees, got {e:g}")
         a = math.radians(float(degrees))
-        return cls(math.cos(a), math.sin(a))
+        if e == 0.0:
+            return cls(math.cos(a), math.sin(a))
+        if e == 90.0:  # cos(pi/2) is 6e-17, not 0: overhead is overhead
+            return cls(0.0, 0.0, 1.0)
+        er = math.radians(e)
+        return cls(math.cos(er) * math.cos(a), math.cos(er) * math.sin(a), math.sin(er))
 
     @classmethod
-    def from_drag(cls, center, point) -> "Light":
-        """From a drag in the drawing plane (thesis 4.1): pointing from ``center`` (2,) towards
-        ``point`` (2,). Raises ParameterError for non-finite input or a drag of no length
+    def from_drag(cls, center, point, elevation: float = 0.0) -> "Light":
+        """From a drag in the drawing plane (thesis 4.1): the azimuth points from ``center``
+        (2,) towards ``point`` (2,); ``elevation`` degrees above the plane (0: the thesis'
+        in-plane light). Raises ParameterError for non-finite input or a drag of no length
         (relative to the coordinates' size, so the test is the same at any zoom)."""
         c = np.asarray(center, dtype=np.float64).reshape(-1)
         p = np.asarray(point, dtype=np.float64).reshape(-1)
@@ -191,14 +214,30 @@ class Light:
         scale = max(1.0, float(np.max(np.abs(c))), float(np.max(np.abs(p))))
         if math.hypot(d[0], d[1]) <= 1e-12 * scale:
             raise ParameterError("the light direction is undefined: drag away from the centre of the drawing")
-        return cls(float(d[0]), float(d[1]))
+        if elevation == 0.0:
+            return cls(float(d[0]), float(d[1]))
+        return cls.from_angle(math.degrees(math.atan2(d[1], d[0])), elevation)
 
     @property
     def direction(self) -> np.ndarray:
-        """(3,) float64 unit vector with z = 0."""
-        return np.array([self.x, self.y, 0.0])
+        """(3,) float64 unit vector towards the light."""
+        return np.array([self.x, self.y, self.z])
 
     @property
     def angle(self) -> float:
-        """Degrees, counter-clockwise from +x."""
+        """Azimuth: degrees, counter-clockwise from +x (0 for a light straight overhead)."""
         return math.degrees(math.atan2(self.y, self.x))
+
+    @property
+    def elevation(self) -> float:
+        """Degrees above the drawing plane: 0 in the plane, 90 straight overhead."""
+        return 0.0 if self.z == 0.0 else math.degrees(math.atan2(self.z, math.hypot(self.x, self.y)))
+
+    @property
+    def in_plane(self) -> bool:
+        """The thesis' light (z = 0)."""
+        return self.z == 0.0
+
+    def to_list(self) -> list[float]:
+        """[x, y, z] as saved in a document."""
+        return [self.x, self.y, self.z]

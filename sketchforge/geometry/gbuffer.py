@@ -627,3 +627,103 @@ def isophote_coverage(gbuf: GBuffer, light, K: int, width: float = 1.2) -> np.nd
 def _dot(N: np.ndarray, l: np.ndarray) -> np.ndarray:
     """Row-wise N·l for (k, 3) N; column by column (numpy's float32 matvec is ~20x slower)."""
     return N[:, 0] * l[0] + N[:, 1] * l[1] + N[:, 2] * l[2]
+
+
+@dataclass(frozen=True, eq=False)
+class SurfaceMaps:
+    """The surface seen at each pixel centre, unblended (no antialiasing, no background): what
+    must hold exactly pixel by pixel, such as a shape-from-shading sample's normal and depth.
+
+    Attributes
+    ----------
+    view : View
+    mask : (height, width) bool
+        Pixels whose centre lies on a layer.
+    normal : (height, width, 3) float32
+        The front layer's unit normal there (x right, y up, z towards the viewer), the very
+        normal :func:`shade` shades; (0, 0, 0) outside the mask.
+    height : (height, width) float64
+        The front layer's z there (document units, towards the viewer), the largest z of that
+        layer at the pixel as in :func:`rasterise`; 0 outside the mask.
+    layer : (height, width) int32
+        The front layer's index, -1 outside the mask.
+    """
+
+    view: View
+    mask: np.ndarray
+    normal: np.ndarray
+    height: np.ndarray
+    layer: np.ndarray
+
+
+def front_surface(meshes: list, view: View) -> SurfaceMaps:
+    """Per-pixel normal and height of the front surface, from :func:`rasterise`'s fragments.
+
+    Parameters
+    ----------
+    meshes : list of Mesh or None
+        Back to front, as for :func:`rasterise` (a later mesh covers earlier ones; within one
+        mesh the largest z wins, so an assembled model shows its front).
+    view : View
+
+    Returns
+    -------
+    SurfaceMaps
+    """
+    gbuf = rasterise(list(meshes), view, antialias=False)
+    W, H = int(view.width), int(view.height)
+    owned = np.nonzero(gbuf.front >= 0)[0]
+    frag = gbuf.front[owned]
+    normal = np.zeros((H * W, 3), dtype=np.float32)
+    normal[owned] = gbuf.normal[frag]
+    layer = np.full(H * W, -1, dtype=np.int32)
+    layer[owned] = gbuf.layer[frag]
+    height = np.zeros(H * W, dtype=np.float64)
+    for li in np.unique(layer[owned]):
+        mesh = meshes[int(li)]
+        V, F = np.asarray(mesh.V), np.asarray(mesh.F, dtype=np.int64)
+        # The same pixel centres, triangles and barycentric weights as the fragments: the
+        # largest z per pixel is the fragment rasterise kept there.
+        pix, tri, bary = scan_triangles(view.to_pixels(V), F, W, H)
+        z = np.einsum("kj,kj->k", bary, V[F[tri], 2])
+        top = np.full(H * W, -np.inf)
+        np.maximum.at(top, pix, z)
+        mine = owned[layer[owned] == li]
+        height[mine] = top[mine]
+    return SurfaceMaps(
+        view,
+        (layer >= 0).reshape(H, W),
+        normal.reshape(H, W, 3),
+        height.reshape(H, W),
+        layer.reshape(H, W),
+    )
+
+
+def reflectance_image(maps: SurfaceMaps, light, reflectance) -> np.ndarray:
+    """Shading as a number per pixel, max(0, R(n, l)) of :attr:`SurfaceMaps.normal` inside the
+    mask and 0 outside: the display's Lambertian is ``reflectance = lambda N, l: N @ l``.
+
+    Parameters
+    ----------
+    maps : SurfaceMaps
+    light : (3,) float64
+        Unit direction towards the light.
+    reflectance : callable
+        ``reflectance(N (k, 3) float64, l (3,) float64) -> (k,)`` signed values; it gets every
+        pixel (normals outside the mask are (0, 0, 1), so a model compiled per input size
+        sees one size per image size).
+
+    Returns
+    -------
+    (height, width) float64
+    """
+    direction = np.asarray(light, dtype=np.float64).reshape(3)
+    N = maps.normal.reshape(-1, 3).astype(np.float64)
+    outside = ~maps.mask.reshape(-1)
+    N[outside] = (0.0, 0.0, 1.0)
+    R = np.asarray(reflectance(N, direction), dtype=np.float64).reshape(-1)
+    if R.shape != (len(N),) or not np.all(np.isfinite(R)):
+        raise ValueError(f"the reflectance returned {R.shape} values for {len(N)} normals; it must return one finite value per normal")
+    out = np.maximum(R, 0.0)
+    out[outside] = 0.0
+    return out.reshape(maps.mask.shape)

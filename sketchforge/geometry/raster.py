@@ -44,7 +44,7 @@ def render_top(
     tints=None,
     max_cost: int = MAX_RASTER_COST,
 ) -> np.ndarray:
-    """Render meshes seen from above with an in-plane light.
+    """Render meshes seen from above, shaded by a directional light.
 
     Parameters
     ----------

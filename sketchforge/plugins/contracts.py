@@ -142,6 +142,8 @@ def solver_check(kind: str):
             _fail(plugin, f"{spec.what} {item.name!r}: check_params must be callable as check_params(params) -> dict (ignored)")
         if not isinstance(item.version, str) or not item.version:
             _fail(plugin, f"{spec.what} {item.name!r}: version must be a non-empty string (ignored)")
+        if not isinstance(getattr(item, "several_isophotes", False), bool):
+            _fail(plugin, f"{spec.what} {item.name!r}: several_isophotes must be True or False (ignored)")
         try:
             defaults = item.check_params({})
         except Exception as exc:  # noqa: BLE001 - foreign code

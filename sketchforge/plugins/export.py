@@ -39,8 +39,23 @@ def run_exporter(host, path, mesh=None, doc=None, progress=None) -> str:
     """
     path = Path(path)
     exporter = host.exporter_for(path, doc if mesh is None else None)
-    plugin = host.provider_of(exporter) or "unknown plugin"
     check_target(path)
+    data, summary = _produce(host, exporter, path, mesh, doc, progress)
+    write_bytes_atomic(path, data)
+    return summary
+
+
+def export_bytes(host, path, mesh=None, doc=None, progress=None) -> tuple[bytes, str]:
+    """The bytes :func:`run_exporter` would write to ``path``, and its summary, without
+    touching ``path`` (which only names the file: its suffix picks the exporter, and errors
+    name it). A batch worker exports this way and the machine that asked writes the file."""
+    path = Path(path)
+    exporter = host.exporter_for(path, doc if mesh is None else None)
+    return _produce(host, exporter, path, mesh, doc, progress)
+
+
+def _produce(host, exporter, path: Path, mesh, doc, progress) -> tuple[bytes, str]:
+    plugin = host.provider_of(exporter) or "unknown plugin"
     whole_document = mesh is None and exporter.write_document is not None
     if mesh is None and not whole_document:
         if doc is None:
@@ -66,5 +81,4 @@ def run_exporter(host, path, mesh=None, doc=None, progress=None) -> str:
         if not scratch.is_file():
             raise ExportError(f"cannot write {path}: exporter {exporter.name!r} (plugin {plugin!r}) wrote no file")
         data = scratch.read_bytes()
-    write_bytes_atomic(path, data)
-    return str(summary) if summary else f"{len(data)} bytes"
+    return data, (str(summary) if summary else f"{len(data)} bytes")

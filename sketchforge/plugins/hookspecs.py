@@ -94,6 +94,16 @@ def sketchforge_sculpt_solvers():
     alone). Raise ``SculptError`` (one line, what to draw instead) for an edit it cannot make.
     The host keeps the rim at 0 and heights >= 0, refuses non-finite heights and keeps the
     edit only if the isophote ends no farther from the stroke than it was.
+
+    ``problem.light`` is the document's light, anywhere on the hemisphere facing the viewer
+    (z >= 0; the thesis has it in the drawing plane): a solver that cannot take a tilted light
+    raises a ``SculptError`` that says so in one line rather than return a wrong surface.
+
+    Several isophotes in one edit (the ``sculpt_isophotes`` command) go only to a solver that
+    sets ``several_isophotes=True``: its ``problem.parts`` then holds one problem per isophote
+    and ``problem.sample_values`` the shading each stroke sample asks for; the host checks
+    each stroke as it checks a single one. For any other solver the host refuses such an edit
+    in one line naming it ("the sculpt solver 'x' redraws one isophote per edit: ...").
     """
 
 

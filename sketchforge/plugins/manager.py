@@ -513,7 +513,7 @@ class PluginHost:
         for exp in self.exporters.values():
             if suffix in exp.suffixes:
                 return exp
-        known = ", ".join(sorted(s for e in self.exporters.values() for s in e.suffixes))
+        known = ", ".join(sorted({s for e in self.exporters.values() for s in e.suffixes}))  # .glb once
         raise ExportError(f"cannot export to {suffix or 'a file without suffix'!r}: known formats are {known}")
 
 

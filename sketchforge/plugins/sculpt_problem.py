@@ -34,7 +34,8 @@ class SculptProblem:
     is_rim : (n,) bool
         Vertices on the outline or a hole's rim: their height stays 0.
     light : (3,) float64
-        Unit light direction in the drawing plane.
+        Unit direction towards the light, anywhere on the hemisphere facing the viewer
+        (z >= 0: in the drawing plane as in the thesis, tilted, or straight overhead).
     model : ReflectanceModel
         The reflectance the edit inverts; ``model.R(n, l)`` is written with ``jax.numpy``.
     E : (n,) float64
@@ -74,6 +75,17 @@ class SculptProblem:
         over some vertices with the others fixed is a smooth (C¹) fill.
     before : float
         Mean distance from the stroke (where an isophote is promised) to the isophote now.
+    parts : tuple of SculptProblem
+        Empty for an edit of one isophote. For a joint edit of several (``sculpt_isophotes``,
+        given only to a solver with ``several_isophotes``): one complete problem per isophote,
+        each with its own ``c``, ``pick``, ``isophote``, ``band``, ``band_radius``, ``in_band``,
+        ``stroke``, ``samples`` and ``before``. The joint problem itself then holds the union
+        of the bands (``band``, ``in_band``; ``band_radius`` the largest), every stroke piece
+        (``stroke``), every sample (``samples``, ``sample_weights``, ``sample_values``), and
+        the first part's ``c``, ``pick`` and ``isophote``; its services act on all the strokes
+        (:meth:`shading_change` asks each sample for its own value, :meth:`distance_to_stroke`
+        is to the nearest stroke, :meth:`distance_after` the mean over every stroke's samples
+        of the distance to its own isophote).
     host_data : object
         The host's own data for the solvers it ships itself; other solvers must not use it.
     """
@@ -106,6 +118,18 @@ class SculptProblem:
     _locate: Callable = field(repr=False, default=None)
     _distance_to_stroke: Callable = field(repr=False, default=None)
     host_data: Any = field(repr=False, default=None)
+    parts: tuple = ()
+    _sample_values: Any = field(repr=False, default=None)
+
+    @property
+    def sample_values(self) -> np.ndarray:
+        """(k,) float64: the shading each sample of :attr:`samples` asks for: ``c`` for an edit
+        of one isophote; each stroke's own isovalue in a joint edit, or, when the host retries
+        a joint edit with part of one stroke's change (its never-worse fallback),
+        E + f·(c − E) there."""
+        if self._sample_values is None:
+            return np.full(len(self.samples), self.c)
+        return self._sample_values
 
     @property
     def z(self) -> np.ndarray:
@@ -140,7 +164,8 @@ class SculptProblem:
 
     def shading_change(self, free: np.ndarray, weights: np.ndarray | None = None) -> np.ndarray:
         """The smoothest change of shading δE (n,) that is 0 off the ``free`` vertices (n,) bool
-        and makes E + δE = c along the stroke (thesis 4.4.1, on the layer's own triangles: the
+        and makes E + δE = c along the stroke (each sample's :attr:`sample_values` in a joint
+        edit) (thesis 4.4.1, on the layer's own triangles: the
         stroke enters as a line integral, so no remeshing and no native triangulation).
         ``weights`` (k,) replace :attr:`sample_weights` (e.g. to fade the stroke out where
         the solver cannot act)."""

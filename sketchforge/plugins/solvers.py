@@ -32,6 +32,8 @@ import numbers
 from dataclasses import dataclass, field
 from typing import Any, Callable, Mapping
 
+import numpy as np
+
 from sketchforge.errors import ParameterError, quote
 
 
@@ -90,7 +92,18 @@ class SculptSolver:
     the cleaned stroke and services such as the shading of candidate heights); the host clamps
     heights at 0, keeps the rim at 0, refuses non-finite values and, unless switched off,
     keeps the edit only if the isophote ends no farther from the stroke (trying half and a
-    quarter of δz)."""
+    quarter of δz).
+
+    The light (``problem.light``) is anywhere on the hemisphere facing the viewer (z >= 0), not
+    only in the drawing plane: a solver that cannot handle a tilted light raises a
+    ``SculptError`` saying so in one line, never returns a wrong surface.
+
+    ``several_isophotes``: whether ``solve`` takes a joint edit of several isophotes (the
+    ``sculpt_isophotes`` command): then ``problem.parts`` holds one problem per isophote and
+    ``problem.sample_values`` the shading each stroke sample asks for (see
+    :class:`~sketchforge.plugins.sculpt_problem.SculptProblem`). A solver that leaves it False is
+    never given one: the host refuses such an edit in one line naming the solver ("the sculpt
+    solver 'strips' redraws one isophote per edit: ...")."""
 
     name: str
     solve: Callable
@@ -102,6 +115,8 @@ class SculptSolver:
     #: Optional ``warm_up()``: compile or build what the first solve would (the app calls it
     #: on a worker thread when the person chooses the solver).
     warm_up: Callable | None = None
+    #: Takes several isophotes in one edit (``problem.parts``); False: one per edit.
+    several_isophotes: bool = False
 
 
 @dataclass(frozen=True)
@@ -157,35 +172,58 @@ def validate_params(params: Mapping | None, defaults: Mapping, checks: Mapping[s
     return out
 
 
+#: The range of a numeric parameter whose solver gives no bound of its own: the drawing's
+#: coordinate range (±1e9 drawing units), beyond which lengths, areas and weights overflow or
+#: lose every digit (issue 38: 1e308 passed and failed deep inside a solver).
+MAX_PARAMETER = 1e9
+
+
+def _shown(x) -> str:
+    """A number for a message: ``:g`` for a float, an integer's digits up to 20 (its length
+    beyond: formatting a 400-digit integer with ``:g`` raised OverflowError)."""
+    if isinstance(x, int):
+        if abs(x) >= 10**1000:
+            return "an integer of over 1000 digits"
+        text = str(x)
+        return text if len(text.lstrip("-")) <= 20 else f"an integer of {len(text.lstrip('-'))} digits"
+    return f"{x:g}"
+
+
 def number(key: str, lo: float | None = None, hi: float | None = None, *, lo_open: bool = False,
            hi_open: bool = False, integer: bool = False, optional: bool = False) -> Callable:
-    """A ``checks`` entry: the value must be a (finite) number in the range, an integer if
-    ``integer``, or None if ``optional``. Returns float (int for an integer parameter)."""
+    """A ``checks`` entry: the value must be a finite real number (not a bool, a string or
+    NaN, whatever its type: numpy's included) in the range, a whole number if ``integer``
+    (returned as int, else as float), or None if ``optional``. Every parameter has a finite
+    range: a bound left out, or beyond ±:data:`MAX_PARAMETER`, is ±:data:`MAX_PARAMETER`. ``lo_open`` / ``hi_open`` exclude the
+    bound itself. Messages are one line naming the key."""
+    # Never wider than the drawing's range, whatever the caller asks (an infinite bound too).
+    lo = -MAX_PARAMETER if lo is None else max(lo, -MAX_PARAMETER)
+    hi = MAX_PARAMETER if hi is None else min(hi, MAX_PARAMETER)
 
     def check(v):
         if v is None and optional:
             return None
-        if isinstance(v, bool) or not isinstance(v, numbers.Real):
+        if isinstance(v, (bool, np.bool_)) or not isinstance(v, numbers.Real):
             raise ParameterError(f"{key!r} must be a number{' or null' if optional else ''}, got {quote(v)}")
-        if integer:
-            if isinstance(v, float) and not v.is_integer():
-                raise ParameterError(f"{key!r} must be a whole number, got {v!r}")
-            try:
-                x = int(v)
-            except (OverflowError, ValueError):
-                raise ParameterError(f"{key!r} must be a whole number, got {quote(v)}") from None
+        if isinstance(v, numbers.Integral):
+            x = seen = int(v)  # exact at any size: compared with the bounds before any float is made
         else:
             try:
                 x = float(v)
-            except OverflowError:
+            except OverflowError:  # a Fraction beyond float range
                 raise ParameterError(f"{key!r} is too large for a number") from None
             if not math.isfinite(x):
                 raise ParameterError(f"{key!r} must be a finite number, got {x}")
-        if lo is not None and (x < lo or (lo_open and x == lo)):
-            raise ParameterError(f"{key!r} must be {'>' if lo_open else '>='} {lo:g}, got {x:g}")
-        if hi is not None and (x > hi or (hi_open and x == hi)):
-            raise ParameterError(f"{key!r} must be {'<' if hi_open else '<='} {hi:g}, got {x:g}")
-        return x
+            seen = x
+            if integer:
+                if not x.is_integer():
+                    raise ParameterError(f"{key!r} must be a whole number, got {x!r}")
+                x = int(x)
+        if x < lo or (lo_open and x == lo):
+            raise ParameterError(f"{key!r} must be {'>' if lo_open else '>='} {_shown(lo)}, got {_shown(seen)}")
+        if x > hi or (hi_open and x == hi):
+            raise ParameterError(f"{key!r} must be {'<' if hi_open else '<='} {_shown(hi)}, got {_shown(seen)}")
+        return x if integer else float(x)
 
     return check
 

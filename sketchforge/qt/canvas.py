@@ -22,7 +22,8 @@ Gestures:
   it, on a corner scales it about the opposite corner, on the knob above rotates it; the
   outline follows the drag and its end asks for one ``transform_layer``
   (:attr:`transform_requested`).
-- ``"light"``: a left drag sets the light with ``LightTool`` (one undo step per drag); never a
+- ``"light"``: a left drag turns the light with ``LightTool`` (its direction in the drawing
+  plane; a raised light keeps its elevation; one undo step per drag); never a
   stroke.
 - ``"sculpt"``: clicks, drags and the wheel go to the sculpt controller (``sculpt.py``).
 
@@ -578,6 +579,8 @@ class Canvas(pg.GraphicsView):
                 self._light_center = self.view_center()
                 self._tool = LightTool(self.doc, center=self._light_center)
                 self._gesture_call(self._tool.press, start)
+                if self._tool.message:  # straight overhead: nothing to turn, and why
+                    self.message.emit(self._tool.message)
             elif mode == "sculpt" and self.sculpt is not None:
                 self.sculpt.stroke_press(start)
                 self._tool = self.sculpt
@@ -646,7 +649,8 @@ class Canvas(pg.GraphicsView):
             if self.busy:
                 self.message.emit("a solve is running: wait for it or cancel it")
                 return True
-            self.sculpt.pick(self._event_doc(ev))
+            add = bool(ev.modifiers() & Qt.KeyboardModifier.ShiftModifier)  # Shift+click: another isophote
+            self.sculpt.pick(self._event_doc(ev), add=add)
             return True
         return False
 

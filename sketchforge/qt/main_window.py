@@ -17,7 +17,7 @@ import logging
 from pathlib import Path
 
 import numpy as np
-from PySide6.QtCore import QSettings, Qt, QTimer
+from PySide6.QtCore import QSettings, Qt, QTimer, Signal
 from PySide6.QtGui import QAction, QActionGroup, QIcon, QKeySequence
 from PySide6.QtWidgets import (
     QFileDialog,
@@ -34,16 +34,18 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
-from sketchforge.atomic import refuse_input_as_output
+from sketchforge.atomic import refuse_input_as_output, same_file
 from sketchforge.document import commands as C
 from sketchforge.document import fileformat as ff
 from sketchforge.document.autosave import Autosaver, autosave_interval, describe_stop, find_recoverable, forget, recover
+from sketchforge.document.autosave import set_aside
 from sketchforge.document.autosave import poll_interval_ms
 from sketchforge.document.layer import Light
-from sketchforge.errors import EditsDoNotApplyError, SketchforgeError
+from sketchforge.errors import ContourError, EditsDoNotApplyError, SketchforgeError
 from sketchforge.geometry.parts import part_at
 from sketchforge.qt.canvas import Canvas
 from sketchforge.qt.command_runner import CommandRunner, GuardedJobs
+from sketchforge.qt import errors_ui
 from sketchforge.qt.errors_ui import ask_yes_no, error_text, show_error
 from sketchforge.qt.panels.creation_panel import CreationPanel
 from sketchforge.qt.panels.history_panel import HistoryPanel
@@ -101,6 +103,9 @@ class _AutosaveGuard:
 
 
 class MainWindow(QMainWindow):
+    #: one line from the solver process's watchdog (any thread): shown in the status bar
+    solver_process_note = Signal(str)
+
     def __init__(self, doc, host=None, settings: QSettings | None = None, parent=None,
                  offload_inflation: bool = False) -> None:
         super().__init__(parent)
@@ -108,15 +113,18 @@ class MainWindow(QMainWindow):
         self.host = host or doc.host
         #: With ``offload_inflation`` (the app), inflations run in a child process: their
         #: native factorisation holds the GIL, which froze this window for up to 1.5 s even
-        #: though the solve runs on a worker thread (see sketchforge.offload).
+        #: though the solve runs on a worker thread (see sketchforge.offload). Its watchdog's
+        #: notes (a restart after a crash, a timeout, a cancel) come through a queued signal.
         self.offload = None
         if offload_inflation:
             from sketchforge.offload import OffloadedInflation
 
-            self.offload = OffloadedInflation(doc.host)
+            self.offload = OffloadedInflation(doc.host, notify=self.solver_process_note.emit)
             doc.host = self.offload
         self.settings = settings or QSettings()
         self.path: Path | None = None
+        #: what ``path`` held when this window last opened or saved it (ff.stamp_of)
+        self.disk_stamp: tuple | None = None
         self.mode = "editing"
         self.state = "creation"
         self.current_layer: str | None = None
@@ -182,7 +190,10 @@ class MainWindow(QMainWindow):
         autosave, so it is not replayed). Returns True when one was recovered (it opens as
         unsaved changes). Declining keeps the autosave: it is offered again next time. The files
         of another sketchforge still running are never offered, reported or removed."""
-        items = find_recoverable()
+        set_aside_notes: list[str] = []
+        items = find_recoverable(set_aside_notes=set_aside_notes)  # also removes killed autosaves' temps
+        if set_aside_notes:
+            QMessageBox.information(self, "An autosave was set aside", "\n\n".join(n[:1].upper() + n[1:] for n in set_aside_notes))
         reports = [i for i in items if not i.has_document]
         if reports:
             # A crash during a solve on a document without unsaved changes: nothing to
@@ -210,14 +221,19 @@ class MainWindow(QMainWindow):
         else:
             question = f"sketchforge found unsaved work on {where} from a session that did not close normally. Recover it?"
         question += f"\n\nNo keeps the autosave ({item.path}); it is offered again at the next start."
-        if not ask_yes_no(self, "Recover unsaved work?", question):
+        if not ask_yes_no(self, "Recover unsaved work?", question, default_yes=True):
             return False  # the autosave stays where it is: this session never writes or removes it
         try:
             loaded = recover(item, host=self.host)
-        except SketchforgeError as exc:
-            show_error(self, "Cannot recover the autosave", exc)
+        except Exception as exc:  # noqa: BLE001 - a bad autosave must never end the app
+            # Kept for the user, but out of the way: it would fail the same way at every start.
+            note = set_aside(item.path, error_text(exc))
+            QMessageBox.critical(self, "Cannot recover the autosave", note)
             return False
-        self.adopt(loaded, Path(item.original) if item.original else None)
+        # The file's digest when the crashed session last read or saved it: a save over it
+        # asks first if it changed since.
+        stamp = (None, None, None, None, item.original_sha256) if item.original and item.original_sha256 else None
+        self.adopt(loaded, Path(item.original) if item.original else None, stamp)
         self.doc.undo_stack.reset_clean()  # recovered work is not saved anywhere yet
         self._sync_title()
         try:
@@ -372,6 +388,11 @@ class MainWindow(QMainWindow):
         self.act_redo = self._action(e, "Redo", self.redo, ["Ctrl+Shift+Z", "Ctrl+Y"])
         e.addSeparator()
         self.act_cancel = self._action(e, "Cancel", self.cancel_current, "Esc")
+        # Enter applies the strokes drawn for several picked isophotes; only while the drawing
+        # has the focus (elsewhere Enter belongs to the fields).
+        self.act_apply_strokes = self._action(e, "Apply sculpt strokes", self.apply_sculpt_strokes, ["Return", "Enter"])
+        self.act_apply_strokes.setShortcutContext(Qt.ShortcutContext.WidgetWithChildrenShortcut)
+        self.canvas.addAction(self.act_apply_strokes)
 
         lm = mb.addMenu("&Layer")
         self._action(lm, "&Add layer", self.add_layer, "Ctrl+Shift+N")
@@ -501,6 +522,10 @@ class MainWindow(QMainWindow):
         )
         self.sculpt_panel.tool_selected.connect(self.select_tool)
         self.light_panel.angle_edited.connect(self.set_light_angle)
+        self.light_panel.elevation_edited.connect(self.set_light_elevation)
+        self.light_panel.disc.pressed.connect(self._light_drag_started)
+        self.light_panel.disc.dragged.connect(self._light_dragged)
+        self.light_panel.disc.released.connect(self._light_drag_ended)
 
         lp = self.layers_panel
         lp.add_requested.connect(self.add_layer)
@@ -513,6 +538,9 @@ class MainWindow(QMainWindow):
         lp.current_changed.connect(self._current_layer_changed)
 
         self.runner.busy_changed.connect(self._busy)
+        self.solver_process_note.connect(self.show_message)
+        if self.offload is not None:
+            self.runner.cancelled.connect(self.offload.cancel)  # Cancel stops the child's job too
         self.runner.failed.connect(lambda exc, tb, cmd: show_error(self, f"{cmd.text()} failed", exc, tb))
         self.jobs.busy_changed.connect(self._progress)
 
@@ -748,10 +776,37 @@ class MainWindow(QMainWindow):
             return
         self._run_params(layer_id, params)
 
+    def _azimuth(self) -> float:
+        """The light's azimuth; straight overhead (which has none), the one the panel shows."""
+        light = self.doc.light
+        return self.light_panel.angle.value() if light.elevation >= 90.0 else light.angle
+
     def set_light_angle(self, degrees: float) -> None:
-        light = Light.from_angle(degrees)
+        """A typed azimuth: the light turns about the view axis, keeping its elevation."""
+        light = Light.from_angle(degrees, 0.0 if self.doc.light.in_plane else self.doc.light.elevation)
         if light != self.doc.light:
-            self.push(C.SetLight(direction=[light.x, light.y, 0.0]))
+            self.push(C.SetLight(direction=light.to_list()))
+
+    def set_light_elevation(self, degrees: float) -> None:
+        """A typed elevation (0: in the drawing plane, 90: overhead), keeping the azimuth."""
+        light = Light.from_angle(self._azimuth(), degrees)
+        if light != self.doc.light:
+            self.push(C.SetLight(direction=light.to_list()))
+
+    def _light_drag_started(self) -> None:
+        self._light_gesture = C.new_gesture_id()
+
+    def _light_dragged(self, light) -> None:
+        """A step of a drag on the light disc: commands of one drag share a gesture id, so the
+        drag is one undo step."""
+        gesture = getattr(self, "_light_gesture", None)
+        if gesture is not None and light != self.doc.light:
+            if not self.push(C.SetLight(direction=light.to_list(), gesture=gesture)):
+                self._light_gesture = None  # refused (a solve runs): the rest of the drag too
+                self.light_panel.show_light(self.doc.light)
+
+    def _light_drag_ended(self) -> None:
+        self._light_gesture = None
 
     # --- parts drawn and arranged with the mouse and keys (Monster Mash) ------------------------
     def _outlines(self) -> list:
@@ -792,7 +847,17 @@ class MainWindow(QMainWindow):
             notes = "".join("; " + n for n in plan.notes)
             self.show_message(f"new {kind} part “{self.doc.layer(c.layer).name}”{notes}")
 
-        self.runner.run(cmd, label="Inflating", macro="Draw layer" if before else None, before=before, on_done=done)
+        self.runner.run(cmd, label="Inflating", macro="Draw layer" if before else None, before=before, on_done=done,
+                        on_error=self._drawing_slip)
+
+    def _drawing_slip(self, exc) -> bool:
+        """A stroke that cannot become an outline (it crosses itself, encloses no area): a slip
+        of the hand, said in the status bar; nothing changed and nothing to dismiss (a
+        blocking dialog for each slip was too much, issue 38). Other errors: a dialog."""
+        if not isinstance(exc, ContourError):
+            return False
+        self.show_message(f"the stroke was not drawn: {error_text(exc)}")
+        return True
 
     def _redraw(self, layer, pts, closed: bool, what: str, keep_edits: bool = True, holes=(), notes=()) -> None:
         """Replace ``layer``'s outline and holes (one undo step); its sculpt edits are kept when
@@ -802,6 +867,8 @@ class MainWindow(QMainWindow):
         _, cmd = tool.commands_for(pts)
 
         def error(exc) -> bool:
+            if self._drawing_slip(exc):
+                return True
             if not isinstance(exc, EditsDoNotApplyError):
                 return False
             if ask_yes_no(
@@ -809,6 +876,7 @@ class MainWindow(QMainWindow):
                 "Redraw the contour?",
                 f"Layer “{layer.name}” has {len(layer.edits)} sculpt edit(s) that do not apply to the new "
                 f"outline ({exc}). Redraw it without them? (Undo brings them back.)",
+                default_yes=True,  # Yes loses nothing (Undo brings the edits back); No drops the stroke
             ):
                 QTimer.singleShot(0, lambda: self._redraw(self.doc.layer(layer.id), pts, closed, what, keep_edits=False,
                                                           holes=holes, notes=notes))
@@ -856,6 +924,7 @@ class MainWindow(QMainWindow):
             "Parts left their host",
             f"After this change ({what}), the junction of {names} no longer lies on “{host.name}” ({details}). "
             "Undo the change? (No keeps it: redraw or move those parts to attach them again.)",
+            default_yes=False,  # keep what the person just did; Ctrl+Z still undoes it
         ):
             # Only if the change is still the last thing done (a queued stroke may have run
             # while the question was open).
@@ -987,16 +1056,19 @@ class MainWindow(QMainWindow):
             return self.save()
         return answer == QMessageBox.StandardButton.Discard
 
-    def adopt(self, loaded, path: Path | None) -> None:
-        """Take over the state of a freshly loaded document (history starts here)."""
+    def adopt(self, loaded, path: Path | None, stamp: tuple | None = None) -> None:
+        """Take over the state of a freshly loaded document (history starts here). ``stamp``:
+        what ``path`` held when ``loaded`` was read from it (:func:`ff.stamp_of`), so that a
+        save can tell whether someone else changed the file since."""
         self._pending_strokes.clear()
         self._pending_params.clear()
         self.runner.cancel()
         self.doc.adopt(loaded)
         self.path = path
+        self.disk_stamp = stamp if path is not None else None
         # A new autosave file; the records of solves still running (a cancelled one, the
         # assembly) go on until those solves end.
-        self.autosaver = self.autosaver.hand_over(path)
+        self.autosaver = self.autosaver.hand_over(path, original_sha256=self.disk_stamp[4] if self.disk_stamp else None)
         self.current_layer = None
         self.canvas.rebuild()
         self._sync_all()
@@ -1022,15 +1094,16 @@ class MainWindow(QMainWindow):
         """Open a file; on error show it and keep the open document untouched."""
         if ask and (self._refuse_if_busy() or not self.maybe_save()):
             return False
+        info: dict = {}
         try:
-            loaded = ff.load(path, host=self.host)
+            loaded = ff.load(path, host=self.host, info=info)
         except SketchforgeError as exc:
             show_error(self, "Cannot open the document", exc)
             return False
         except Exception as exc:  # noqa: BLE001 - a bug, but the open document must survive
             show_error(self, "Cannot open the document", exc)
             return False
-        self.adopt(loaded, Path(path))
+        self.adopt(loaded, Path(path), ff.stamp_of(info["stat"], info["sha256"]))
         self._add_recent(path)
         self.show_message(f"opened {path}")
         return True
@@ -1049,18 +1122,50 @@ class MainWindow(QMainWindow):
     def save_to(self, path: Path) -> bool:
         if self._refuse_if_busy():
             return False
+        if self.path is not None and same_file(path, self.path):
+            changed, self.disk_stamp = ff.changed_on_disk(path, self.disk_stamp)
+            if changed:
+                return self._save_over_a_changed_file(Path(path))
         try:
-            ff.save(self.doc, path)
+            stamp = ff.save(self.doc, path)
         except SketchforgeError as exc:
             show_error(self, "Cannot save the document", exc)
             return False
         self.path = Path(path)
-        self.autosaver = self.autosaver.hand_over(self.path)  # running solves keep their record
+        self.disk_stamp = stamp
+        # running solves keep their record
+        self.autosaver = self.autosaver.hand_over(self.path, original_sha256=stamp[4])
         self._add_recent(path)
         self._sync_title()
         self.history_panel.rebuild()
         self.show_message(f"saved {path}")
         return True
+
+    def _save_over_a_changed_file(self, path: Path) -> bool:
+        """The window's file was changed on disk since it was opened or saved here (another
+        window or program saved over it): saving now would destroy that work without a word
+        (issue 38). Ask; Enter chooses Save As, which loses nobody's work."""
+        choice = errors_ui.ask_choice(
+            self,
+            "The file changed on disk",
+            f"{path} was changed on disk since this window opened or saved it (by another window or program).\n\n"
+            "Overwrite: replace it with this window's document (the other changes are lost).\n"
+            "Save As: save this window's document as another file (nothing is lost).\n"
+            "Reload: open the file as it is on disk (this window's unsaved changes are lost).",
+            ["Overwrite", "Save As…", "Reload", "Cancel"],
+            default=1,
+            cancel=3,
+        )
+        if choice == 0:
+            self.disk_stamp = None  # the person chose: write over it
+            return self.save_to(path)
+        if choice == 1:
+            return self.save_as()
+        if choice == 2:
+            self.open_path(path, ask=False)
+            return False
+        self.show_message(f"not saved: {path} changed on disk")
+        return False
 
     def export_dialog(self) -> None:
         filters = ";;".join(
@@ -1117,6 +1222,14 @@ class MainWindow(QMainWindow):
             act = self.recent_menu.addAction(f)
             act.triggered.connect(lambda _=False, f=f: self.open_path(Path(f)))
         self.recent_menu.setEnabled(bool(files))
+
+    def apply_sculpt_strokes(self) -> None:
+        """Enter in SCULPTURE: apply the strokes drawn for the picked isophotes as one edit."""
+        if self.canvas.interaction != "sculpt":
+            return
+        if self._refuse_if_busy():
+            return
+        self.sculpt.apply_drawn()
 
     def cancel_current(self) -> None:
         """Esc: close the help, stop the running solve, and drop a sculpt stroke being drawn

@@ -58,8 +58,10 @@ class AppContext(QObject):
         ``tool_name``, ``tool`` (the tool object, None without one), ``picking``,
         ``radius`` / ``set_radius(r)``, ``live_preview`` / ``set_preview(on)``,
         ``show_strips``, ``show_regions`` / ``set_show(strips, regions)``,
-        ``set_options(dict)`` (extra command fields for a tool with ``set_options``), and the
-        signal ``changed`` whenever any of these or the status text changes.
+        ``set_options(dict)`` (extra command fields for a tool with ``set_options``),
+        ``pick_count`` / ``strokes_drawn`` / ``strokes_to_apply`` and ``apply_drawn()`` (several
+        isophotes picked with Shift+click: what Enter applies), and the signal ``changed``
+        whenever any of these or the status text changes.
     mode, state : str
         ``mode`` "editing" or "observation"; ``state`` "creation" or "sculpture" (kept while
         in OBSERVATION).

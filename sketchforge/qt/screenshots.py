@@ -1,6 +1,8 @@
 """Screenshots of the app for the docs: ``python -m sketchforge.qt.screenshots DOC OUTDIR``.
 
-Writes ``editing.png``, ``sculpt.png`` and, with the strips plugin installed,
+Writes ``editing.png``, ``sculpt.png``, ``light-raised.png`` and ``light-panel.png`` (the light
+raised 40°), ``sculpt-overhead.png`` (an edit under a light straight overhead),
+``sculpt-two-isophotes.png`` (two isophotes redrawn in one edit) and, with the strips plugin installed,
 ``sculpt-strips.png`` (the same edit by the ``strips`` solver; these need no OpenGL: run with
 ``QT_QPA_PLATFORM=offscreen``) and, where OpenGL works (``xvfb-run -a`` with
 ``QT_QPA_PLATFORM=xcb``), ``observation.png``. ``sketchforge --screenshot`` is the same path for
@@ -49,6 +51,92 @@ def stage_sculpt(window, app) -> None:
     settle(window, app)
 
 
+def _largest(window):
+    layers = [l for l in window.doc.layers if l.visible and l.mesh is not None]
+    layer = max(layers, key=lambda l: np.ptp(l.mesh.V[:, 0]) * np.ptp(l.mesh.V[:, 1]))
+    V = layer.mesh.V
+    return 0.5 * (V[:, :2].min(axis=0) + V[:, :2].max(axis=0)), 0.5 * np.ptp(V[:, :2], axis=0)
+
+
+def _draw(sc, stroke) -> None:
+    sc.stroke_press(stroke[0])
+    for p in stroke[1:]:
+        sc.stroke_move(p)
+    sc.stroke_release(stroke[-1])
+
+
+def stage_raised_light(window, app) -> None:
+    """EDITING with the light raised 40° above the drawing plane (the Light panel's disc)."""
+    from sketchforge.document.layer import Light
+    from sketchforge.qt.app import settle
+
+    window.set_mode("editing")
+    light = Light.from_angle(135.0, 40.0)
+    window.set_light_elevation(light.elevation)
+    window.set_light_angle(light.angle)
+    settle(window, app)
+    from PySide6.QtTest import QTest
+
+    QTest.qWait(800)  # the layer thumbnails follow the light once it rests
+    settle(window, app)
+
+
+def _bump(piece: np.ndarray, direction, amount: float) -> np.ndarray:
+    """``piece`` (k, 2) moved by ``amount`` along ``direction`` (2,) or (k, 2) in its middle,
+    ends kept (a sine profile): a hand-drawn local redraw."""
+    t = np.linspace(0.0, 1.0, len(piece))
+    return piece + amount * np.sin(np.pi * t)[:, None] * np.asarray(direction, dtype=np.float64)
+
+
+def _middle(iso: np.ndarray, around, length: float) -> np.ndarray:
+    """The stretch of the polyline ``iso`` (k, 2) within ``length`` of arc of its point nearest
+    to ``around``."""
+    s = np.concatenate([[0.0], np.cumsum(np.linalg.norm(np.diff(iso, axis=0), axis=1))])
+    s0 = s[int(np.argmin(np.linalg.norm(iso - around, axis=1)))]
+    return iso[np.abs(s - s0) <= length]
+
+
+def stage_overhead_edit(window, app) -> None:
+    """The light straight overhead (the isophotes are contour lines of the slope: rings about
+    each part's crest; 8 lines drawn), and one of them redrawn: a piece pushed outwards."""
+    from sketchforge.qt.app import settle
+
+    window.set_light_elevation(90.0)
+    window.canvas.set_isoline_count(8)
+    window.set_mode("sculpture")
+    centre, half = _largest(window)
+    sc = window.sculpt
+    sc.set_radius(0.2 * float(min(half)))
+    pick = centre + [-0.55 * half[0], 0.1 * half[1]]
+    if not sc.pick(pick):
+        return
+    piece = _middle(np.asarray(sc._isophote)[:, :2], pick, 0.9 * float(min(half)))
+    if len(piece) < 4:
+        return
+    out = (piece - centre) / np.linalg.norm(piece - centre, axis=1, keepdims=True)
+    _draw(sc, _bump(piece, out, 0.8 * sc.radius))
+    settle(window, app, timeout_s=300)
+
+
+def stage_two_isophotes(window, app) -> None:
+    """Two isophotes picked (click, then Shift+click), each redrawn towards the light in its
+    middle: one edit, applied when the second stroke is released."""
+    from sketchforge.qt.app import settle
+
+    window.set_mode("sculpture")
+    centre, half = _largest(window)
+    light = window.doc.light.direction[:2]
+    light = light / max(float(np.linalg.norm(light)), 1e-12)
+    sc = window.sculpt
+    sc.set_radius(0.16 * float(min(half)))
+    picks = [centre + 0.55 * half * light, centre + 0.15 * half * light]
+    if not (sc.pick(picks[0]) and sc.pick(picks[1], add=True)):
+        return
+    for p, at in zip(sc.tool.picks, picks):
+        _draw(sc, _bump(_middle(p.isophote, at, 0.8 * float(min(half))), light, 0.7 * sc.radius))
+    settle(window, app, timeout_s=300)
+
+
 def main(argv=None) -> int:
     from PySide6.QtGui import QGuiApplication
 
@@ -94,6 +182,20 @@ def main(argv=None) -> int:
     grab_window(w, out / "sculpt.png")
     print(f"wrote {out / 'sculpt.png'}", file=sys.stderr)
     w.close_now()
+    # Beyond the thesis (issue 35): a raised light, an edit under an overhead one, and two
+    # isophotes redrawn in one edit.
+    w = window_on_doc()
+    stage_raised_light(w, app)
+    grab_window(w, out / "light-raised.png")
+    w.light_panel.grab().save(str(out / "light-panel.png"))
+    print(f"wrote {out / 'light-raised.png'} and {out / 'light-panel.png'}", file=sys.stderr)
+    w.close_now()
+    for name, stage in (("sculpt-overhead.png", stage_overhead_edit), ("sculpt-two-isophotes.png", stage_two_isophotes)):
+        w = window_on_doc()
+        stage(w, app)
+        grab_window(w, out / name)
+        print(f"wrote {out / name}: {w.sculpt.status}", file=sys.stderr)
+        w.close_now()
     if "strips" in host.solvers("sculpt"):
         # The same edit with the thesis' solver, chosen in the panel as a person would.
         w = window_on_doc()

@@ -92,6 +92,7 @@ class SculptController(QObject):
         self.live_preview = True
         self.status = ""
         self._last_attempt = None
+        self._strokes_applied = False  # the strokes kept for several picks are what the last edit applied
         self.last_info: dict = {}
         self._options: dict = {}
         tools = self._tools()
@@ -194,6 +195,7 @@ class SculptController(QObject):
         if self.tool is not None:
             (getattr(self.tool, "reset", None) or self.tool.cancel)()
         self._last_attempt = None
+        self._strokes_applied = False
         self.last_info = {}
         for name in ("isophote", "band", "stroke", "strips", "regions"):
             self.canvas.set_overlay(name, [])
@@ -237,18 +239,42 @@ class SculptController(QObject):
     def _show_pick(self) -> None:
         ov = {} if self.tool is None else self.tool.overlay
         iso = ov.get("isophote")
-        self.canvas.set_overlay("isophote", [] if iso is None else [iso])
+        # Several picked (Shift+click): every one of them, each with its band.
+        self.canvas.set_overlay("isophote", list(ov.get("isophotes", [])) + ([] if iso is None else [iso]))
         self._show_band()
 
     def _show_stroke(self) -> None:
         if self.tool is not None and not self.picking:
             self.canvas.set_overlay("stroke", overlay_lines(self.tool.overlay))
             return
-        stroke = None if self.tool is None else self.tool.overlay.get("stroke")
-        self.canvas.set_overlay("stroke", [] if stroke is None else [stroke])
+        ov = {} if self.tool is None else self.tool.overlay
+        stroke = ov.get("stroke")
+        # The strokes kept for the other picked isophotes, and the one being drawn.
+        self.canvas.set_overlay("stroke", list(ov.get("strokes", [])) + ([] if stroke is None else [stroke]))
+
+    @property
+    def pick_count(self) -> int:
+        """Isophotes picked for the next edit (several after Shift+clicks)."""
+        return len(getattr(self.tool, "picks", None) or []) if self.picking else int(self.pick_point is not None)
+
+    @property
+    def strokes_to_apply(self) -> int:
+        """Strokes drawn for several picked isophotes and not applied as they are: what Enter
+        (or the panel's Apply) would apply; 0 right after the edit was applied."""
+        return 0 if self._strokes_applied else self.strokes_drawn
+
+    @property
+    def strokes_drawn(self) -> int:
+        """Of those, how many have a stroke kept (several picked: before the edit is applied)."""
+        picks = (getattr(self.tool, "picks", None) or []) if self.picking else []
+        return sum(getattr(p, "stroke", None) is not None for p in picks)
 
     # --- pick ---------------------------------------------------------------------------------
-    def pick(self, point) -> bool:
+    def pick(self, point, add: bool = False) -> bool:
+        """A click: pick the isophote there. ``add`` (Shift+click, with a tool that has
+        ``add_pick_at``): pick another one of the same part while one is picked, each with its
+        band; its stroke is drawn next, and the edit is applied when every picked isophote has
+        one (or with Enter / the panel's Apply)."""
         if self.tool is None:
             self.message.emit(PLUGIN_MISSING)
             self._set_status(PLUGIN_MISSING)
@@ -257,8 +283,11 @@ class SculptController(QObject):
             self._tool_call(self.tool.press, point)
             self.stroke_release(point)
             return True
+        if add and self.pick_point is not None and callable(getattr(self.tool, "add_pick_at", None)):
+            return self._add_pick(point)
         self.stop_preview()
         self._last_attempt = None
+        self._strokes_applied = False
         self.last_info = {}
         for name in ("stroke", "strips", "regions"):
             self.canvas.set_overlay(name, [])
@@ -272,7 +301,25 @@ class SculptController(QObject):
             self.message.emit(self.tool.message)
         layer = self.doc.layer(self.tool.layer_id)
         self.layer_picked.emit(layer.id)
-        self._set_status(f"isophote n·l = {self.tool.isovalue:.3f} on {layer.name}: draw its new course inside the band")
+        self._set_status(f"isophote n·l = {self.tool.isovalue:.3f} on {layer.name}: draw its new course inside the band "
+                         "(Shift+click picks another to redraw with it)")
+        return True
+
+    def _add_pick(self, point) -> bool:
+        """Shift+click: one more isophote for the same edit. The last attempt (if any) stays:
+        the next edit replaces it, with every picked isophote."""
+        self.stop_preview()
+        ok = self.tool.add_pick_at(point)
+        self._show_pick()
+        self._show_stroke()
+        if not ok:
+            self.message.emit(self.tool.message)
+            self._set_status(self.tool.message)
+            return False
+        n = self.pick_count
+        values = ", ".join(f"{p.isovalue:.3f}" for p in self.tool.picks)
+        self._set_status(f"{n} isophotes picked (n·l = {values}): draw the new course of each inside its band; the edit "
+                         "is applied when each has one, or press Enter")
         return True
 
     # --- stroke -------------------------------------------------------------------------------
@@ -414,7 +461,31 @@ class SculptController(QObject):
         except SketchforgeError as exc:
             self._fail(exc)
             return
+        self._strokes_applied = False
+        if cmd is None:  # several isophotes picked: the stroke is kept until each has one
+            self._show_stroke()
+            self._set_status(self.tool.message)
+            return
         self.apply(cmd)
+
+    def apply_drawn(self) -> bool:
+        """Enter or the panel's Apply: apply the strokes drawn so far for the picked isophotes
+        as one edit (those without a stroke are left out)."""
+        if not self.picking or not callable(getattr(self.tool, "command_for_drawn", None)):
+            return False
+        if self.strokes_drawn == 0:
+            text = "nothing to apply: draw the new course of a picked isophote first" if self.pick_point is not None \
+                else "nothing to apply: click on a shape to pick an isophote, then redraw it"
+            self._set_status(text)
+            self.message.emit(text)
+            return False
+        try:
+            cmd = self.tool.command_for_drawn()
+        except SketchforgeError as exc:
+            self._fail(exc)
+            return False
+        self.apply(cmd)
+        return True
 
     def _release_plain(self, pos) -> None:
         """A plain tool's release: the command(s) it pushes are prepared on a worker and
@@ -464,6 +535,7 @@ class SculptController(QObject):
 
         def on_done(done_cmd):
             self._last_attempt = done_cmd
+            self._strokes_applied = True
             self.last_info = result_info(done_cmd)
             self._show_debug()
             r = getattr(done_cmd, "result", None)

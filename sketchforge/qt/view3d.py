@@ -3,7 +3,8 @@
 Normals are per triangle corner from the geometry core (smooth, creases only where the surface
 folds). The camera frames the model the first time it is shown and on "Fit view"; orbit and zoom
 are kept when the source (assembled / per layer) changes or the model is rebuilt. Display styles:
-"shaded" (a head light), "cel" (the three cel tones of the document's in-plane light) and
+"shaded" (a head light), "cel" (the three cel tones of the document's light, in the drawing
+plane or raised above it) and
 "isophotes" (shaded, with lines n·l = j/(K+1) of the document's light), computed per pixel in
 the fragment shader from the interpolated model-space normal, as on the canvas.
 

@@ -9,13 +9,16 @@ each group's solve and the fairing are reused when their inputs are bit-identica
 
 from __future__ import annotations
 
+import math
+import numbers
 import time
 from dataclasses import dataclass, field
 from typing import Mapping, Sequence
 
 import numpy as np
 
-from sketchforge.errors import LimitError, ParameterError
+from sketchforge.errors import LimitError, ParameterError, quote
+from sketchforge.plugin_api import number
 from sketchforge.geometry.mesh import Mesh
 
 from .attach import Attachment, find_attachments
@@ -54,6 +57,14 @@ DEFAULT_PARAMS: Mapping[str, object] = {
     "fillet": 4.0,
     "fair": 12,
 }
+
+#: Ranges of the numeric options. Lengths are in edge lengths: a fillet or margin wider than a
+#: part has nothing left to shape, one below a millionth of an edge nothing to keep apart; the
+#: weights are relative to 1. At each end a 5k-vertex body with two legs assembles in about a
+#: second (benchmarks/bench_param_extremes.py); beyond them the QP crawled (``reg`` 1e-16:
+#: 52 s, ``stiffness`` 1e6: 16 s) or failed without naming the option (1e308).
+MAX_PARAMS: Mapping[str, float] = {"fillet": 100.0, "margin": 100.0, "gap": 100.0, "reg": 1e6, "stiffness": 1e4}
+MIN_PARAMS: Mapping[str, float] = {"fillet": 0.0, "margin": 1e-6, "gap": 1e-6, "reg": 1e-6, "stiffness": 1e-6}
 
 
 @dataclass(frozen=True, eq=False)
@@ -140,6 +151,13 @@ def _sheet(cache: AssemblyCache | None, k: int, name: str, mesh: Mesh, free: boo
     return sheet.evolve(layer=k, name=name)
 
 
+def _finite(v) -> bool:
+    try:
+        return math.isfinite(v)
+    except OverflowError:  # an integer or fraction beyond float range: finite, and huge
+        return True
+
+
 def _params(params) -> dict:
     """The assembly's complete parameters: defaults filled in, unknown keys refused (the
     ``check_params`` of the ``depth_qp`` assembler)."""
@@ -149,13 +167,23 @@ def _params(params) -> dict:
         raise ParameterError(f"unknown assembly parameter {unknown[0][:60]!r} (known: {', '.join(sorted(known))})")
     p = dict(DEFAULT_PARAMS)
     p.update(params or {})
-    if not (isinstance(p["fillet"], (int, float)) and np.isfinite(p["fillet"]) and p["fillet"] >= 0):
-        raise ParameterError(f"assembly parameter 'fillet' must be a number >= 0, got {p['fillet']!r}")
+    # The core's rule for a number (sketchforge.plugin_api.number: no bool, no string, no NaN, a
+    # 300-digit integer refused in one line), each within a finite range (issue 38: 1e308
+    # passed and failed inside the QP without naming the parameter).
+    for key, positive in (("fillet", False), ("margin", True), ("gap", True), ("reg", True), ("stiffness", True)):
+        v = p[key]
+        try:
+            p[key] = number(key, MIN_PARAMS[key], MAX_PARAMS[key])(v)
+        except ParameterError:
+            real = isinstance(v, numbers.Real) and not isinstance(v, (bool, np.bool_)) and _finite(v)
+            if real and v > MAX_PARAMS[key]:
+                raise ParameterError(f"assembly parameter {key!r} must be at most {MAX_PARAMS[key]:g}, got {quote(v)}") from None
+            if real and v > 0:
+                raise ParameterError(f"assembly parameter {key!r} must be at least {MIN_PARAMS[key]:g}, got {quote(v)}") from None
+            what = "a positive number" if positive else "a number >= 0"
+            raise ParameterError(f"assembly parameter {key!r} must be {what}, got {quote(v)}") from None
     if not (isinstance(p["fair"], (int, np.integer)) and not isinstance(p["fair"], bool) and 0 <= p["fair"] <= 50):
-        raise ParameterError(f"assembly parameter 'fair' must be a whole number of rings from 0 to 50, got {p['fair']!r}")
-    for key in ("margin", "gap", "reg", "stiffness"):
-        if not (isinstance(p[key], (int, float)) and np.isfinite(p[key]) and p[key] > 0):
-            raise ParameterError(f"assembly parameter '{key}' must be a positive number, got {p[key]!r}")
+        raise ParameterError(f"assembly parameter 'fair' must be a whole number of rings from 0 to 50, got {quote(p['fair'])}")
     if p["qp_solver"] not in ("osqp", "active_set"):
         raise ParameterError(f"assembly parameter 'qp_solver' must be 'osqp' or 'active_set', got {p['qp_solver']!r}")
     if p["on_bad_junction"] not in ("raise", "free"):

@@ -139,7 +139,8 @@ def _with_loop(P: np.ndarray, radius: float, rng: np.random.Generator) -> np.nda
     return np.concatenate([P[: k + 1], loop, P[k:]])
 
 
-def random_edit(shape: str, ld, rng: np.random.Generator, kind: str | None = None, band: float | None = None):  # pragma: no mutate block
+def random_edit(shape: str, ld, rng: np.random.Generator, kind: str | None = None, band: float | None = None,  # pragma: no mutate block
+                pick=None):
     """A random edit on a layer (see the module docstring), or None when the layer has no
     suitable isophote near the random pick (the caller draws again).
 
@@ -155,6 +156,8 @@ def random_edit(shape: str, ld, rng: np.random.Generator, kind: str | None = Non
         One of :data:`KINDS`; None draws one.
     band : float or None
         Band radius; None: a third of the layer's largest inradius, at most 0.3, at least 3h.
+    pick : (2,) float64 or None
+        Where to pick (None: a random lit vertex away from the rim, see below).
     """
     from sketchforge.errors import SculptError
 
@@ -168,10 +171,11 @@ def random_edit(shape: str, ld, rng: np.random.Generator, kind: str | None = Non
         band = float(np.clip(inradius / 1.5, 3 * h, 0.3))
     # A pick on a lit vertex at least a third of the inradius (and 2h) inside the rim: strokes
     # next to the rim ask for near-vertical surface, which no edit can honour.
-    cand = np.nonzero((d > max(0.35 * inradius, 2 * h)) & (ld.E > 0.05) & (ld.E < 0.95))[0]
-    if len(cand) == 0:
-        return None
-    pick = ld.V2[int(rng.choice(cand))] + rng.normal(0, 0.1 * h, 2)
+    if pick is None:
+        cand = np.nonzero((d > max(0.35 * inradius, 2 * h)) & (ld.E > 0.05) & (ld.E < 0.95))[0]
+        if len(cand) == 0:
+            return None
+        pick = ld.V2[int(rng.choice(cand))] + rng.normal(0, 0.1 * h, 2)
     try:
         c, iso = picked_isophote(ld, pick)
     except SculptError:
@@ -202,6 +206,49 @@ def random_edit(shape: str, ld, rng: np.random.Generator, kind: str | None = Non
         ext = np.linspace(0, 1.5 * band, 12)[1:, None]
         P = np.concatenate([(P[0] + ext * a)[::-1], P, P[-1] + ext * b])
     return Edit(shape, kind, np.asarray(pick, float), band, P, move, intended)
+
+
+def random_pair(shape: str, ld, rng: np.random.Generator, kinds=KINDS):  # pragma: no mutate block
+    """Two random edits of different isophotes near each other on one layer, or None (the
+    caller draws again): the first as :func:`random_edit`; the second picked on a lit vertex
+    0.5–1.5 band radii from the first pick whose shading differs from the first isovalue by at
+    least 0.04 (so the bands overlap and one edit's change reaches the other's isophote),
+    with the same band radius. Strokes that cross are drawn again (such a pair is
+    contradictory: :func:`.joint.check_contradictions` refuses it)."""
+    from .isophote import picked_isophote
+
+    first = random_edit(shape, ld, rng, kind=str(rng.choice(kinds)))
+    if first is None:
+        return None
+    c1, _ = picked_isophote(ld, first.pick)
+    h, d = ld.h, ld.planar.d_rim
+    dist = np.linalg.norm(ld.V2 - first.pick, axis=1)
+    cand = np.nonzero((d > max(0.35 * float(d.max()), 2 * h)) & (ld.E > 0.05) & (ld.E < 0.95)
+                      & (dist > 0.5 * first.band) & (dist < 1.5 * first.band) & (np.abs(ld.E - c1) > 0.04))[0]
+    if len(cand) == 0:
+        return None
+    pick = ld.V2[int(rng.choice(cand))] + rng.normal(0, 0.1 * h, 2)
+    second = random_edit(shape, ld, rng, kind=str(rng.choice(kinds)), band=first.band, pick=pick)
+    if second is None or shapely.LineString(first.stroke).intersects(shapely.LineString(second.stroke)):
+        return None
+    return first, second
+
+
+def draw_pairs(shape: str, mesh, rng, light, pairs: int, kinds=KINDS) -> list:  # pragma: no mutate block
+    """``pairs`` random pairs of edits on one layer (:func:`random_pair`)."""
+    from sketchforge.geometry.reflectance import LAMBERTIAN
+
+    from .layerdata import layer_data
+
+    ld = layer_data(mesh, light, LAMBERTIAN)
+    out: list = []
+    tries = 0
+    while len(out) < pairs and tries < 30 * pairs:
+        tries += 1
+        p = random_pair(shape, ld, rng, kinds)
+        if p is not None:
+            out.append(p)
+    return out
 
 
 # --- running the corpus ------------------------------------------------------------------------
@@ -434,3 +481,115 @@ def chain_measures(fresh, edited, light) -> dict:
         out["dihedral" + suffix], out["jump" + suffix] = dihedral, jump
     out["folds"] = int((folded_faces(edited) & ~folded_faces(fresh)).sum())
     return out
+
+
+@dataclass
+class PairOutcome:
+    """What a pair of edits did, made jointly (``sculpt_isophotes``) or one after the other.
+
+    Attributes
+    ----------
+    shape : str
+    status : str
+        "ok", "refused" or "crash" (sequential: "ok" when at least one edit applied).
+    reason : str
+    before, after : (2,) float64
+        Mean distance from each stroke to its isophote (its pick's isovalue on the layer before
+        the pair) before and after, in edge lengths (nan unless ok).
+    fractions : (2,) float64
+        The share of each stroke's change kept (joint: 1, 0.5 or 0.25).
+    seconds : float
+    applied : int
+        Edits that were applied (joint: 2 or 0).
+    """
+
+    shape: str
+    status: str
+    reason: str
+    before: np.ndarray
+    after: np.ndarray
+    fractions: np.ndarray
+    seconds: float
+    applied: int = 0
+
+    @property
+    def lands(self) -> np.ndarray:
+        """(2,) bool: each stroke's isophote after <= max(2, 0.3 × before) edge lengths."""
+        if self.status != "ok":
+            return np.zeros(2, bool)
+        return self.after <= np.maximum(2.0, 0.3 * self.before)
+
+    @property
+    def both_land(self) -> bool:
+        return bool(self.lands.all())
+
+    @property
+    def worse(self) -> bool:
+        """A stroke ended farther from its isophote than it started (resolution: h/4)."""
+        return self.status == "ok" and bool(np.any(self.after > np.maximum(self.before, 0.25)))
+
+
+def _pair_distances(ld0, first, second, z):
+    """Each stroke's distance (edge lengths) to its own isophote E = c_i of heights ``z``, over
+    the samples a single edit of it would honour on the layer before the pair (c_i, band and
+    samples from that layer), and the distances before."""
+    from sketchforge.geometry.band import band_radius
+
+    from .fidelity import isophote_lines, mean_distance
+    from .layerdata import vertex_shading
+    from .pipeline import _prepare
+
+    E, _, _ = vertex_shading(ld0.planar, z, ld0.light, ld0.model)
+    before, after = [], []
+    for e in (first, second):
+        p = _prepare(ld0, e.pick, band_radius(e.band), e.stroke)
+        before.append(p.before / ld0.h)
+        after.append(mean_distance(p.honoured, isophote_lines(ld0.planar, E, p.c)) / ld0.h)
+    return np.array(before), np.array(after)
+
+
+def run_pair(mesh, light, pair, solver=None, params=None) -> tuple[PairOutcome, PairOutcome]:
+    """Run a pair of corpus edits jointly (``sculpt_many``) and one after the other
+    (``sculpt`` twice, the second on the first's result); measure both the same way."""
+    import time
+
+    from sketchforge.errors import SketchforgeError
+    from sketchforge.geometry.reflectance import LAMBERTIAN
+
+    from .joint import sculpt_many
+    from .layerdata import layer_data
+    from .pipeline import sculpt
+
+    ld0 = layer_data(mesh, light, LAMBERTIAN)
+    first, second = pair
+    nan2 = np.full(2, np.nan)
+    try:
+        b0, _ = _pair_distances(ld0, first, second, ld0.z)
+    except SketchforgeError as exc:  # a stroke a single edit refuses (outside its band...)
+        out = PairOutcome(first.shape, "refused", str(exc), nan2, nan2, nan2, 0.0)
+        return out, out
+    t = time.perf_counter()
+    try:
+        r = sculpt_many(mesh, light, [(e.pick, e.band, e.stroke) for e in pair], solver=solver, params=params)
+        _, after = _pair_distances(ld0, first, second, r.mesh.V[:, 2])
+        joint = PairOutcome(first.shape, "ok", "", b0, after, np.array([p.fraction for p in r.parts]),
+                            time.perf_counter() - t, 2)
+    except SketchforgeError as exc:
+        joint = PairOutcome(first.shape, "refused", str(exc), b0, nan2, nan2, time.perf_counter() - t)
+    except Exception as exc:  # noqa: BLE001  (what the corpus is for: finding these)
+        joint = PairOutcome(first.shape, "crash", repr(exc), b0, nan2, nan2, time.perf_counter() - t)
+    t = time.perf_counter()
+    cur, applied, fr = mesh, 0, [np.nan, np.nan]
+    try:
+        for k, e in enumerate(pair):
+            try:
+                res = sculpt(cur, light, e.pick, e.band, e.stroke, solver=solver, params=params)
+                cur, applied, fr[k] = res.mesh, applied + 1, res.fraction
+            except SketchforgeError:
+                continue
+        _, after = _pair_distances(ld0, first, second, cur.V[:, 2])
+        seq = PairOutcome(first.shape, "ok" if applied else "refused", "", b0, after, np.array(fr),
+                          time.perf_counter() - t, applied)
+    except Exception as exc:  # noqa: BLE001
+        seq = PairOutcome(first.shape, "crash", repr(exc), b0, nan2, nan2, time.perf_counter() - t)
+    return joint, seq

@@ -106,8 +106,9 @@ def solve_heights(
     stroke_rows : ((k, n) sparse float64, (k,) float64) or None
         Barycentric rows of the stroke's quadrature points and their weights: adds
         ``stroke_weight · h · Σ_k w_k (E(P_k) − c)²``, pinning the isophote to the stroke.
-    c : float
-        The isovalue.
+    c : float or (k,) float64
+        The isovalue (or each stroke sample's wanted shading: a joint edit of several
+        isophotes).
     stroke_weight : float
 
     Returns

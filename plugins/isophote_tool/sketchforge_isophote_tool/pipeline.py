@@ -14,7 +14,11 @@ to the named solver (``sketchforge_sculpt_solvers``; the built-in ``gauss_newton
 4. the host's checks, the same for every solver: heights >= 0 and 0 on the rim, finite, and
    never worse: if the isophote ends farther from the stroke than it started, the best
    partial edit is kept (half, a quarter of the change); if none is closer, the edit is
-   refused with what to draw instead (:mod:`.fidelity`).
+   refused with what to draw instead (:mod:`.fidelity`), or as already done when the stroke
+   lies within the shading's resolution of the isophote; a change of more than
+   :data:`MAX_CHANGE` of the peak is scaled down to it first. A band narrower than one edge
+   length, and a stroke whose moving part lies only in the rim margin, are refused before
+   any solve.
 """
 
 from __future__ import annotations
@@ -295,6 +299,88 @@ def build_problem(ld: LayerData, c: float, pick, iso, band_geom, in_band: np.nda
     )
 
 
+@dataclass
+class PreparedStroke:
+    """One redrawn isophote, ready for a solver: the pick's isovalue ``c``, isophote ``iso``
+    and band (``band``, ``in_band`` (n,) bool, ``radius``), the cleaned stroke clipped to the
+    band (``pieces``, ``stroke_geom``), the samples where an isophote is promised
+    (``honoured``), the mean distance from them to the isophote now (``before``) and how much
+    of the drawn stroke was left out (``ignored`` of ``drawn``, drawing units)."""
+
+    c: float
+    iso: object
+    band: object
+    in_band: np.ndarray
+    radius: float
+    pieces: list
+    stroke_geom: object
+    honoured: np.ndarray
+    before: float
+    ignored: float
+    drawn: float
+
+
+def _prepare(ld: LayerData, pick, r: float, stroke) -> PreparedStroke:
+    """Pick, band and stroke of one isophote edit on ``ld`` (band radius ``r``). Raises
+    SculptError for a band narrower than one edge length, a stroke with no part inside the band,
+    or one whose moving part lies only within the rim margin."""
+    pd, h = ld.planar, ld.h
+    if r < h:
+        # Narrower than one edge length the band holds no vertex to change across it: the edit
+        # would do nothing visible.
+        raise SculptError(f"the band ({r:.3g}) is narrower than one edge length of this layer ({h:.3g}): "
+                          f"widen it to at least {h:.3g}")
+    c, iso, band_geom, in_band = _pick(ld, pick, r)
+    cleaned = prepare_stroke(stroke, h)
+    pieces = clip_to_band(cleaned, band_geom, h)
+    drawn = float(np.sum(np.linalg.norm(np.diff(cleaned, axis=0), axis=1)))
+    used = float(sum(np.sum(np.linalg.norm(np.diff(p, axis=0), axis=1)) for p in pieces))
+    ignored = max(0.0, drawn - used)
+    stroke_geom = shapely.MultiLineString(pieces) if len(pieces) > 1 else shapely.LineString(pieces[0])
+    honoured = honoured_samples(pd, pieces, band_geom)
+    if len(honoured) == 0 or _moves_only_in_margin(pd, pieces, iso, honoured, h):
+        local = float(np.max(np.minimum(pd.margin_at(np.concatenate(pieces)), pd.margin)))
+        raise SculptError(
+            f"the stroke runs within the rim margin ({local:.2g} from the outline here), where the surface "
+            "turns vertical and cannot follow a redrawn isophote: draw it further inside the shape"
+        )
+    before = mean_distance(honoured, iso)
+    return PreparedStroke(c, iso, band_geom, in_band, r, pieces, stroke_geom, honoured, before, ignored, drawn)
+
+
+def _run_solver(solver, problem: SculptProblem, full: dict, provider, n: int):
+    """``solver.solve(problem, full)`` as (SculptSolution, dz (n,) float64): a solver's bug is
+    a PluginError naming it, a wrong shape too, non-finite heights a SolverError."""
+    try:
+        answer = solver.solve(problem, full)
+    except SketchforgeError:
+        raise
+    except Exception as exc:  # noqa: BLE001 - a solver's bug: named, never a crash of the app
+        who = f" of plugin {provider!r}" if provider else ""
+        raise PluginError(f"the sculpt solver {solver.name!r}{who} failed: {type(exc).__name__}: {exc}") from exc
+    solution = answer if isinstance(answer, SculptSolution) else SculptSolution(np.asarray(answer))
+    dz = np.asarray(solution.dz, dtype=np.float64)
+    if dz.shape != (n,):
+        raise PluginError(f"the sculpt solver {solver.name!r} returned heights of shape {dz.shape}; the layer has "
+                          f"{n} vertices")
+    if not np.isfinite(dz).all():
+        raise SolverError(f"the sculpt solver {solver.name!r} produced non-finite heights; the layer was left unchanged")
+    return solution, dz
+
+
+def change_bound(ld: LayerData, dz: np.ndarray) -> tuple[float, float]:
+    """The largest height change of ``dz`` (n,) off the rim as a fraction of the layer's peak,
+    and the scale (<= 1) that brings it to :data:`MAX_CHANGE` (1 when it is within)."""
+    peak = float(ld.z.max())
+    largest = float(np.abs(np.where(ld.planar.is_contour, 0.0, dz)).max(initial=0.0)) / max(peak, 1e-300)
+    return largest, (min(1.0, MAX_CHANGE / largest) if largest > 0.0 else 1.0)
+
+
+def bound_note(largest: float) -> str:
+    """The figure a refusal of a scaled-down edit gives (``largest``: see :func:`change_bound`)."""
+    return f" (the full edit would change heights by {largest:.0%} of the peak; at most {MAX_CHANGE:.0%} is applied)"
+
+
 def _default_solver():
     from .gauss_newton import GAUSS_NEWTON
 
@@ -328,7 +414,7 @@ def sculpt(
     mesh : Mesh
         The layer's front surface (z >= 0, z = 0 on ``mesh.boundary``).
     light : (3,) float64
-        Unit light direction in the drawing plane (z = 0).
+        Unit direction towards the light (z >= 0).
     pick : (2,) float64
         A point on the layer; its shading (0 in shadow) is the isovalue c.
     band : float
@@ -373,55 +459,23 @@ def sculpt(
     ld = layer_data(mesh, light, model)
     pd, h = ld.planar, ld.h
     T["layer"] = time.perf_counter() - t0
-    if r < h:
-        # Narrower than one edge length the band holds no vertex to change across it: the edit
-        # would do nothing visible.
-        raise SculptError(f"the band ({r:.3g}) is narrower than one edge length of this layer ({h:.3g}): "
-                          f"widen it to at least {h:.3g}")
 
     t = time.perf_counter()
-    c, iso, band_geom, in_band = _pick(ld, pick, r)
-    cleaned = prepare_stroke(stroke, h)
-    pieces = clip_to_band(cleaned, band_geom, h)
-    drawn = float(np.sum(np.linalg.norm(np.diff(cleaned, axis=0), axis=1)))
-    used = float(sum(np.sum(np.linalg.norm(np.diff(p, axis=0), axis=1)) for p in pieces))
-    ignored = max(0.0, drawn - used)
-    stroke_geom = shapely.MultiLineString(pieces) if len(pieces) > 1 else shapely.LineString(pieces[0])
-    honoured = honoured_samples(pd, pieces, band_geom)
-    if len(honoured) == 0 or _moves_only_in_margin(pd, pieces, iso, honoured, h):
-        local = float(np.max(np.minimum(pd.margin_at(np.concatenate(pieces)), pd.margin)))
-        raise SculptError(
-            f"the stroke runs within the rim margin ({local:.2g} from the outline here), where the surface "
-            "turns vertical and cannot follow a redrawn isophote: draw it further inside the shape"
-        )
-    before = mean_distance(honoured, iso)
+    e = _prepare(ld, pick, r, stroke)
+    c, iso, band_geom, in_band, pieces, honoured, before = e.c, e.iso, e.band, e.in_band, e.pieces, e.honoured, e.before
+    ignored, drawn, stroke_geom = e.ignored, e.drawn, e.stroke_geom
     problem = build_problem(ld, c, pick, iso, band_geom, in_band, r, pieces, honoured, before)
     T["stroke"] = time.perf_counter() - t
 
     t = time.perf_counter()
-    try:
-        answer = solver.solve(problem, full)
-    except SketchforgeError:
-        raise
-    except Exception as exc:  # noqa: BLE001 - a solver's bug: named, never a crash of the app
-        who = f" of plugin {provider!r}" if provider else ""
-        raise PluginError(f"the sculpt solver {solver.name!r}{who} failed: {type(exc).__name__}: {exc}") from exc
-    solution = answer if isinstance(answer, SculptSolution) else SculptSolution(np.asarray(answer))
-    dz = np.asarray(solution.dz, dtype=np.float64)
-    if dz.shape != (len(pd.V2),):
-        raise PluginError(f"the sculpt solver {solver.name!r} returned heights of shape {dz.shape}; the layer has "
-                          f"{len(pd.V2)} vertices")
-    if not np.isfinite(dz).all():
-        raise SolverError(f"the sculpt solver {solver.name!r} produced non-finite heights; the layer was left unchanged")
+    solution, dz = _run_solver(solver, problem, full, provider, len(pd.V2))
     # The solver's own stages (zones, shading, heights...) beside the host's.
     T.update({(k if k not in ("layer", "stroke", "solve", "check", "total") else f"solver.{k}"): float(v)
               for k, v in solution.info.get("timings", {}).items()})
     T["solve"] = time.perf_counter() - t
 
     t = time.perf_counter()
-    peak = float(ld.z.max())
-    largest = float(np.abs(np.where(pd.is_contour, 0.0, dz)).max(initial=0.0)) / max(peak, 1e-300)
-    scale = min(1.0, MAX_CHANGE / largest) if largest > 0.0 else 1.0
+    largest, scale = change_bound(ld, dz)
     fraction, z, after = scale, None, np.inf
     for frac in (scale,) + (tuple(scale * f for f in FALLBACK_FRACTIONS) if never_worse else ()):
         zf = np.maximum(ld.z + frac * dz, 0.0)  # heights >= 0 by contract
@@ -439,8 +493,7 @@ def sculpt(
             # the peak and took the isophote from 0.11 to 0.16 edge lengths).
             raise NothingToDoError(f"the stroke lies on the isophote already ({before / h:.2f} edge lengths from it, "
                                    "within what the shading resolves): nothing to change")
-        bound = (f" (the full edit would change heights by {largest:.0%} of the peak; at most "
-                 f"{MAX_CHANGE:.0%} is applied)") if scale < 1.0 else ""
+        bound = bound_note(largest) if scale < 1.0 else ""
         raise SculptError(
             f"the surface cannot take this shading here: every version of the edit left the isophote farther "
             f"from the stroke ({after / h:.1f} edge lengths) than it was ({before / h:.1f}){bound}; draw the new "

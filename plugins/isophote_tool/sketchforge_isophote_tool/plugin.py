@@ -7,9 +7,9 @@ from sketchforge.plugins.hookspecs import hookimpl
 
 @hookimpl
 def sketchforge_commands():
-    from .command import SculptIsophote
+    from .command import SculptIsophote, SculptIsophotes
 
-    return [SculptIsophote]
+    return [SculptIsophote, SculptIsophotes]
 
 
 @hookimpl

@@ -56,8 +56,8 @@ def shading_change(pd: PlanarData, E: np.ndarray, free: np.ndarray, B: sp.csr_ma
         Barycentric rows of the stroke's quadrature points (:func:`bary_rows`).
     ws : (k,) float64
         Their quadrature weights (times a fade to 0 in the rim margin).
-    c : float
-        The isovalue.
+    c : float or (k,) float64
+        The isovalue (or each sample's wanted shading: a joint edit of several isophotes).
     """
     dE = np.zeros(len(pd.V2))
     idx = np.nonzero(free)[0]

@@ -70,10 +70,15 @@ DEFAULT_PARAMS = {
     "ring": 3.0,  # width of the ring of untouched vertices (δz = 0) around the impacted region (h)
 }
 
-# Finite ranges, the tighter of issue 38's (merged on main: rtol >= 1e-8, atol >= 1e-11,
-# strip_spacing >= 1, rbf_neighbors <= 128) and this solver's own: a corner looser than these
-# (kvaerno5 at rtol 1e-9, strip_spacing 0.5, sample_spacing 0.25, 64 neighbours, ring 20) took
-# 7.4 s CPU, 13 s wall at load ~6, for one edit on a 4.5k-vertex layer.
+#: Finite ranges, the tighter of issue 38's and this solver's own. Issue 38's keep the dearest
+#: accepted set (kvaerno5 at the tightest tolerances, the densest strips and samples, the most
+#: RBF neighbours, the widest ring) to about 15 s of CPU for one edit along a whole isophote of
+#: a 5k-vertex layer, compile included (the former bounds, rtol 1e-12, atol 1e-15, spacings
+#: 0.25 and 0.1, 256 neighbours, ran 145-157 s before refusing; the implicit solver's cost
+#: grows with the strips times its steps; see benchmarks/bench_param_extremes.py). This
+#: solver's own are tighter on the neighbours (<= 64): a corner looser than these (kvaerno5 at
+#: rtol 1e-9, strip_spacing 0.5, sample_spacing 0.25, 64 neighbours, ring 20) took 7.4 s CPU,
+#: 13 s wall at load ~6, for one edit on a 4.5k-vertex layer.
 _CHECKS = {
     "integrator": choice("integrator", ("tsit5", "kvaerno5")),
     "step_control": choice("step_control", ("fixed", "pid")),

@@ -1,6 +1,7 @@
 """The isophote tool's SCULPTURE controls: the reflectance model the height solve inverts, the
 sculpt solver, the band radius (slider and field; the mouse wheel in the drawing too), the live
-preview and what to show of the last edit (characteristics, edit region).
+preview, what to show of the last edit (characteristics, edit region) and, with several
+isophotes picked (Shift+click), a button that applies the strokes drawn so far.
 
 The panel drives the app's sculpt controller (``app.sculpt``) and shows its state; the model
 and solver become the tool's options (:meth:`SculptIsophoteTool.set_options`), always set
@@ -13,7 +14,7 @@ from __future__ import annotations
 import math
 
 from PySide6.QtCore import Qt
-from PySide6.QtWidgets import QCheckBox, QComboBox, QDoubleSpinBox, QFormLayout, QSlider, QWidget
+from PySide6.QtWidgets import QCheckBox, QComboBox, QDoubleSpinBox, QFormLayout, QPushButton, QSlider, QWidget
 
 from sketchforge.errors import SketchforgeError
 from sketchforge.qt.panel_api import MAX_RADIUS, MIN_RADIUS
@@ -63,6 +64,10 @@ class IsophoteSculptPanel(QWidget):
         form.addRow(self.preview)
         form.addRow(self.strips)
         form.addRow(self.regions)
+        self.apply = QPushButton("Apply strokes (Enter)")
+        self.apply.setToolTip("Several isophotes picked (Shift+click): apply the strokes drawn so far as one edit. "
+                              "It is applied by itself once every picked isophote has a stroke.")
+        form.addRow(self.apply)
 
         self._updating = False
         self._warmed: set = set()
@@ -74,6 +79,7 @@ class IsophoteSculptPanel(QWidget):
         self.preview.toggled.connect(lambda on: self._updating or c.set_preview(on))
         self.strips.toggled.connect(lambda _: self._show_changed())
         self.regions.toggled.connect(lambda _: self._show_changed())
+        self.apply.clicked.connect(lambda: c.apply_drawn())
         self.model.currentIndexChanged.connect(lambda _: self._choice_changed())
         self.solver.currentIndexChanged.connect(lambda _: self._choice_changed())
         c.changed.connect(self.show_state)
@@ -179,5 +185,9 @@ class IsophoteSculptPanel(QWidget):
                 w.setEnabled(mine and w.count() > 0)
             self.slider.setEnabled(mine)
             self.spin.setEnabled(mine)
+            picked, drawn = getattr(c, "pick_count", 0), getattr(c, "strokes_drawn", 0)
+            self.apply.setVisible(mine and picked > 1)
+            self.apply.setEnabled(mine and getattr(c, "strokes_to_apply", drawn) > 0)
+            self.apply.setText(f"Apply {drawn} of {picked} strokes (Enter)" if picked > 1 else "Apply strokes (Enter)")
         finally:
             self._updating = False
