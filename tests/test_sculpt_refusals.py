@@ -5,14 +5,11 @@ change heights by more than 60% of the peak."""
 
 import numpy as np
 import pytest
-import shapely
-import shapely.ops
 
-from sculpt_helpers import isophote_stroke
+from sculpt_helpers import isophote_stroke, stroke_moving_only_in_the_margin
 from sketchforge.errors import NothingToDoError, SculptError
 from sketchforge.geometry.reflectance import LAMBERTIAN
 from sketchforge_isophote_tool import sculpt
-from sketchforge_isophote_tool.isophote import picked_isophote
 from sketchforge_isophote_tool.layerdata import layer_data
 from sketchforge_isophote_tool.pipeline import MAX_CHANGE
 from sketchforge_isophote_tool.testing import LIGHT, inflated
@@ -39,29 +36,9 @@ def test_a_band_narrower_than_one_edge_length_is_refused(ellipse, solver):
     assert r.after <= r.before
 
 
-def _stroke_moving_only_in_the_margin(mesh, pick, shift_edges):
-    """The isophote through ``pick`` from the pick to the rim, the part inside the rim margin
-    moved sideways by ``shift_edges`` edge lengths, the rest left on the isophote."""
-    ld = layer_data(mesh, LIGHT, LAMBERTIAN)
-    pd = ld.planar
-    _, iso = picked_isophote(ld, pick)
-    s0 = iso.project(shapely.Point(pick))
-    seg = shapely.ops.substring(iso, s0, iso.length)
-    P = np.array([seg.interpolate(t, normalized=True).coords[0] for t in np.linspace(0, 1, 200)])
-    d = np.gradient(P, axis=0)
-    d /= np.linalg.norm(d, axis=1, keepdims=True)
-    normal = np.column_stack([-d[:, 1], d[:, 0]])
-    inside_margin = pd.rim_distance(P) < pd.margin_at(P)
-    # The move fades in over the margin's first edge length (a hand would not jump).
-    depth = pd.margin_at(P) - pd.rim_distance(P)
-    move = np.clip(depth / pd.h, 0.0, 1.0) * shift_edges * pd.h
-    assert inside_margin.any() and (~inside_margin).sum() > 10
-    return P + move[:, None] * normal, ld
-
-
 @pytest.mark.parametrize("solver", SOLVERS, ids=["gauss_newton", "strips"])
 def test_a_stroke_moving_only_in_the_rim_margin_gets_the_rim_margin_message_and_changes_nothing(ellipse, solver):
-    stroke, ld = _stroke_moving_only_in_the_margin(ellipse, PICK, 1.5)
+    stroke, ld = stroke_moving_only_in_the_margin(ellipse, PICK, 1.5)
     with pytest.raises(SculptError, match="rim margin.*draw it further inside"):
         sculpt(ellipse, LIGHT, PICK, 0.3, stroke, solver=solver)
 
