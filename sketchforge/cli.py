@@ -145,6 +145,10 @@ def cmd_replay(args) -> int:
                 summary = doc.host.export(out, mesh=doc.export_mesh(args.layer))
             else:
                 summary = doc.host.export(out, doc=doc)
+                # the parts the assembly had to leave free, and why (issue 34): said, never silent
+                model = doc.assembled() if doc.host.has_assembler() else None
+                for text in getattr(model, "warnings", ()):
+                    print(f"sketchforge: warning: {printable(text)}", file=sys.stderr)
             print(f"wrote {printable(out)} ({summary})", file=sys.stderr)
     if args.save:
         ff.save(doc, args.save)

@@ -69,7 +69,7 @@ from sketchforge.errors import (
     SolverError,
     UnknownSolverError,
 )
-from sketchforge.geometry.mesh import Mesh
+from sketchforge.geometry.mesh import AssembledMesh, Mesh
 from sketchforge.geometry.reflectance_model import ReflectanceModel, Shader
 from sketchforge.plugins.hookspecs import hookimpl
 from sketchforge.plugins.registry import Exporter, Panel
@@ -89,6 +89,7 @@ from sketchforge.tools.base import Tool
 
 __all__ = [
     "MAX_PARAMETER",
+    "AssembledMesh",
     "Assembler",
     "Command",
     "ContourError",

@@ -844,8 +844,8 @@ class MainWindow(QMainWindow):
 
         def done(c):
             self.layers_panel.select(c.layer)
-            notes = "".join("; " + n for n in plan.notes)
-            self.show_message(f"new {kind} part “{self.doc.layer(c.layer).name}”{notes}")
+            notes = list(plan.notes) + self._attachment_notes(self.doc.layer(c.layer))
+            self.show_message(f"new {kind} part “{self.doc.layer(c.layer).name}”" + "".join("; " + n for n in notes))
 
         self.runner.run(cmd, label="Inflating", macro="Draw layer" if before else None, before=before, on_done=done,
                         on_error=self._drawing_slip)
@@ -894,6 +894,21 @@ class MainWindow(QMainWindow):
 
         self.runner.run(cmd, label="Inflating", on_done=done, on_error=error)
 
+    def _attachment_notes(self, layer) -> list[str]:
+        """What the person should hear when a part is drawn (issue 34): its junction runs off
+        the part it lies on, spans two parts (glued to the one holding most of it) or cannot
+        be glued at all (it will be assembled free, and why) — said now, not first in
+        OBSERVATION."""
+        if layer.closed or layer.mesh is None or len(layer.mesh.junction) < 2:
+            return []
+        host, problem = C.attachment(self.doc, layer)
+        if problem:
+            return [problem]
+        note = C.attachment_note(self.doc, layer)
+        if note:
+            return [note]
+        return [f"glued to “{host.name}”"] if host is not None else []
+
     def _parts_glued_to(self, host) -> list[str]:
         """Ids of the parts the assembly glues to ``host`` now (their junction lies on it)."""
         return [pid for pid, (now, _) in C.attachments(self.doc).items() if pid != host.id and now is host]
@@ -912,7 +927,7 @@ class MainWindow(QMainWindow):
             part = self.doc.layer(pid)
             if now is None or now.id != host_id:
                 where = (f"it is now glued to “{now.name}”" if now is not None else
-                         "it would not assemble: " + problem if problem else "it is now a free part")
+                         problem if problem else "it is now a free part")
                 left.append((part, where))
         if not left:
             return
