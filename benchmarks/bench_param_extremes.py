@@ -93,7 +93,7 @@ def bench_sculpt(solver_name: str) -> None:
 DEAREST = {
     "gauss_newton": {"steps": 50, "ring": 1e9, "smoothness": 1e6, "stroke_weight": 1e6, "rim_margin": 0.0},
     "strips": {"integrator": "kvaerno5", "rtol": 1e-8, "atol": 1e-11, "strip_spacing": 1.0, "sample_spacing": 0.25,
-               "rbf_neighbors": 128, "ring": 20.0},
+               "rbf_neighbors": 64, "ring": 20.0},
 }
 
 

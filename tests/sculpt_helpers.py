@@ -42,3 +42,23 @@ def fidelity(result, light=LIGHT):
     E = layer_normals(result.mesh) @ np.asarray(light, dtype=np.float64)
     lines = [L for L in isophotes(result.mesh.V[:, :2], result.mesh.F, E, result.c)[0] if len(L) > 1]
     return mean_distance(P, result.isophote), mean_distance(P, shapely.MultiLineString(lines)), pd.h
+
+
+def stroke_moving_only_in_the_margin(mesh, pick, shift_edges):
+    """The isophote through ``pick`` from the pick to the rim, the part inside the rim margin
+    moved sideways by ``shift_edges`` edge lengths, the rest left on the isophote."""
+    ld = layer_data(mesh, LIGHT, LAMBERTIAN)
+    pd = ld.planar
+    _, iso = picked_isophote(ld, pick)
+    s0 = iso.project(shapely.Point(pick))
+    seg = shapely.ops.substring(iso, s0, iso.length)
+    P = np.array([seg.interpolate(t, normalized=True).coords[0] for t in np.linspace(0, 1, 200)])
+    d = np.gradient(P, axis=0)
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    normal = np.column_stack([-d[:, 1], d[:, 0]])
+    inside_margin = pd.rim_distance(P) < pd.margin_at(P)
+    # The move fades in over the margin's first edge length (a hand would not jump).
+    depth = pd.margin_at(P) - pd.rim_distance(P)
+    move = np.clip(depth / pd.h, 0.0, 1.0) * shift_edges * pd.h
+    assert inside_margin.any() and (~inside_margin).sum() > 10
+    return P + move[:, None] * normal, ld
