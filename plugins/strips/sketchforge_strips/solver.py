@@ -154,7 +154,10 @@ def solve(problem: SculptProblem, params: dict) -> SculptSolution:
     step = float(params["sample_spacing"]) * h
     seeds, edge, pid = [], [], []
     for j, piece in enumerate(problem.stroke):
-        s = flux_seeds(extend(piece, r), lambda P: np.nan_to_num(problem.interpolate(flow, P)), spacing, 0.25 * h)
+        # extended by a band radius, but never past the layer's size: a band of 1e9 (the whole
+        # layer) asked for 2 TiB of seeds along a stroke reaching out to it (issue 38's attack)
+        s = flux_seeds(extend(piece, min(r, extent)), lambda P: np.nan_to_num(problem.interpolate(flow, P)), spacing,
+                       0.25 * h)
         e = np.zeros(len(s), bool)
         e[[0, -1] if len(s) else []] = True
         seeds.append(s)
