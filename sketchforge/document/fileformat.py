@@ -42,7 +42,7 @@ from sketchforge.document.document import Document
 from sketchforge.document.layer import Layer, Light
 from sketchforge.errors import DocumentFormatError, ExportError, LimitError, SketchforgeError, quote
 from sketchforge.geometry.mesh import Mesh
-from sketchforge.plugins.solvers import SOLVER_KINDS, SolverChoice
+from sketchforge.solver_kinds import SOLVER_KINDS, SolverChoice
 
 FORMAT_NAME = "sketchforge"
 FORMAT_VERSION = 2
@@ -353,12 +353,11 @@ def validate_header(data: Any, source: str) -> tuple[Light, list]:
 
 
 def document_from_dict(data: Any, source: str = "document", host=None, use_snapshot: bool = True) -> Document:
-    """Validate and build a document. Uses the snapshot when there is one, else replays."""
-    light, journal = validate_header(data, source)
+    """Validate and build a document on ``host`` (its plugin host: required). Uses the snapshot
+    when there is one, else replays."""
     if host is None:
-        from sketchforge.plugins.manager import default_host
-
-        host = default_host()
+        raise TypeError("document_from_dict needs the plugin host: document_from_dict(data, source, host=host)")
+    light, journal = validate_header(data, source)
     provenance.check_available(data, host, source)  # every missing plugin, in one message
     snap = data.get("snapshot") if use_snapshot else None
     if snap is None:
@@ -388,9 +387,7 @@ def document_from_dict(data: Any, source: str = "document", host=None, use_snaps
     plugin_data = snap.get("plugin_data", {})
     if not isinstance(plugin_data, dict) or not all(isinstance(k, str) for k in plugin_data):
         raise DocumentFormatError(f"{source}: snapshot.plugin_data must be an object")
-    from sketchforge.plugins.plugin_data import validate_plugin_data
-
-    validate_plugin_data(doc.host, plugin_data, f"{source}: snapshot")  # the limits the plugins' commands keep
+    doc.host.validate_plugin_data(plugin_data, f"{source}: snapshot")  # the limits the plugins' commands keep
     assembly = _assembly_from_dict(snap.get("assembly"), f"{source}: snapshot.assembly", doc.host)
     doc.restore_state(layers, cur_light, light, journal, plugin_data, assembly)
     return doc
@@ -543,7 +540,7 @@ def parse_json(raw: bytes, path) -> Any:
     return data
 
 
-def load(path, host=None, use_snapshot: bool = True) -> Document:
+def load(path, host, use_snapshot: bool = True) -> Document:
     """Open a document file (snapshot if present, else replay)."""
     return document_from_dict(read_json(path), str(path), host=host, use_snapshot=use_snapshot)
 
@@ -560,3 +557,30 @@ def save(doc: Document, path, mark_clean: bool = True) -> None:
         raise ExportError(str(exc).replace("cannot write", "cannot save")) from None
     if mark_clean:
         doc.undo_stack.set_clean()
+
+
+def read_snapshot(data: Any, source: str = "document") -> tuple[list[Layer] | None, Light]:
+    """The layers of a file's snapshot and its current light, read without its plugins (their
+    edits and parameters unchecked, the meshes validated): what ``sketchforge info`` describes
+    when the document's plugins are not installed. The layers are None for a file without a
+    snapshot (only a replay, which needs the plugins, would make them); the light is then the
+    journal's initial one.
+
+    Raises
+    ------
+    DocumentFormatError
+        A header, layer or mesh that is not valid whatever the plugins.
+    """
+    light, _ = validate_header(data, source)
+    snap = data.get("snapshot")
+    if snap is None:
+        return None, light
+    if not isinstance(snap, dict) or not isinstance(snap.get("layers"), list):
+        raise DocumentFormatError(f"{source}: field 'snapshot' must be an object with a 'layers' list")
+    from sketchforge.document.document import MAX_LAYERS
+
+    if len(snap["layers"]) > MAX_LAYERS:
+        raise LimitError(f"{source}: the snapshot has {len(snap['layers']):,} layers; a document holds at most {MAX_LAYERS}")
+    layers = [_layer_from_dict(l, f"{source}: snapshot.layers[{i}]") for i, l in enumerate(snap["layers"])]
+    return layers, _parse_light(snap.get("light", data.get("light", [1.0, 0.0, 0.0])), f"{source}: snapshot.light",
+                                data["version"])
