@@ -18,7 +18,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from sketchforge.errors import DocumentFormatError, ParameterError, quote
+from sketchforge.plugin_api import DocumentFormatError, ParameterError, quote
 
 KEY = "animate"
 FPS = 24

@@ -15,8 +15,8 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from sketchforge.errors import LimitError, ParameterError
-from sketchforge.geometry.mesh import Mesh
+from sketchforge.plugin_api import LimitError, ParameterError
+from sketchforge.plugin_api import Mesh
 
 from .attach import Attachment, find_attachments
 from .blend import blend_junctions

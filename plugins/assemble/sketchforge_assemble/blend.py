@@ -114,7 +114,7 @@ def blend_junctions(sheets: list[Sheet], attachments: list[Attachment], front_of
         weight that fades to 0 over the fillet, so the part's slope continues the host's,
         whatever the depth solve does to the host.
     """
-    from sketchforge.geometry.locate import TriangleLocator
+    from sketchforge.plugin_api import TriangleLocator
 
     locators = {} if locators is None else locators
     lips, glues, springs = [], [], []

@@ -12,8 +12,8 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import shapely
 
-from sketchforge.geometry import guard
-from sketchforge.geometry.mesh import Mesh
+from sketchforge.plugin_api import guard
+from sketchforge.plugin_api import Mesh
 
 
 @dataclass(frozen=True, eq=False)

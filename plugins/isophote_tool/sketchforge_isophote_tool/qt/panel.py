@@ -16,7 +16,7 @@ import math
 from PySide6.QtCore import Qt
 from PySide6.QtWidgets import QCheckBox, QComboBox, QDoubleSpinBox, QFormLayout, QPushButton, QSlider, QWidget
 
-from sketchforge.errors import SketchforgeError
+from sketchforge.plugin_api import SketchforgeError
 from sketchforge.qt.panel_api import MAX_RADIUS, MIN_RADIUS
 
 from ..tool import SculptIsophoteTool
