@@ -55,8 +55,9 @@ def core() -> None:
     from sketchforge.document import fileformat as ff
     from sketchforge.geometry import gbuffer as gb
     from sketchforge.geometry.shaders import cel_shade, lambert_shade
+    from sketchforge.plugins import default_host
 
-    doc = ff.load(EXAMPLE)
+    doc = ff.load(EXAMPLE, default_host())
     meshes = [l.mesh if l.visible else None for l in doc.layers]
     view = gb.View.framing([m for m in meshes if m is not None], *SIZE, margin=0.1)
     print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")

@@ -479,6 +479,7 @@ def shade(
     outline_alpha: float = 0.0,
     outline_width: float = 1.0,
     out: np.ndarray | None = None,
+    intensity=None,
 ) -> np.ndarray:
     """Shade a GBuffer and composite it back to front over the background.
 
@@ -506,6 +507,10 @@ def shade(
         With ``bgrx``: the result of an earlier ``shade`` of this very buffer with the same
         background, written over in place. Pixels no fragment reaches never change between
         lights, so only the others are written (a light drag at 10^6 pixels).
+    intensity : callable or None
+        ``intensity(normals (k, 3), light (3,)) -> (E (k,), dE/dn (k, 3))``: the reflectance
+        the isophote lines follow (a model's, :mod:`sketchforge.geometry.model_shading`);
+        None: n·l.
 
     Returns
     -------
@@ -545,7 +550,8 @@ def shade(
             if b[li + 1] > b[li]:
                 colour[b[li] : b[li + 1]] *= scale[li]
         if isophotes > 0:
-            cov = isophote_coverage(gbuf, l, isophotes, line_width)
+            cov = isophote_coverage(gbuf, l, isophotes, line_width,
+                                    None if intensity is None else intensity(gbuf.normal, l))
             hit = np.nonzero(cov > 0)[0]
             f = gbuf.front_frag[hit]
             lc = np.asarray(line_colour, dtype=np.float32).reshape(3) * 255.0
@@ -592,13 +598,15 @@ def _pack(c: np.ndarray) -> np.ndarray:
     return p4.view("<u4").ravel()
 
 
-def isophote_coverage(gbuf: GBuffer, light, K: int, width: float = 1.2) -> np.ndarray:
+def isophote_coverage(gbuf: GBuffer, light, K: int, width: float = 1.2, intensity=None) -> np.ndarray:
     """Antialiased isophote lines n·l = j/(K+1) of the front layers, as coverage per owning
     fragment (``gbuf.front_frag``).
 
     The distance of a pixel to the nearest level, |E - c| / |∇E|, uses the screen-space gradient
     of the front layer's own E (normal differences that never cross into another layer), so a
     line keeps ``width`` pixels whatever the zoom, and stops where a layer in front begins.
+    ``intensity``: (E (k,), dE/dn (k, 3)) per fragment, a reflectance model's (lines at
+    E = j/(K+1), their gradient by the chain rule through dE/dn); None: E = n·l.
 
     Returns
     -------
@@ -607,6 +615,8 @@ def isophote_coverage(gbuf: GBuffer, light, K: int, width: float = 1.2) -> np.nd
     l = np.asarray(light, dtype=np.float32).reshape(3)
     K = int(K)
     dn_dx, dn_dy, (nx, ny, nz), bound = gbuf._line_data()
+    if intensity is not None:
+        return _model_coverage(gbuf, K, width, intensity, dn_dx, dn_dy, bound)
     t = nx * (l[0] * (K + 1))
     t += ny * (l[1] * (K + 1))
     t += nz * (l[2] * (K + 1))
@@ -619,6 +629,27 @@ def isophote_coverage(gbuf: GBuffer, light, K: int, width: float = 1.2) -> np.nd
     if len(cand):
         gx = _dot(dn_dx[cand], l) * (K + 1)
         gy = _dot(dn_dy[cand], l) * (K + 1)
+        g = np.sqrt(gx * gx + gy * gy)
+        cov[cand] = np.clip(reach - d[cand] / np.maximum(g, 1e-6), 0.0, 1.0)
+    return cov
+
+
+def _model_coverage(gbuf: GBuffer, K: int, width: float, intensity, dn_dx, dn_dy, bound) -> np.ndarray:
+    """:func:`isophote_coverage` of a reflectance model's E with gradient G = dE/dn per
+    fragment: |∇E| <= |G| |∇n| prunes the pixels as n·l's bound does."""
+    E, G = intensity
+    f = gbuf.front_frag
+    t = (np.asarray(E)[f] * (K + 1)).astype(np.float32)
+    Gf = np.asarray(G, dtype=np.float32)[f]
+    d = np.abs(t - np.clip(np.rint(t), 1, K))
+    reach = np.float32(0.5 * width + 0.5)
+    gmax = np.sqrt(np.einsum("ij,ij->i", Gf, Gf))
+    cand = np.nonzero(d < reach * (K + 1) * bound * gmax)[0]
+    cov = np.zeros(len(t), dtype=np.float32)
+    if len(cand):
+        gc = Gf[cand]
+        gx = np.einsum("ij,ij->i", dn_dx[cand], gc) * (K + 1)
+        gy = np.einsum("ij,ij->i", dn_dy[cand], gc) * (K + 1)
         g = np.sqrt(gx * gx + gy * gy)
         cov[cand] = np.clip(reach - d[cand] / np.maximum(g, 1e-6), 0.0, 1.0)
     return cov
