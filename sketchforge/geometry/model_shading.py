@@ -4,10 +4,12 @@ never written twice (once in JAX for the sculpt, once in numpy for the display).
 
 The display evaluates that same function, compiled by JAX, on the per-pixel normals of the
 canvas' buffer (numpy float32 arrays, upcast to float64), in fixed chunks of
-:data:`CHUNK` normals (the last one padded), so it compiles once per model whatever the view:
-R and its gradient dR/dn come from one compiled call, and the gradient draws the model's own
-isophote lines (R = j/(K+1)) with a constant width in pixels. The Lambertian model takes a
-plain numpy path (``N·l``, gradient ``l``); its colours are the clay shader's.
+:data:`CHUNK` normals (the last one padded), so it compiles once per model whatever the view.
+The model's own isophote lines (R = j/(K+1)) follow the same per-pixel R, their width kept in
+pixels by R's differences between neighbouring pixels of a layer
+(:func:`sketchforge.geometry.gbuffer.isophote_coverage`): no gradient is evaluated (it cost
+2.3 times the values). The Lambertian model takes a plain numpy path (``N·l``); its colours are
+the clay shader's.
 
 The values are the sculpt's: :func:`sketchforge.geometry.reflectance.evaluate_pq` evaluates
 the same ``R`` at n(p, q); on a buffer's float32 normals they agree within 1e-6
@@ -30,13 +32,14 @@ CHUNK = 1 << 16
 
 @lru_cache(maxsize=None)
 def _compiled(model: ReflectanceModel):
+    """R over a chunk of normals, compiled once per model."""
     from sketchforge.geometry.reflectance import jax  # x64 switched on there
 
-    return jax.jit(jax.vmap(jax.value_and_grad(model.R, argnums=0), in_axes=(0, None)))
+    return jax.jit(jax.vmap(model.R, in_axes=(0, None)))
 
 
-def reflectance_and_gradient(model: ReflectanceModel, N: np.ndarray, l: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """R(n_i, l) and dR/dn at many normals, from the model's own definition.
+def reflectance(model: ReflectanceModel, N: np.ndarray, l: np.ndarray) -> np.ndarray:
+    """R(n_i, l) at many normals, from the model's own definition.
 
     Parameters
     ----------
@@ -48,37 +51,31 @@ def reflectance_and_gradient(model: ReflectanceModel, N: np.ndarray, l: np.ndarr
 
     Returns
     -------
-    R : (k,) float64
+    (k,) float64
         Signed reflectance.
-    G : (k, 3) float64
-        Its gradient with respect to the normal.
     """
     from sketchforge.geometry.reflectance import LAMBERTIAN
 
     l = np.asarray(l, dtype=np.float64).reshape(3)
     k = len(N)
     if model.R is LAMBERTIAN.R:
-        N32 = np.asarray(N)
-        R = N32[:, 0] * l[0] + N32[:, 1] * l[1] + N32[:, 2] * l[2]  # float64 from a float32 buffer
-        return R, np.broadcast_to(l, (k, 3))
+        N_ = np.asarray(N)
+        return N_[:, 0] * l[0] + N_[:, 1] * l[1] + N_[:, 2] * l[2]  # float64 from a float32 buffer
     fn = _compiled(model)
     R = np.empty(k)
-    G = np.empty((k, 3))
     block = np.empty((CHUNK, 3))
     for s in range(0, k, CHUNK):
         n = min(CHUNK, k - s)
         block[:n] = N[s : s + n]
         block[n:] = (0.0, 0.0, 1.0)  # padding: any unit normal
-        r, g = fn(block, l)
-        R[s : s + n] = np.asarray(r)[:n]
-        G[s : s + n] = np.asarray(g)[:n]
-    return R, G
+        R[s : s + n] = np.asarray(fn(block, l))[:n]
+    return R
 
 
 class ModelShader:
     """A display shader made from a reflectance model: clay lit by ``AMBIENT + (1 - AMBIENT)
     * clip(R(n, l), 0, 1)`` (for Lambertian, exactly the clay shader), with the model's own
-    isophote lines (:meth:`intensity`).
+    isophote lines (:meth:`intensity`, the R the lines follow).
 
     ``shade(N, l)`` and ``intensity(N, l)`` of one buffer and light share one evaluation."""
 
@@ -88,19 +85,19 @@ class ModelShader:
         self.description = f"clay lit by the reflectance model {model.name!r}: {model.description}".strip(": ")
         self._last: tuple | None = None
 
-    def intensity(self, N: np.ndarray, l: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(R (k,), dR/dn (k, 3)) at the normals ``N`` (cached for the last buffer and light)."""
+    def intensity(self, N: np.ndarray, l: np.ndarray) -> np.ndarray:
+        """R (k,) float64 at the normals ``N`` (cached for the last buffer and light)."""
         l = np.asarray(l, dtype=np.float64).reshape(3)
         last = self._last  # one read: a thumbnail thread may shade meanwhile
         if last is not None and last[1] is N and last[0] == l.tobytes():
-            return last[2], last[3]
-        R, G = reflectance_and_gradient(self.model, N, l)
-        self._last = (l.tobytes(), N, R, G)
-        return R, G
+            return last[2]
+        R = reflectance(self.model, N, l)
+        self._last = (l.tobytes(), N, R)
+        return R
 
     def shade(self, N: np.ndarray, l: np.ndarray) -> np.ndarray:
         """(k, 3) colours in [0, 1] (float32 for a float32 buffer, like the clay shader)."""
-        R, _ = self.intensity(N, l)
+        R = self.intensity(N, l)
         dtype = np.float32 if np.asarray(N).dtype == np.float32 else np.float64
         k = np.clip(R, 0.0, 1.0).astype(dtype)
         k *= 1.0 - AMBIENT
