@@ -2,7 +2,8 @@
 the app's Help > Plugins shows (one source, so the two always agree).
 
 Each problem line the host recorded (a plugin left out, a hook that raised, a contribution
-refused, a name two plugins claim) is listed once, under every plugin it names.
+refused, a name two plugins claim) is listed once, numbered; every plugin it names refers to
+its number.
 """
 
 from __future__ import annotations
@@ -92,9 +93,20 @@ def unattributed_problems(host, entries: list[PluginEntry]) -> list[str]:
     return [p for p in host.problems if p not in listed]
 
 
+def numbered_problems(entries: list[PluginEntry], extra_problems=()) -> list[str]:
+    """Every problem once, in the order of the plugins listed (then those no plugin owns): the
+    numbers a plugin's "problems" refer to."""
+    out: list[str] = []
+    for e in entries:
+        out += [p for p in e.problems if p not in out]
+    return out + [p for p in extra_problems if p not in out]
+
+
 def format_inventory(entries: list[PluginEntry], extra_problems=()) -> list[str]:
     """The inventory as text lines (``sketchforge plugins``): per plugin one heading line
-    "NAME VERSION (STATUS)", one line per kind of contribution, one per problem."""
+    "NAME VERSION (STATUS)", one line per kind of contribution and the numbers of its
+    problems; then each problem once, numbered ("problems:", "  1. ...")."""
+    problems = numbered_problems(entries, extra_problems)
     lines = []
     for e in entries:
         head = e.name + (f" {e.version}" if e.version else "")
@@ -105,8 +117,10 @@ def format_inventory(entries: list[PluginEntry], extra_problems=()) -> list[str]
             lines.append(f"  {heading}: {', '.join(names)}")
         if not e.registers and e.status == "loaded":
             lines.append("  registers nothing")
-        for p in e.problems:
-            lines.append(f"  problem: {p}")
-    for p in extra_problems:
-        lines.append(f"problem: {p}")
+        if e.problems:
+            refs = ", ".join(str(problems.index(p) + 1) for p in e.problems)
+            lines.append(f"  problem{'s' * (len(e.problems) != 1)}: {refs} (below)")
+    if problems:
+        lines.append(f"{len(problems)} problem{'s' * (len(problems) != 1)}:")
+        lines += [f"  {i}. {p}" for i, p in enumerate(problems, 1)]
     return lines

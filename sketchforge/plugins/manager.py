@@ -323,6 +323,11 @@ class PluginHost:
         in the status bar and log; the CLI on stderr."""
         return list(self.pm.problems)
 
+    def report_problem(self, text: str, *plugins: str) -> None:
+        """Add a problem a front end found (a panel whose ``create`` failed), naming its
+        plugins: it is listed with the others (Help > Plugins, ``problems_of``)."""
+        self._report(text, *plugins)
+
     def problems_of(self, plugin_name: str) -> list[str]:
         """The problem lines that concern ``plugin_name`` (a plugin left out, a contribution
         refused, a name it shares with another plugin)."""
@@ -546,6 +551,19 @@ class PluginHost:
             self._report(f"plugins {' and '.join(repr(i.plugin_name) for i in impls)} both implement sketchforge_pose: "
                          "error, posing is refused until one of them is uninstalled", *(i.plugin_name for i in impls))
         return self.problems
+
+    def display_shadings(self) -> dict:
+        """Every way the display can shade: {key: shader}, the display shaders by their name,
+        then each reflectance model as ``"model:NAME"`` shading by its own R(n, l) (one BRDF
+        definition for the sculpt and the display: :mod:`sketchforge.geometry.model_shading`).
+        A shader has ``name``, ``shade(N, l)``, ``description``; a model's also
+        ``intensity(N, l)`` (its isophote lines)."""
+        from sketchforge.geometry.model_shading import model_shader
+
+        out = dict(self.shaders)
+        for name, model in self.reflectance_models.items():
+            out[f"model:{name}"] = model_shader(model)
+        return out
 
     def validate_plugin_data(self, plugin_data: dict, where: str) -> None:
         """Check a file's plugin data (``snapshot.plugin_data``) with the validators the
