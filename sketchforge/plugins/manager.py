@@ -85,8 +85,9 @@ def make_plugin_manager(
     Each plugin's hooks are checked as it is registered (:func:`_hook_problem`). A plugin given
     in ``plugins`` that fails raises PluginError. With ``skip_broken`` an entry point that
     fails to import or to register is left out instead of failing the whole host (the app, the
-    CLI and ``Document()`` must start even if one plugin is broken or lacks a dependency); the
-    failures are in ``pm.skipped`` ({name: one line}) and ``pm.problems``."""
+    CLI and a script's document must start even if one plugin is broken or lacks a dependency);
+    the failures are in ``pm.skipped`` ({name: one line}) and ``pm.problems``, each with the
+    plugins it concerns in ``pm.problem_owners``."""
     from sketchforge.plugins import builtin
 
     pm = pluggy.PluginManager("sketchforge")
@@ -635,10 +636,11 @@ _default: PluginHost | None = None
 
 
 def default_host() -> PluginHost:
-    """The process-wide host with every installed plugin (built on first use). A plugin that
-    cannot be loaded (a missing dependency, a broken hook) is left out with one line in
-    ``problems`` (and the log) naming it, never a traceback: the CLI prints that line, the app
-    shows it in its status bar, ``Document()`` works with the rest."""
+    """The process-wide host with every installed plugin (built on first use): what the CLI
+    and a script hand a document (``Document(default_host())``). A plugin that cannot be loaded
+    (a missing dependency, a broken hook) is left out with one line in ``problems`` naming it,
+    never a traceback: the CLI prints that line once, the app lists it in Help > Plugins, a
+    document works with the rest."""
     global _default
     if _default is None:
         _default = PluginHost.create(skip_broken=True)

@@ -202,7 +202,6 @@ def plugin_screenshots(doc_path: Path, out: Path) -> None:
     biggest = max((l for l in w.doc.layers if l.mesh is not None), key=lambda l: l.mesh.n_vertices)
     w.layers_panel.select(biggest.id)
     settle(w, app)
-    w.creation_panel.grab().save(str(out / "params-creation.png"))
     panel = w.plugin_panels.get("isophote_sculpt")
     if panel is not None and panel.solver.findData("strips") >= 0:
         w.set_mode("sculpture")
@@ -226,6 +225,7 @@ def plugin_screenshots(doc_path: Path, out: Path) -> None:
         settle(w, app)
         w.canvas.render_now()
         w.center.grab().save(str(out / "model-shading.png"))
+    w.creation_panel.grab().save(str(out / "params-creation.png"))
     w.close_now()
     print(f"wrote the plugin screenshots in {out}", file=sys.stderr)
 
