@@ -141,7 +141,9 @@ def cmd_info(args) -> int:
     _, journal = ff.validate_header(data, str(args.doc))
     missing = missing_plugins(data, host)
     if missing:
-        layers, l = ff.read_snapshot(data, str(args.doc))
+        from sketchforge.document.summary import read_snapshot
+
+        layers, l = read_snapshot(data, str(args.doc))
     else:
         doc = ff.document_from_dict(data, str(args.doc), host=host)
         layers, l = doc.layers, doc.light

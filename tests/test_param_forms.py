@@ -85,9 +85,9 @@ def test_the_built_in_solvers_declare_every_parameter(real_host):
 
 
 def test_the_helpers_declare_what_they_check():
-    check = number("w", 0.0, 2.0, lo_open=True, optional=True, label="Weight", help="how much")
-    assert check.field == ParamField("w", "number", None, 0.0, 2.0, True, False, True, (), "Weight", "how much")
-    assert check.field.range_text() == "0 < w <= 2" and check.field.title == "Weight"
+    check = number("w", 0.0, 2.0, lo_open=True, optional=True)
+    assert check.field == ParamField("w", "number", None, 0.0, 2.0, True, False, True)
+    assert check.field.range_text() == "0 < w <= 2" and check.field.title == "W"
     assert number("n", 1, 9, integer=True).field.kind == "integer"
     assert number("x", float("-inf"), math.inf).field.lo is None  # an infinite bound is no bound
     assert choice("c", ["a", "b"]).field.options == ("a", "b")
@@ -103,9 +103,10 @@ def test_a_hand_written_check_declares_its_form_and_keeps_its_messages():
 
     declared = declare_params(by_hand, {"size": 1.0, "mode": "a"},
                               {"size": number("size", 0.0, 10.0, lo_open=True), "mode": choice("mode", ("a", "b"))},
-                              help={"size": "the size"})
+                              help={"size": "the size"}, labels={"size": "Size (m)"})
     fields = {f.key: f for f in describe_params(declared)}
     assert fields["size"].range_text() == "0 < size <= 10" and fields["size"].help == "the size"
+    assert fields["size"].title == "Size (m)" and fields["mode"].title == "Mode"
     assert fields["mode"].options == ("a", "b") and fields["mode"].declared
     # undeclared keys are inferred from the defaults, without a range
     assert [(fields[k].kind, fields[k].declared) for k in ("note", "auto", "extra")] == [

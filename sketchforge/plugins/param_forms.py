@@ -6,7 +6,8 @@ What a field knows comes from the parameter helpers of :mod:`sketchforge.plugins
 
 - ``number(key, lo, hi, lo_open=, hi_open=, integer=, optional=)`` declares a range (and
   whether None, "automatic", is allowed), ``choice(key, options)`` the options, ``flag(key)``
-  a switch; each check carries its :class:`ParamField` as ``check.field``;
+  a switch; each check carries its :class:`ParamField` as ``check.field``; what a parameter
+  means (its tooltip) and its label, :func:`declare_params` adds;
 - ``validate_params(params, defaults, checks)`` ties them to the defaults: the host calls
   ``check_params({})`` once while recording the ``validate_params`` call it makes;
 - a solver whose ``check_params`` is written by hand declares the same with
@@ -108,14 +109,13 @@ class ParamField:
         return True
 
 
-def number_field(key, lo=None, hi=None, lo_open=False, hi_open=False, integer=False, optional=False,
-                 label="", help="") -> ParamField:
+def number_field(key, lo=None, hi=None, lo_open=False, hi_open=False, integer=False, optional=False) -> ParamField:
     """The field ``number(...)`` declares (an infinite bound is no bound)."""
     def bound(b):
         return None if b is None or not math.isfinite(float(b)) else float(b)
 
     return ParamField(key, "integer" if integer else "number", None, bound(lo), bound(hi), bool(lo_open), bool(hi_open),
-                      bool(optional), (), label, help)
+                      bool(optional))
 
 
 # --- recording validate_params ----------------------------------------------------------------
@@ -132,10 +132,11 @@ def record_declaration(defaults: Mapping, checks: Mapping | None) -> None:
 
 
 def declare_params(check_params: Callable, defaults: Mapping, checks: Mapping[str, Callable] | None = None,
-                   help: Mapping[str, str] | None = None) -> Callable:
+                   help: Mapping[str, str] | None = None, labels: Mapping[str, str] | None = None) -> Callable:
     """``check_params`` (unchanged: its checks and messages stay its own) declaring its form:
     the ``defaults`` and the ``checks`` made with ``number``, ``choice`` and ``flag`` that
-    describe each key's range or options, and optional ``help`` texts per key.
+    describe each key's range or options, and optional ``help`` texts and ``labels`` per key
+    (a label's default is the key, humanised).
 
     For a solver whose check is written by hand (or does more than ``validate_params``)::
 
@@ -147,7 +148,7 @@ def declare_params(check_params: Callable, defaults: Mapping, checks: Mapping[st
     def check(params):
         return check_params(params)
 
-    check.__sketchforge_params__ = (dict(defaults), dict(checks or {}), dict(help or {}))
+    check.__sketchforge_params__ = (dict(defaults), dict(checks or {}), dict(help or {}), dict(labels or {}))
     return check
 
 
@@ -182,12 +183,12 @@ def describe_params(check_params: Callable) -> list[ParamField]:
     finally:
         _RECORDING.reset(token)
     if declared is not None:
-        _, checks, helps = declared
+        _, checks, helps, labels = declared
     elif rec:
         _, checks = rec[0]
-        helps = {}
+        helps, labels = {}, {}
     else:
-        checks, helps = {}, {}
+        checks, helps, labels = {}, {}, {}
     out = []
     for key, value in full.items():
         field = getattr(checks.get(key), "field", None)
@@ -195,7 +196,8 @@ def describe_params(check_params: Callable) -> list[ParamField]:
             field = _inferred(key, value)
         elif field.kind in ("number", "integer") and value is None and not field.optional:
             field = _inferred(key, value)
-        out.append(_with(field, key=key, default=value, help=helps.get(key, field.help)))
+        out.append(_with(field, key=key, default=value, help=helps.get(key, field.help),
+                         label=labels.get(key, field.label)))
     return out
 
 

@@ -25,7 +25,8 @@ bad value. :func:`validate_params` does the usual work for a solver with a flat 
 parameters. The host puts the solver's name in front of the message.
 
 What :func:`number`, :func:`choice` and :func:`flag` check, they also declare (``check.field``:
-a range, options, a switch, with an optional ``label`` and ``help``), and
+a range, options, a switch; what each parameter means, :func:`~sketchforge.plugins.param_forms.declare_params`
+says), and
 :func:`validate_params` ties them to the defaults: the app builds each solver's parameter form
 from that (:mod:`sketchforge.plugins.param_forms`; a hand-written ``check_params`` declares
 its form with :func:`~sketchforge.plugins.param_forms.declare_params`), so a plugin writes no
@@ -160,8 +161,7 @@ def validate_params(params: Mapping | None, defaults: Mapping, checks: Mapping[s
 
 
 def number(key: str, lo: float | None = None, hi: float | None = None, *, lo_open: bool = False,
-           hi_open: bool = False, integer: bool = False, optional: bool = False, label: str = "",
-           help: str = "") -> Callable:
+           hi_open: bool = False, integer: bool = False, optional: bool = False) -> Callable:
     """A ``checks`` entry: the value must be a (finite) number in the range, an integer if
     ``integer``, or None if ``optional``. Returns float (int for an integer parameter)."""
 
@@ -190,12 +190,12 @@ def number(key: str, lo: float | None = None, hi: float | None = None, *, lo_ope
             raise ParameterError(f"{key!r} must be {'<' if hi_open else '<='} {hi:g}, got {x:g}")
         return x
 
-    # What the app's form shows: this range (``label``, ``help``: its words; see param_forms).
-    check.field = number_field(key, lo, hi, lo_open, hi_open, integer, optional, label, help)
+    # What the app's form shows: this range (its words: declare_params' help; see param_forms).
+    check.field = number_field(key, lo, hi, lo_open, hi_open, integer, optional)
     return check
 
 
-def choice(key: str, options, *, label: str = "", help: str = "") -> Callable:
+def choice(key: str, options) -> Callable:
     """A ``checks`` entry: the value must be one of ``options`` (strings)."""
     options = tuple(options)
 
@@ -204,11 +204,11 @@ def choice(key: str, options, *, label: str = "", help: str = "") -> Callable:
             raise ParameterError(f"{key!r} must be one of {', '.join(map(repr, options))}, got {quote(v)}")
         return v
 
-    check.field = ParamField(key, "choice", options=options, label=label, help=help)
+    check.field = ParamField(key, "choice", options=options)
     return check
 
 
-def flag(key: str, *, label: str = "", help: str = "") -> Callable:
+def flag(key: str) -> Callable:
     """A ``checks`` entry: the value must be true or false."""
 
     def check(v):
@@ -216,5 +216,5 @@ def flag(key: str, *, label: str = "", help: str = "") -> Callable:
             raise ParameterError(f"{key!r} must be true or false, got {quote(v)}")
         return v
 
-    check.field = ParamField(key, "flag", label=label, help=help)
+    check.field = ParamField(key, "flag")
     return check

@@ -32,23 +32,30 @@ def assemble_layers(layers, params):
 #: The parameters as the app's form shows them: the ranges and options ``_params`` checks
 #: (with its own messages).
 FORM = {
-    "fillet": number("fillet", 0.0, help="Width of the blended junction, in edge lengths of the part (0: a plain fold)"),
-    "fair": number("fair", 0, 50, integer=True, help="Rings of edges smoothed around the ends of a blended junction"),
-    "margin": number("margin", 0.0, lo_open=True, help="Front/back separation at the rim, in edge lengths"),
-    "gap": number("gap", 0.0, lo_open=True, help="Clearance between overlapping layers, in edge lengths"),
-    "reg": number("reg", 0.0, lo_open=True, help="Pull of the parts towards the drawing plane (relative)"),
-    "stiffness": number("stiffness", 0.0, lo_open=True,
-                        help="How much stiffer a layer with parts glued to it is than the parts"),
-    "qp_solver": choice("qp_solver", ("osqp", "active_set"), label="QP solver",
-                        help="osqp (a dual active set finishes a row left violated) or the active set alone"),
-    "on_bad_junction": choice("on_bad_junction", ("raise", "free"),
-                              help="A junction that cannot be glued: refuse the model, or leave that part free"),
+    "fillet": number("fillet", 0.0),
+    "fair": number("fair", 0, 50, integer=True),
+    "margin": number("margin", 0.0, lo_open=True),
+    "gap": number("gap", 0.0, lo_open=True),
+    "reg": number("reg", 0.0, lo_open=True),
+    "stiffness": number("stiffness", 0.0, lo_open=True),
+    "qp_solver": choice("qp_solver", ("osqp", "active_set")),
+    "on_bad_junction": choice("on_bad_junction", ("raise", "free")),
+}
+HELP = {
+    "fillet": "Width of the blended junction, in edge lengths of the part (0: a plain fold)",
+    "fair": "Rings of edges smoothed around the ends of a blended junction",
+    "margin": "Front/back separation at the rim, in edge lengths",
+    "gap": "Clearance between overlapping layers, in edge lengths",
+    "reg": "Pull of the parts towards the drawing plane (relative)",
+    "stiffness": "How much stiffer a layer with parts glued to it is than the parts",
+    "qp_solver": "osqp (a dual active set finishes a row left violated) or the active set alone",
+    "on_bad_junction": "A junction that cannot be glued: refuse the model, or leave that part free",
 }
 
 DEPTH_QP = Assembler(
     "depth_qp",
     assemble_layers,
-    check_params=declare_params(_params, DEFAULT_PARAMS, FORM),
+    check_params=declare_params(_params, DEFAULT_PARAMS, FORM, HELP, {"qp_solver": "QP solver"}),
     version=VERSION,
     description="Monster Mash assembly (thesis 4.7): front and back sheets, junctions cut and glued, "
                 "depth order as a QP on per-vertex offsets, junctions blended and faired",

@@ -17,18 +17,20 @@ def inflate(points, closed, params, holes):
 #: The parameters as the app's form shows them: the ranges ``validate_params`` checks (its own
 #: messages), the largest values being the drawing's coordinate range.
 FORM = {
-    "resolution": number("resolution", 0.0, MAX_COORDINATE, lo_open=True,
-                         help="Target triangle edge length, drawing units (smaller: finer, slower)"),
-    "inflation": number("inflation", 0.0, MAX_COORDINATE,
-                        help="Height scale: 1 turns a disk of radius R into a hemisphere of height R"),
-    "smoothing": number("smoothing", 0.0, 1.0, hi_open=True,
-                        help="Fairing weight α in [0, 1): 0 keeps the inflation's steep rim, more rounds it"),
+    "resolution": number("resolution", 0.0, MAX_COORDINATE, lo_open=True),
+    "inflation": number("inflation", 0.0, MAX_COORDINATE),
+    "smoothing": number("smoothing", 0.0, 1.0, hi_open=True),
+}
+HELP = {
+    "resolution": "Target triangle edge length, drawing units (smaller: finer, slower)",
+    "inflation": "Height scale: 1 turns a disk of radius R into a hemisphere of height R",
+    "smoothing": "Fairing weight α in [0, 1): 0 keeps the inflation's steep rim, more rounds it",
 }
 
 POISSON = Inflater(
     "poisson",
     inflate,
-    check_params=declare_params(validate_params, DEFAULT_PARAMS, FORM),
+    check_params=declare_params(validate_params, DEFAULT_PARAMS, FORM, HELP),
     version=VERSION,
     description="thesis 3.2/4.2: -L u = 4M with u = 0 on every rim, z = inflation·sqrt(u), then faired",
 )
