@@ -285,3 +285,23 @@ def test_render_chooses_the_shading_by_model_or_shader(tmp_path, capsys):
     assert "lambertian" in err and not (tmp_path / "x.png").exists()
     assert cli.main(["render", str(src), "--png", str(tmp_path / "x.png"), "--shader", "toon"]) == 2
     assert "no such display shader is installed (installed: cel, lambert" in capsys.readouterr().err
+
+
+def test_the_app_s_host_prints_each_problem_once(monkeypatch, capsys):
+    """A plugin that cannot be loaded used to reach stderr two to four times (the host's log, the
+    app's 'not loaded' line, its problem line, the inflation child's host): now once."""
+    from importlib.metadata import EntryPoint
+
+    from sketchforge.plugins import manager
+    from sketchforge.qt.app import plugin_host
+
+    real = manager.entry_points
+    broken = EntryPoint("zz_needs_diffrax", "sketchforge_no_such_module.plugin", "sketchforge")
+    monkeypatch.setattr(manager, "entry_points", lambda group: list(real(group=group)) + [broken])
+    monkeypatch.setenv("SKETCHFORGE_PLUGINS", "inflate,zz_needs_diffrax")
+    host = plugin_host()
+    manager.PluginHost.create(skip_broken=True)  # the child process builds one too: it prints nothing
+    err = capsys.readouterr().err.splitlines()
+    line = ("sketchforge: warning: plugin 'zz_needs_diffrax' could not be loaded: ModuleNotFoundError: "
+            "No module named 'sketchforge_no_such_module'")
+    assert err == [line] and host.problems_of("zz_needs_diffrax") == [line.removeprefix("sketchforge: warning: ")]
