@@ -7,7 +7,9 @@ Errors a user can cause print one line on stderr and exit with status 2; no trac
 from __future__ import annotations
 
 import argparse
+import os
 import sys
+import warnings
 from pathlib import Path
 
 from sketchforge.atomic import check_target, refuse_input_as_output, same_file
@@ -92,6 +94,11 @@ def cmd_replay(args) -> int:
         host.exporter_for(Path(args.export))  # an unknown format, before the replay
     data = ff.read_json(args.doc)
     light, journal = ff.validate_header(data, str(args.doc))
+    if args.check and data.get("snapshot") is None:
+        # Exit 0 with nothing said read as a pass; without a snapshot nothing was compared.
+        raise SketchforgeError(
+            f"{args.doc} has no snapshot: nothing to compare (--check compares the replay with the saved snapshot)"
+        )
     check_available(data, host, str(args.doc))  # names every missing plugin at once
 
     def progress(i, n):
@@ -99,7 +106,7 @@ def cmd_replay(args) -> int:
             print(f"replayed {i}/{n}", file=sys.stderr)
 
     doc = ff.replay_journal(light, journal, str(args.doc), host=host, progress=progress)
-    if args.check and data.get("snapshot") is not None:
+    if args.check:
         snap = ff.document_from_dict(data, str(args.doc), host=host)
         diffs = ff.compare(snap, doc)
         if diffs:
@@ -123,6 +130,10 @@ def cmd_replay(args) -> int:
                 summary = doc.host.export(out, mesh=doc.export_mesh(args.layer))
             else:
                 summary = doc.host.export(out, doc=doc)
+                # the parts the assembly had to leave free, and why (issue 34): said, never silent
+                model = doc.assembled() if doc.host.has_assembler() else None
+                for text in getattr(model, "warnings", ()):
+                    print(f"sketchforge: warning: {printable(text)}", file=sys.stderr)
             print(f"wrote {printable(out)} ({summary})", file=sys.stderr)
     if args.save:
         ff.save(doc, args.save)
@@ -269,6 +280,31 @@ def build_app_parser() -> argparse.ArgumentParser:
     return p
 
 
+def _warning_note(caught) -> str:
+    """The numeric warnings (RuntimeWarning: numpy's "overflow encountered in multiply") a
+    failed command raised, folded into its error line: " (on the way: ...)", or "". Other
+    warnings (a library's deprecations) say nothing about the user's input: dropped."""
+    texts = list(dict.fromkeys(str(w.message).strip().splitlines()[0] for w in caught
+                               if issubclass(w.category, RuntimeWarning) and str(w.message).strip()))
+    if not texts:
+        return ""
+    more = f" and {len(texts) - 2} more" if len(texts) > 2 else ""
+    return f" (on the way: {'; '.join(texts[:2])}{more})"
+
+
+def _stdout_gone() -> int:
+    """The reader of stdout went away (``info | head -1``): the rest of the output has nowhere
+    to go, which is no error. Later writes (the interpreter's own flush at exit) go to
+    /dev/null, so no BrokenPipeError traceback follows; the status is a SIGPIPE death's."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError, AttributeError):
+        pass
+    return 141
+
+
 def main(argv=None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     try:
@@ -276,7 +312,18 @@ def main(argv=None) -> int:
             args = build_parser().parse_args(argv)
             if args.cmd != "plugins":  # which lists them itself, each under its plugin
                 _warn_plugin_problems()
-            return args.func(args)
+            # One line, always: a solver's numeric warnings (RuntimeWarning lines before the
+            # error line) are collected; a failure folds them into its line, a success has
+            # been checked for non-finite results by the core and drops them.
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                try:
+                    rc = args.func(args)
+                except SketchforgeError as exc:
+                    print(f"sketchforge: error: {printable(shorten(str(exc) + _warning_note(caught)))}", file=sys.stderr)
+                    return 2
+            sys.stdout.flush()  # here, where a closed pipe is caught, not at exit
+            return rc
         args = build_app_parser().parse_args(argv)
         if args.screenshot and args.doc is not None:
             refuse_input_as_output(args.screenshot, [args.doc], "screenshot")
@@ -286,6 +333,8 @@ def main(argv=None) -> int:
     except SketchforgeError as exc:
         print(f"sketchforge: error: {printable(shorten(str(exc)))}", file=sys.stderr)
         return 2
+    except BrokenPipeError:
+        return _stdout_gone()
     except KeyboardInterrupt:
         print("sketchforge: interrupted", file=sys.stderr)
         return 130

@@ -90,7 +90,7 @@ from sketchforge.errors import (
     quote,
     shorten,
 )
-from sketchforge.geometry.mesh import Mesh
+from sketchforge.geometry.mesh import AssembledMesh, Mesh
 from sketchforge.geometry.reflectance_model import ReflectanceModel, Shader
 from sketchforge.plugins.hookspecs import hookimpl
 from sketchforge.plugins.outputs import check_front_mesh
@@ -98,6 +98,7 @@ from sketchforge.plugins.param_forms import ParamField, declare_params, describe
 from sketchforge.plugins.registry import DatasetGenerator, Exporter, Panel
 from sketchforge.plugins.sculpt_problem import SculptProblem, SculptSolution
 from sketchforge.plugins.solvers import (
+    MAX_PARAMETER,
     Assembler,
     Inflater,
     SculptSolver,
@@ -170,6 +171,7 @@ _LAZY: dict[str, tuple[str, str]] = {
     "BACK": ("sketchforge.geometry.attachment", "BACK"),
     "find_host": ("sketchforge.geometry.attachment", "find_host"),
     "median_edge_length": ("sketchforge.geometry.attachment", "median_edge_length"),
+    "plan_attachments": ("sketchforge.geometry.attachment", "plan_attachments"),
 }
 
 
@@ -212,6 +214,7 @@ __all__ = sorted(
         "Layer",
         "Light",
         "Mesh",
+        "AssembledMesh",
         "inflate_layer",
         "reapply_edits",
         "new_gesture_id",
@@ -225,6 +228,7 @@ __all__ = sorted(
         # solver parameters and outputs
         "validate_params",
         "number",
+        "MAX_PARAMETER",
         "choice",
         "flag",
         "no_params",

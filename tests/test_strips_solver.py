@@ -130,7 +130,7 @@ def test_its_parameters_are_checked_and_unknown_ones_refused():
     assert check_params({}) == DEFAULT_PARAMS
     assert check_params({"integrator": "kvaerno5", "rbf_neighbors": 64})["rbf_neighbors"] == 64
     for bad, message in (({"integrator": "euler"}, "'integrator' must be one of 'tsit5', 'kvaerno5', got 'euler'"),
-                         ({"rtol": 0}, "'rtol' must be >= 1e-12, got 0"),
+                         ({"rtol": 0}, "'rtol' must be >= 1e-08, got 0"),
                          ({"rbf_neighbors": 3.5}, "'rbf_neighbors' must be a whole number, got 3.5"),
                          ({"lambda": 0.05}, "unknown parameter 'lambda' (known: ")):
         with pytest.raises(ParameterError) as info:

@@ -118,7 +118,11 @@ def sketchforge_assemblers():
     (``set_assembly``; default ``"depth_qp"``), with ``layers`` the visible layers that have a
     mesh, back to front (read-only ``Layer`` values: ``id``, ``mesh`` whose ``junction`` marks
     Γ_conn, ``closed``), and the dict ``check_params`` returned. Returns one ``Mesh``,
-    outward-oriented triangles, ``boundary`` and ``junction`` empty.
+    outward-oriented triangles, ``boundary`` and ``junction`` empty; or an ``AssembledMesh``
+    (a ``Mesh`` that also says which layers it could not glue, ``free``, with one sentence
+    each in ``warnings``, and ``notes`` on parts glued by a stretch of their junction), which
+    the app shows over the model. One part that cannot be glued should never refuse the
+    whole model (issue 34): assemble it free and say so.
     """
 
 

@@ -40,6 +40,8 @@ import numbers
 from dataclasses import dataclass, field
 from typing import Any, Callable, Mapping
 
+import numpy as np
+
 from sketchforge.errors import ParameterError, quote
 from sketchforge.plugins.param_forms import ParamField, number_field, record_declaration
 from sketchforge.solver_kinds import SOLVER_KINDS, SolverChoice, SolverKind, json_value  # noqa: F401 (re-exported)
@@ -160,35 +162,58 @@ def validate_params(params: Mapping | None, defaults: Mapping, checks: Mapping[s
     return out
 
 
+#: The range of a numeric parameter whose solver gives no bound of its own: the drawing's
+#: coordinate range (±1e9 drawing units), beyond which lengths, areas and weights overflow or
+#: lose every digit (issue 38: 1e308 passed and failed deep inside a solver).
+MAX_PARAMETER = 1e9
+
+
+def _shown(x) -> str:
+    """A number for a message: ``:g`` for a float, an integer's digits up to 20 (its length
+    beyond: formatting a 400-digit integer with ``:g`` raised OverflowError)."""
+    if isinstance(x, int):
+        if abs(x) >= 10**1000:
+            return "an integer of over 1000 digits"
+        text = str(x)
+        return text if len(text.lstrip("-")) <= 20 else f"an integer of {len(text.lstrip('-'))} digits"
+    return f"{x:g}"
+
+
 def number(key: str, lo: float | None = None, hi: float | None = None, *, lo_open: bool = False,
            hi_open: bool = False, integer: bool = False, optional: bool = False) -> Callable:
-    """A ``checks`` entry: the value must be a (finite) number in the range, an integer if
-    ``integer``, or None if ``optional``. Returns float (int for an integer parameter)."""
+    """A ``checks`` entry: the value must be a finite real number (not a bool, a string or
+    NaN, whatever its type: numpy's included) in the range, a whole number if ``integer``
+    (returned as int, else as float), or None if ``optional``. Every parameter has a finite
+    range: a bound left out, or beyond ±:data:`MAX_PARAMETER`, is ±:data:`MAX_PARAMETER`. ``lo_open`` / ``hi_open`` exclude the
+    bound itself. Messages are one line naming the key."""
+    # Never wider than the drawing's range, whatever the caller asks (an infinite bound too).
+    lo = -MAX_PARAMETER if lo is None else max(lo, -MAX_PARAMETER)
+    hi = MAX_PARAMETER if hi is None else min(hi, MAX_PARAMETER)
 
     def check(v):
         if v is None and optional:
             return None
-        if isinstance(v, bool) or not isinstance(v, numbers.Real):
+        if isinstance(v, (bool, np.bool_)) or not isinstance(v, numbers.Real):
             raise ParameterError(f"{key!r} must be a number{' or null' if optional else ''}, got {quote(v)}")
-        if integer:
-            if isinstance(v, float) and not v.is_integer():
-                raise ParameterError(f"{key!r} must be a whole number, got {v!r}")
-            try:
-                x = int(v)
-            except (OverflowError, ValueError):
-                raise ParameterError(f"{key!r} must be a whole number, got {quote(v)}") from None
+        if isinstance(v, numbers.Integral):
+            x = seen = int(v)  # exact at any size: compared with the bounds before any float is made
         else:
             try:
                 x = float(v)
-            except OverflowError:
+            except OverflowError:  # a Fraction beyond float range
                 raise ParameterError(f"{key!r} is too large for a number") from None
             if not math.isfinite(x):
                 raise ParameterError(f"{key!r} must be a finite number, got {x}")
-        if lo is not None and (x < lo or (lo_open and x == lo)):
-            raise ParameterError(f"{key!r} must be {'>' if lo_open else '>='} {lo:g}, got {x:g}")
-        if hi is not None and (x > hi or (hi_open and x == hi)):
-            raise ParameterError(f"{key!r} must be {'<' if hi_open else '<='} {hi:g}, got {x:g}")
-        return x
+            seen = x
+            if integer:
+                if not x.is_integer():
+                    raise ParameterError(f"{key!r} must be a whole number, got {x!r}")
+                x = int(x)
+        if x < lo or (lo_open and x == lo):
+            raise ParameterError(f"{key!r} must be {'>' if lo_open else '>='} {_shown(lo)}, got {_shown(seen)}")
+        if x > hi or (hi_open and x == hi):
+            raise ParameterError(f"{key!r} must be {'<' if hi_open else '<='} {_shown(hi)}, got {_shown(seen)}")
+        return x if integer else float(x)
 
     # What the app's form shows: this range (its words: declare_params' help; see param_forms).
     check.field = number_field(key, lo, hi, lo_open, hi_open, integer, optional)

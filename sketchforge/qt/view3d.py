@@ -186,6 +186,9 @@ class View3D(QWidget):
         self._layout.addWidget(self.info)
         #: The last assembly failure (a sentence naming the part), or None.
         self.failure: str | None = None
+        #: What the assembler said about the model on show although it assembled: the parts it
+        #: had to leave free, each with why (issue 34); shown in a softer banner.
+        self.notice: list[str] = []
         self._active = False
         self.shown: list = []
         doc.assembly_invalidated.connect(self._invalidated)
@@ -281,6 +284,7 @@ class View3D(QWidget):
         parts = [l for l in self.doc.layers if l.visible and l.mesh is not None]
         if not parts:
             self._set_failure(None)
+            self._set_notice([])
             self._show([], "nothing to show: draw a contour in EDITING mode")
             return
         if self.source == "layers":
@@ -305,9 +309,11 @@ class View3D(QWidget):
         # A junction that runs off its host fails the assembly: said at once, from the
         # document's own attachment rule, instead of after the assembly job (which can wait
         # behind other work), and the assembly is still run to confirm it.
+        # A part whose junction the document's rule cannot glue will be assembled free: said
+        # at once, before the assembly job (which can wait behind other work) confirms it.
         problems = self._junction_problems()
         if problems:
-            self._fail(problems[0][1], layers, [problems[0][0]])
+            self._set_notice([text for _, text in problems])
 
         def done(mesh):
             self._job = None
@@ -351,13 +357,29 @@ class View3D(QWidget):
         self.failure = text
         self._update_banner()
 
+    def _set_notice(self, warnings) -> None:
+        self.notice = [str(w) for w in warnings]
+        self._update_banner()
+
+    #: How many of the assembler's warnings the banner lists (the rest are counted).
+    NOTICE_LINES = 3
+
     def _update_banner(self) -> None:
-        if self.failure is None:
+        if self.failure is None and (not self.notice or self.source != "assembled"):
             self.banner.setVisible(False)
             return
-        where = ("each layer is shown on its own (the part named in red); fix it in EDITING, or pick "
-                 "“Per layer”" if self.source == "assembled" else "the layers are shown each on its own")
-        self.banner.setText(f"The assembly failed: {self.failure}\n{where[0].upper() + where[1:]}.")
+        if self.failure is not None:
+            where = ("each layer is shown on its own (the part named in red); fix it in EDITING, or pick "
+                     "“Per layer”" if self.source == "assembled" else "the layers are shown each on its own")
+            self.banner.setStyleSheet("QLabel { background: #f6d8d2; color: #5a1408; padding: 6px; }")
+            self.banner.setText(f"The assembly failed: {self.failure}\n{where[0].upper() + where[1:]}.")
+        else:
+            shown = [w[0].upper() + w[1:] + "." for w in self.notice[: self.NOTICE_LINES]]
+            more = len(self.notice) - len(shown)
+            if more:
+                shown.append(f"… and {more} more (Per layer shows each part on its own).")
+            self.banner.setStyleSheet("QLabel { background: #f7ebc8; color: #4d3800; padding: 6px; }")
+            self.banner.setText("Assembled, with parts left free — fix them in EDITING:\n" + "\n".join(shown))
         self._place_banner()
         self.banner.setVisible(True)
         self.banner.raise_()
@@ -374,6 +396,10 @@ class View3D(QWidget):
             self._place_banner()
 
     def _show_assembled(self, mesh, layers) -> None:
+        self._set_notice(getattr(mesh, "warnings", ()))
+        notes = getattr(mesh, "notes", ())
+        if notes:
+            self.message.emit(notes[0][0].upper() + notes[0][1:] + (f" (and {len(notes) - 1} more)" if len(notes) > 1 else ""))
         if mesh is None:
             self._show([(l.mesh, CLAY) for l in layers], "the assembler returned nothing; showing the layers")
         else:

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from sketchforge.plugin_api import Assembler, choice, declare_params, hookimpl, number
+from sketchforge.plugin_api import AssembledMesh, Assembler, choice, declare_params, hookimpl, number
 
 from .assemble import DEFAULT_PARAMS, _params, assemble_detailed
 from .cache import AssemblyCache
@@ -12,7 +12,7 @@ from .cache import AssemblyCache
 CACHE = AssemblyCache()
 
 #: Bumped when the same layers and parameters would assemble differently.
-VERSION = "1"
+VERSION = "2"  # 2: issue 34 (sides, stretches, free parts, full thickness, thin parts refined)
 
 
 def assemble_layers(layers, params):
@@ -26,7 +26,10 @@ def assemble_layers(layers, params):
         names=[layer.name or layer.id for layer in layers],
         cache=CACHE,
     )
-    return result.mesh
+    # what the person should know: the parts shown free and why, the parts glued by a
+    # stretch of their junction only (issue 34)
+    return AssembledMesh(result.mesh.V, result.mesh.F, free=tuple(layers[i].id for i in result.free + result.left_out),
+                         warnings=tuple(result.warnings), notes=tuple(result.notes))
 
 
 #: The parameters as the app's form shows them: the ranges and options ``_params`` checks

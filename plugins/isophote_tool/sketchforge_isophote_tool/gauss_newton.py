@@ -19,7 +19,7 @@ import time
 
 import numpy as np
 
-from sketchforge.plugin_api import ParameterError
+from sketchforge.plugin_api import ParameterError, quote
 from sketchforge.plugin_api import SculptProblem, SculptSolution
 from sketchforge.plugin_api import SculptSolver, declare_params, number, validate_params
 
@@ -41,13 +41,18 @@ DEFAULT_PARAMS = {
     "joint_stroke_weight": 100.0,
 }
 
+#: Every range is finite (issue 38: 1e308 passed, and the height solve printed an overflow
+#: warning before failing). Weights beyond 1e6 of the data term leave the solve nothing to fit
+#: (1e308 made its matrix infinite); ``ring_weight`` blends towards the edit zone's 1; lengths
+#: stop at the drawing's range. The dearest accepted set (50 steps, every weight and length at
+#: its top) edits a 5k-vertex layer in under a second (benchmarks/bench_param_extremes.py).
 _CHECKS = {
-    "smoothness": number("smoothness", 0.0),
-    "ring_weight": number("ring_weight", 0.0),
-    "stroke_weight": number("stroke_weight", 0.0),
-    "joint_stroke_weight": number("joint_stroke_weight", 0.0),
-    "ring": number("ring", 0.0, optional=True),
-    "rim_margin": number("rim_margin", 0.0, optional=True),
+    "smoothness": number("smoothness", 0.0, 1e6),
+    "ring_weight": number("ring_weight", 0.0, 1.0),
+    "stroke_weight": number("stroke_weight", 0.0, 1e6),
+    "joint_stroke_weight": number("joint_stroke_weight", 0.0, 1e6),
+    "ring": number("ring", 0.0, 1e9, optional=True),
+    "rim_margin": number("rim_margin", 0.0, 1e9, optional=True),
 }
 
 #: Bumped when the same edit would give other heights.
@@ -59,7 +64,7 @@ def check_params(params) -> dict:
     out = validate_params(params, DEFAULT_PARAMS, _CHECKS)
     steps = out["steps"]
     if not (isinstance(steps, (int, np.integer)) and not isinstance(steps, bool) and 1 <= steps <= 50):
-        raise ParameterError(f"'steps' must be an integer in 1..50, got {steps!r}")
+        raise ParameterError(f"'steps' must be an integer in 1..50, got {quote(steps)}")
     out["steps"] = int(steps)
     return out
 
