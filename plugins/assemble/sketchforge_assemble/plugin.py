@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from sketchforge.plugin_api import AssembledMesh, Assembler, choice, declare_params, hookimpl, number
 
-from .assemble import DEFAULT_PARAMS, _params, assemble_detailed
+from .assemble import DEFAULT_PARAMS, MAX_PARAMS, MIN_PARAMS, _params, assemble_detailed
 from .cache import AssemblyCache
 
 #: Shared by every assembly through the hook (the app's assembled view, ``replay``): a
@@ -35,14 +35,15 @@ def assemble_layers(layers, params):
 #: The parameters as the app's form shows them: the ranges and options ``_params`` checks
 #: (with its own messages).
 FORM = {
-    "fillet": number("fillet", 0.0),
+    # _params' own ranges, closed at both ends (a value at the minimum is accepted)
+    "fillet": number("fillet", MIN_PARAMS["fillet"], MAX_PARAMS["fillet"]),
     "fair": number("fair", 0, 50, integer=True),
-    "margin": number("margin", 0.0, lo_open=True),
-    "gap": number("gap", 0.0, lo_open=True),
-    "reg": number("reg", 0.0, lo_open=True),
-    "stiffness": number("stiffness", 0.0, lo_open=True),
+    "margin": number("margin", MIN_PARAMS["margin"], MAX_PARAMS["margin"]),
+    "gap": number("gap", MIN_PARAMS["gap"], MAX_PARAMS["gap"]),
+    "reg": number("reg", MIN_PARAMS["reg"], MAX_PARAMS["reg"]),
+    "stiffness": number("stiffness", MIN_PARAMS["stiffness"], MAX_PARAMS["stiffness"]),
     "qp_solver": choice("qp_solver", ("osqp", "active_set")),
-    "on_bad_junction": choice("on_bad_junction", ("raise", "free")),
+    "on_bad_junction": choice("on_bad_junction", ("free", "raise")),
 }
 HELP = {
     "fillet": "Width of the blended junction, in edge lengths of the part (0: a plain fold)",
@@ -52,7 +53,8 @@ HELP = {
     "reg": "Pull of the parts towards the drawing plane (relative)",
     "stiffness": "How much stiffer a layer with parts glued to it is than the parts",
     "qp_solver": "osqp (a dual active set finishes a row left violated) or the active set alone",
-    "on_bad_junction": "A junction that cannot be glued: refuse the model, or leave that part free",
+    "on_bad_junction": "A junction that cannot be glued: leave that part free (named in the warnings), "
+                       "or refuse the model",
 }
 
 DEPTH_QP = Assembler(
