@@ -10,7 +10,7 @@ import math
 import numpy as np
 import pytest
 
-from sketchforge.plugin_api import ParameterError, SculptSolver, choice, declare_params, describe_params, flag, number, validate_params
+from sketchforge.plugin_api import MAX_PARAMETER, ParameterError, SculptSolver, choice, declare_params, describe_params, flag, number, validate_params
 from sketchforge.plugins.param_forms import ParamField
 
 
@@ -89,7 +89,10 @@ def test_the_helpers_declare_what_they_check():
     assert check.field == ParamField("w", "number", None, 0.0, 2.0, True, False, True)
     assert check.field.range_text() == "0 < w <= 2" and check.field.title == "W"
     assert number("n", 1, 9, integer=True).field.kind == "integer"
-    assert number("x", float("-inf"), math.inf).field.lo is None  # an infinite bound is no bound
+    # every number has a finite range (issue 38): an infinite bound is the core's, and the form says so
+    wide = number("x", float("-inf"), math.inf).field
+    assert (wide.lo, wide.hi) == (-MAX_PARAMETER, MAX_PARAMETER)
+    assert wide.accepts(MAX_PARAMETER) and not wide.accepts(2 * MAX_PARAMETER)
     assert choice("c", ["a", "b"]).field.options == ("a", "b")
     assert flag("f").field.kind == "flag" and ParamField("stroke_weight", "number").title == "Stroke weight"
 

@@ -110,7 +110,8 @@ class ParamField:
 
 
 def number_field(key, lo=None, hi=None, lo_open=False, hi_open=False, integer=False, optional=False) -> ParamField:
-    """The field ``number(...)`` declares (an infinite bound is no bound)."""
+    """The field ``number(...)`` declares (its bounds as ``number`` made them finite; an
+    infinite one left here is no bound)."""
     def bound(b):
         return None if b is None or not math.isfinite(float(b)) else float(b)
 
