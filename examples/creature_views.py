@@ -55,16 +55,19 @@ def main(argv=None) -> None:
     ap.add_argument("--pictures", type=Path, default=None, help="also write the README's pictures here")
     args = ap.parse_args(argv)
     from sketchforge.document import fileformat as ff
+    from sketchforge.plugins import default_host
     from sketchforge_assemble.drawn import drawn_creature
 
+    host = default_host()
     data = drawn_creature(0)
-    doc = ff.document_from_dict(data, "drawn creature", use_snapshot=False)
+    doc = ff.document_from_dict(data, "drawn creature", host=host, use_snapshot=False)
     ff.save(doc, HERE / "drawn.json")
     print(f"wrote {HERE / 'drawn.json'}")
     if args.pictures:
         args.pictures.mkdir(parents=True, exist_ok=True)
         for seed in (0, 1, 2):
-            d = ff.document_from_dict(drawn_creature(seed), f"drawn creature {seed}", use_snapshot=False)
+            d = ff.document_from_dict(drawn_creature(seed), f"drawn creature {seed}", host=host,
+                                   use_snapshot=False)
             out = args.pictures / f"drawn-creature-{seed}.png"
             three_views(d.export_mesh(), out)
             print(f"wrote {out}")

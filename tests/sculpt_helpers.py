@@ -6,20 +6,16 @@ import numpy as np
 import shapely
 import shapely.ops
 
-from sketchforge.geometry.heightfield import layer_normals
-from sketchforge.geometry.isophotes import isophotes
-from sketchforge.geometry.reflectance import LAMBERTIAN
+from sketchforge.plugin_api import isophote_through, isophotes, layer_normals
 from sketchforge_isophote_tool.fidelity import honoured_samples, mean_distance
-from sketchforge_isophote_tool.isophote import picked_isophote
-from sketchforge_isophote_tool.layerdata import layer_data
 from sketchforge_isophote_tool.testing import LIGHT
 
 
 def isophote_stroke(mesh, pick, offset=0.0, half=0.25, light=LIGHT):
     """A stroke along the isophote through ``pick`` (length 2·half), offset sideways (> 0: towards
     the darker side)."""
-    ld = layer_data(mesh, light, LAMBERTIAN)
-    c, iso = picked_isophote(ld, pick)
+    c, line = isophote_through(mesh, pick, light)  # the public helper (as the isophote tool picks)
+    iso = shapely.LineString(line)
     s0 = iso.project(shapely.Point(pick))
     seg = shapely.ops.substring(iso, max(s0 - half, 0.0), min(s0 + half, iso.length))
     if offset:

@@ -188,7 +188,7 @@ def test_numeric_warnings_of_a_failed_command_are_folded_into_its_line(tmp_path,
         warnings.warn("a library deprecation", DeprecationWarning)
         raise SolverError("the solve failed")
 
-    monkeypatch.setattr(fileformat, "load", warn_then_fail)
+    monkeypatch.setattr(fileformat, "document_from_dict", warn_then_fail)  # how info builds the document
     rc, out, err = _cli("info", _doc(tmp_path))
     assert rc == 2 and err.count("\n") == 1, err
     assert err.startswith("sketchforge: error: the solve failed (on the way: overflow encountered in scalar multiply)")

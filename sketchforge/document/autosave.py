@@ -477,7 +477,7 @@ def describe_stop(item: Recoverable) -> str:
     return f"sketchforge stopped while computing {parts[0]}."
 
 
-def recover(item: Recoverable, host=None):
+def recover(item: Recoverable, host):
     """Open an autosave as a document with unsaved changes. The file itself is left alone;
     the caller removes it (:func:`forget`) once a new autosaver has taken over. A step that
     was running when the session stopped is not in it: its result was never pushed."""

@@ -470,7 +470,7 @@ class SetInflateParams(ReplaceLayerCommand):
 def parse_params(d: dict, cmd: str, key: str = "params") -> dict:
     """A journal entry's solver parameters: an object of JSON values (the solver checks the
     keys and values when the command runs, and when a document with a snapshot is opened)."""
-    from sketchforge.plugins.solvers import json_value
+    from sketchforge.solver_kinds import json_value
 
     params = parse_field(d, key, dict, cmd, {})
     if not json_value(params):
@@ -497,7 +497,7 @@ class SetAssembly(Command):
         return "Set assembly"
 
     def do(self, doc) -> None:
-        from sketchforge.plugins.solvers import SolverChoice
+        from sketchforge.solver_kinds import SolverChoice
 
         old = doc.assembly
         switch = self.solver is not None and self.solver != old.solver

@@ -44,7 +44,7 @@ from sketchforge.document.document import Document
 from sketchforge.document.layer import Layer, Light
 from sketchforge.errors import DocumentFormatError, ExportError, LimitError, SketchforgeError, quote
 from sketchforge.geometry.mesh import Mesh
-from sketchforge.plugins.solvers import SOLVER_KINDS, SolverChoice
+from sketchforge.solver_kinds import SOLVER_KINDS, SolverChoice
 
 FORMAT_NAME = "sketchforge"
 FORMAT_VERSION = 2
@@ -355,12 +355,11 @@ def validate_header(data: Any, source: str) -> tuple[Light, list]:
 
 
 def document_from_dict(data: Any, source: str = "document", host=None, use_snapshot: bool = True) -> Document:
-    """Validate and build a document. Uses the snapshot when there is one, else replays."""
-    light, journal = validate_header(data, source)
+    """Validate and build a document on ``host`` (its plugin host: required). Uses the snapshot
+    when there is one, else replays."""
     if host is None:
-        from sketchforge.plugins.manager import default_host
-
-        host = default_host()
+        raise TypeError("document_from_dict needs the plugin host: document_from_dict(data, source, host=host)")
+    light, journal = validate_header(data, source)
     provenance.check_available(data, host, source)  # every missing plugin, in one message
     snap = data.get("snapshot") if use_snapshot else None
     if snap is None:
@@ -390,9 +389,7 @@ def document_from_dict(data: Any, source: str = "document", host=None, use_snaps
     plugin_data = snap.get("plugin_data", {})
     if not isinstance(plugin_data, dict) or not all(isinstance(k, str) for k in plugin_data):
         raise DocumentFormatError(f"{source}: snapshot.plugin_data must be an object")
-    from sketchforge.plugins.plugin_data import validate_plugin_data
-
-    validate_plugin_data(doc.host, plugin_data, f"{source}: snapshot")  # the limits the plugins' commands keep
+    doc.host.validate_plugin_data(plugin_data, f"{source}: snapshot")  # the limits the plugins' commands keep
     assembly = _assembly_from_dict(snap.get("assembly"), f"{source}: snapshot.assembly", doc.host)
     doc.restore_state(layers, cur_light, light, journal, plugin_data, assembly)
     return doc

@@ -23,6 +23,14 @@ with JSON values only (they are saved in the journal); it raises
 :class:`~sketchforge.errors.ParameterError` (one line, naming the key) for an unknown key or a
 bad value. :func:`validate_params` does the usual work for a solver with a flat set of
 parameters. The host puts the solver's name in front of the message.
+
+What :func:`number`, :func:`choice` and :func:`flag` check, they also declare (``check.field``:
+a range, options, a switch; what each parameter means, :func:`~sketchforge.plugins.param_forms.declare_params`
+says), and
+:func:`validate_params` ties them to the defaults: the app builds each solver's parameter form
+from that (:mod:`sketchforge.plugins.param_forms`; a hand-written ``check_params`` declares
+its form with :func:`~sketchforge.plugins.param_forms.declare_params`), so a plugin writes no
+Qt for its parameters.
 """
 
 from __future__ import annotations
@@ -35,27 +43,8 @@ from typing import Any, Callable, Mapping
 import numpy as np
 
 from sketchforge.errors import ParameterError, quote
-
-
-@dataclass(frozen=True)
-class SolverKind:
-    """What the host needs to know about one kind of solver."""
-
-    kind: str
-    hook: str
-    #: "inflater", "sculpt solver", "assembler": how messages name one.
-    what: str
-    #: The built-in solver's name (the default).
-    default: str
-    #: The name of the function field on the value type.
-    call: str
-
-
-SOLVER_KINDS: dict[str, SolverKind] = {
-    "inflate": SolverKind("inflate", "sketchforge_inflaters", "inflater", "poisson", "inflate"),
-    "sculpt": SolverKind("sculpt", "sketchforge_sculpt_solvers", "sculpt solver", "gauss_newton", "solve"),
-    "assemble": SolverKind("assemble", "sketchforge_assemblers", "assembler", "depth_qp", "assemble"),
-}
+from sketchforge.plugins.param_forms import ParamField, number_field, record_declaration
+from sketchforge.solver_kinds import SOLVER_KINDS, SolverChoice, SolverKind, json_value  # noqa: F401 (re-exported)
 
 
 def no_params(params: Mapping) -> dict:
@@ -156,6 +145,7 @@ def validate_params(params: Mapping | None, defaults: Mapping, checks: Mapping[s
     ParameterError
         "unknown parameter 'x' (known: a, b)", or the check's message.
     """
+    record_declaration(defaults, checks)  # the form the app shows (sketchforge.plugins.param_forms)
     if params is None:
         params = {}
     if not isinstance(params, Mapping):
@@ -225,6 +215,8 @@ def number(key: str, lo: float | None = None, hi: float | None = None, *, lo_ope
             raise ParameterError(f"{key!r} must be {'<' if hi_open else '<='} {_shown(hi)}, got {_shown(seen)}")
         return x if integer else float(x)
 
+    # What the app's form shows: this range (its words: declare_params' help; see param_forms).
+    check.field = number_field(key, lo, hi, lo_open, hi_open, integer, optional)
     return check
 
 
@@ -237,6 +229,7 @@ def choice(key: str, options) -> Callable:
             raise ParameterError(f"{key!r} must be one of {', '.join(map(repr, options))}, got {quote(v)}")
         return v
 
+    check.field = ParamField(key, "choice", options=options)
     return check
 
 
@@ -248,37 +241,5 @@ def flag(key: str) -> Callable:
             raise ParameterError(f"{key!r} must be true or false, got {quote(v)}")
         return v
 
+    check.field = ParamField(key, "flag")
     return check
-
-
-def json_value(v: Any, depth: int = 0) -> bool:
-    """Whether ``v`` is a value a journal can hold: None, bool, finite number, string, or a
-    list / string-keyed object of those (at most 8 levels)."""
-    if v is None or isinstance(v, (bool, str)):
-        return True
-    if isinstance(v, numbers.Real):
-        return isinstance(v, int) or math.isfinite(float(v))
-    if depth >= 8:
-        return False
-    if isinstance(v, (list, tuple)):
-        return all(json_value(x, depth + 1) for x in v)
-    if isinstance(v, Mapping):
-        return all(isinstance(k, str) and json_value(x, depth + 1) for k, x in v.items())
-    return False
-
-
-@dataclass(frozen=True)
-class SolverChoice:
-    """A document's choice of solver for one job: a name (None: the default) and its own
-    parameters, as the document stores them (read-only)."""
-
-    solver: str | None = None
-    params: Mapping = field(default_factory=dict)
-
-    def to_dict(self) -> dict:
-        d: dict = {}
-        if self.solver is not None:
-            d["solver"] = self.solver
-        if self.params:
-            d["params"] = dict(self.params)
-        return d

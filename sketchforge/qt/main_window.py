@@ -47,6 +47,7 @@ from sketchforge.qt.canvas import Canvas
 from sketchforge.qt.command_runner import CommandRunner, GuardedJobs
 from sketchforge.qt import errors_ui
 from sketchforge.qt.errors_ui import ask_yes_no, error_text, show_error
+from sketchforge.qt.panels.assembly_panel import AssemblyPanel
 from sketchforge.qt.panels.creation_panel import CreationPanel
 from sketchforge.qt.panels.history_panel import HistoryPanel
 from sketchforge.qt.panels.layers_panel import LayersPanel
@@ -54,6 +55,7 @@ from sketchforge.qt.panels.light_panel import LightPanel
 from sketchforge.qt.panels.mode_panel import ModePanel
 from sketchforge.qt.panels.sculpt_panel import SculptPanel
 from sketchforge.qt.panel_api import AppContext
+from sketchforge.qt.plugins_dialog import PluginsDialog, ProblemsButton
 from sketchforge.qt.sculpt import SculptController
 from sketchforge.qt.shortcuts import HelpOverlay
 from sketchforge.qt.view3d import View3D
@@ -136,6 +138,8 @@ class MainWindow(QMainWindow):
         #: [(points, kind)] strokes drawn while a solve ran: drawn in order when it ends
         self._pending_strokes: list[tuple] = []
 
+        if hasattr(self.host, "validate"):
+            self.host.validate()  # every registry now: each plugin problem is known from the start
         self._build_widgets()
         self._build_plugin_panels()
         self._build_menus()
@@ -156,17 +160,30 @@ class MainWindow(QMainWindow):
         self.autosave_error: str | None = None
 
     def _report_plugin_problems(self) -> None:
-        """Plugins left out at start-up (import failed, a hook raised, a contract broken): one
-        status-bar line naming them; the details went to the log and stderr."""
+        """Plugins left out at start-up (import failed, a hook raised, a contract broken), and
+        panels that failed: one status-bar line naming them, and a status-bar button that stays
+        while there are any and opens Help > Plugins, where each problem is listed once under
+        its plugin."""
         skipped = dict(getattr(self.host, "skipped", {}) or {})
         problems = list(getattr(self.host, "problems", []) or [])
-        lines = []
-        if skipped or problems:
+        for text in self.panel_problems:  # the window's own findings join the host's list
+            if text not in problems and hasattr(self.host, "report_problem"):
+                self.host.report_problem(text, *self._panel_owner.get(text, ()))
+                problems.append(text)
+        self.problems_button.show_count(problems)
+        if problems:
             names = ", ".join(sorted(skipped)) or "none disabled"
-            lines.append(f"plugin problems ({names}): {problems[0] if problems else next(iter(skipped.values()))}")
-        lines += self.panel_problems
-        if lines:
-            self.show_message("; ".join(lines))
+            n = len(problems)
+            self.show_message(f"plugin problems ({names}): {problems[0]}"
+                              + (f" (and {n - 1} more: Help > Plugins)" if n > 1 else ""))
+
+    def show_plugins(self) -> PluginsDialog:
+        """Help > Plugins: every plugin, its version, what it registers and its problems."""
+        dialog = PluginsDialog(self.host, self)
+        dialog.setAttribute(Qt.WidgetAttribute.WA_DeleteOnClose)
+        self.plugins_dialog = dialog
+        dialog.show()
+        return dialog
 
     def _autosave(self) -> None:
         """Timer tick. A failure (full disk, a file where the data folder should be) is shown
@@ -257,8 +274,10 @@ class MainWindow(QMainWindow):
         self.center.addWidget(self.view3d)
 
         self.modes = ModePanel()
-        self.creation_panel = CreationPanel()
-        self.creation_panel.set_shaders(self.host.shaders.keys(), self.canvas.shader_name)
+        self.creation_panel = CreationPanel(self.host)
+        shadings = self.host.display_shadings()
+        self.creation_panel.set_shaders(shadings.keys(), self.canvas.shader_name,
+                                        {k: f"{s.name} (reflectance model)" for k, s in shadings.items() if k.startswith("model:")})
         self.sculpt_panel = SculptPanel()
         self.light_panel = LightPanel()
         self.creation_page = QWidget()
@@ -275,6 +294,8 @@ class MainWindow(QMainWindow):
         observe_lay = QVBoxLayout(self.observe_page)
         observe_lay.setContentsMargins(0, 0, 0, 0)
         observe_lay.addWidget(self.observe_note)
+        self.assembly_panel = AssemblyPanel(self.host)
+        observe_lay.addWidget(self.assembly_panel)
         observe_lay.addStretch(1)  # plugin panels go above it (_build_plugin_panels)
         self.controls.addWidget(self.observe_page)
         top = QWidget()
@@ -331,6 +352,7 @@ class MainWindow(QMainWindow):
         self.plugin_panels: dict[str, QWidget] = {}
         #: one line per panel left out because it failed
         self.panel_problems: list[str] = []
+        self._panel_owner: dict[str, tuple] = {}
         observe = self.observe_page.layout()
         places = {
             "creation": self.creation_page.layout().addWidget,
@@ -349,6 +371,7 @@ class MainWindow(QMainWindow):
                 text = f"panel {panel.name!r} (plugin {who!r}) left out: {type(exc).__name__}: {exc}"
                 log.warning("%s", text, exc_info=True)
                 self.panel_problems.append(text)
+                self._panel_owner[text] = (who,) if who else ()
                 continue
             places[panel.place](widget)
             self.plugin_panels[panel.name] = widget
@@ -427,6 +450,7 @@ class MainWindow(QMainWindow):
             group.addAction(act)
         h = mb.addMenu("&Help")
         self._action(h, "&Gestures and keys", self.toggle_help, ["F1", "?"])
+        self.act_plugins = self._action(h, "&Plugins…", self.show_plugins)
         self.update_recent_menu()
 
     def _build_tool_palette(self) -> None:
@@ -479,6 +503,8 @@ class MainWindow(QMainWindow):
         for w in (self.progress_label, self.progress, self.cancel_button):
             sb.addPermanentWidget(w)
             w.setVisible(False)
+        self.problems_button = ProblemsButton(self.show_plugins)
+        sb.addPermanentWidget(self.problems_button)
 
     def _connect(self) -> None:
         doc = self.doc
@@ -514,6 +540,9 @@ class MainWindow(QMainWindow):
         self.creation_panel.outlines_changed.connect(self.canvas.set_layer_outlines)
 
         self.creation_panel.params_edited.connect(self.set_params)
+        self.creation_panel.inflater_changed.connect(self.set_inflater)
+        self.assembly_panel.assembly_edited.connect(self.set_assembly)
+        doc.assembly_changed.connect(lambda: self.assembly_panel.show_assembly(self.doc.assembly))
         self.creation_panel.shader_changed.connect(self._shader_changed)
         self.creation_panel.isolines_changed.connect(self.canvas.set_isoline_count)
         # the 3D view's isophote style follows the same count, live (0 lines: keep its last count)
@@ -546,6 +575,7 @@ class MainWindow(QMainWindow):
 
     # --- synchronising widgets with the document ------------------------------------------------
     def _sync_all(self) -> None:
+        self.assembly_panel.show_assembly(self.doc.assembly)
         self._sync_undo()
         self._sync_title()
         self.light_panel.show_light(self.doc.light)
@@ -739,6 +769,37 @@ class MainWindow(QMainWindow):
             return
         self._run_params(self.current_layer, params)
 
+    def set_inflater(self, name: str) -> None:
+        """The Creation panel's inflater: the selected part is inflated by it (from its
+        defaults; one undo step, its sculpt edits re-applied or the switch refused), and new
+        parts are too."""
+        layer = self.doc.layer(self.current_layer) if self.current_layer in self.doc.layer_ids() else None
+        if layer is None or layer.solver == name or (layer.solver is None and name == self.host.default_solver_name("inflate")):
+            self.show_message(f"new parts are inflated by “{name}”")
+            return
+        if self._refuse_if_busy():
+            self._sync_current_layer()
+            return
+        self.runner.run(
+            C.SetInflateParams(layer=layer.id, solver=name),
+            label=f"Inflating with {name}",
+            on_done=lambda *_: self.show_message(f"“{layer.name}” is inflated by “{name}”; new parts are too"),
+            on_error=lambda exc: self._sync_current_layer() or False,
+        )
+
+    def set_assembly(self, solver, params: dict) -> None:
+        """The Assembly panel: choose the assembler (``solver``, from its defaults) or change
+        its parameters; one ``set_assembly`` (one undo step). A value the assembler refuses is
+        one status line, and the panel shows the document's values again."""
+        if self._refuse_if_busy():
+            self.assembly_panel.show_assembly(self.doc.assembly)
+            return
+        try:
+            self.doc.push(C.SetAssembly(solver=solver, params=dict(params)))
+        except SketchforgeError as exc:
+            self.show_message(error_text(exc))
+            self.assembly_panel.show_assembly(self.doc.assembly)
+
     def _run_params(self, layer_id: str, params: dict) -> None:
         edits = len(self.doc.layer(layer_id).edits)
         # With sculpt edits the layer is re-inflated and its edits re-applied in order (or the
@@ -838,7 +899,10 @@ class MainWindow(QMainWindow):
 
     def _new_part(self, plan) -> None:
         """A new part (or the contour of the empty layer ``plan.target``)."""
-        tool = DrawContourTool(self.doc, target_layer=plan.target, closed=plan.closed, index=plan.index)
+        inflater = self.creation_panel.new_part_inflater
+        if plan.target is not None and self.doc.layer(plan.target).solver is not None:
+            inflater = None  # an empty layer keeps the inflater it was given
+        tool = DrawContourTool(self.doc, target_layer=plan.target, closed=plan.closed, index=plan.index, inflater=inflater)
         before, cmd = tool.commands_for(plan.points)
         kind = "closed" if plan.closed else "open"
 

@@ -29,8 +29,11 @@ from PySide6.QtCore import QObject, Signal
 from sketchforge.qt.sculpt import MAX_RADIUS, MIN_RADIUS
 # An exception as one status-bar line: a SketchforgeError's message, anything else with its type.
 from sketchforge.qt.errors_ui import error_text
+# The parameter form of a solver, generated from what it declares: a panel that lets the person
+# choose a solver shows its parameters with it (the isophote tool's sculpt solver choice).
+from sketchforge.qt.param_form import SolverForm
 
-__all__ = ["AppContext", "MAX_RADIUS", "MIN_RADIUS", "error_text"]
+__all__ = ["AppContext", "MAX_RADIUS", "MIN_RADIUS", "SolverForm", "error_text"]
 
 BUSY = "a solve is running: wait for it or cancel it (Esc)"
 

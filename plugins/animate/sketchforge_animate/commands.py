@@ -16,8 +16,8 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from sketchforge.document.commands import Command, parse_field
-from sketchforge.errors import DocumentFormatError, ParameterError
+from sketchforge.plugin_api import Command, parse_field
+from sketchforge.plugin_api import DocumentFormatError, ParameterError
 
 from .state import KEY, MAX_LOOP_FRAMES, Animation, Pin, _triples, _vec, check_range, fit_recording
 

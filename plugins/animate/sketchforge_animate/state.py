@@ -19,8 +19,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from sketchforge.errors import DocumentFormatError, ParameterError, quote
-from sketchforge.plugin_api import MAX_PARAMETER, number
+from sketchforge.plugin_api import MAX_PARAMETER, DocumentFormatError, ParameterError, number, quote
 
 KEY = "animate"
 FPS = 24

@@ -17,10 +17,10 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from sketchforge.errors import GeometryError, LimitError, ParameterError, quote
+from sketchforge.plugin_api import GeometryError, LimitError, ParameterError, quote
 from sketchforge.plugin_api import number
-from sketchforge.geometry.laplacian import laplacian_and_mass
-from sketchforge.geometry.mesh import Mesh
+from sketchforge.plugin_api import laplacian_and_mass
+from sketchforge.plugin_api import Mesh
 
 from .attach import Attachment, find_attachments
 from .blend import blend_junctions

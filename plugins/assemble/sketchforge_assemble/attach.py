@@ -14,9 +14,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from sketchforge.errors import GeometryError
-from sketchforge.geometry import guard
-from sketchforge.geometry.attachment import BACK, FRONT, plan_attachments
+from sketchforge.plugin_api import GeometryError
+from sketchforge.plugin_api import guard
+from sketchforge.plugin_api import BACK, FRONT, plan_attachments
 
 from .errors import AttachmentError
 from .sheet import Sheet

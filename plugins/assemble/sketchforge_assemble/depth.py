@@ -56,9 +56,9 @@ import scipy.sparse.linalg as sla
 from scipy.sparse.csgraph import connected_components
 from scipy.linalg import cho_solve, cholesky, solve_triangular
 
-from sketchforge.geometry import guard
-from sketchforge.geometry.laplacian import laplacian_and_mass
-from sketchforge.geometry.locate import TriangleLocator
+from sketchforge.plugin_api import guard
+from sketchforge.plugin_api import laplacian_and_mass
+from sketchforge.plugin_api import TriangleLocator
 
 from .attach import FRONT, Attachment, lo_chain_index
 from .cache import AssemblyCache, memo

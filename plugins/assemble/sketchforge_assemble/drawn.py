@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from sketchforge.geometry.parts import overlapped, stroke_closes
+from sketchforge.plugin_api import overlapped, stroke_closes
 
 #: The kinds of creature drawn (a seed picks one, in turn).
 KINDS = ("quadruped", "bird", "biped")

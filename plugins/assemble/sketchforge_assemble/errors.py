@@ -3,7 +3,7 @@
 
 from __future__ import annotations
 
-from sketchforge.errors import SketchforgeError, SolverError
+from sketchforge.plugin_api import SketchforgeError, SolverError
 
 
 class AttachmentError(SketchforgeError, ValueError):

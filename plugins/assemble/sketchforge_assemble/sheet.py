@@ -15,9 +15,9 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import shapely
 
-from sketchforge.errors import SketchforgeError
-from sketchforge.geometry import guard
-from sketchforge.geometry.mesh import Mesh
+from sketchforge.plugin_api import SketchforgeError
+from sketchforge.plugin_api import guard
+from sketchforge.plugin_api import Mesh
 
 
 @dataclass(frozen=True, eq=False)
@@ -245,8 +245,8 @@ def refine_thin(sheet: Sheet, min_height_edges: float = THIN_HEIGHT_EDGES) -> Sh
     near the rim is not), z = √u. The junction is the same stretch of outline, with its new
     points. A sheet that is not thin, or has no junction, is returned as it is.
     """
-    from sketchforge.geometry.locate import TriangleLocator
-    from sketchforge.geometry.triangulate import triangulate_polygon
+    from sketchforge.plugin_api import TriangleLocator
+    from sketchforge.plugin_api import triangulate_polygon
 
     if len(sheet.junction) < 2 or sheet.chains or sheet.Fb is not None:
         return sheet

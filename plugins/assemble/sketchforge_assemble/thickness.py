@@ -28,7 +28,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
-from sketchforge.geometry.laplacian import laplacian_and_mass
+from sketchforge.plugin_api import laplacian_and_mass
 
 from .sheet import Sheet
 

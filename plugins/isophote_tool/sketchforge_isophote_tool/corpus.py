@@ -159,7 +159,7 @@ def random_edit(shape: str, ld, rng: np.random.Generator, kind: str | None = Non
     pick : (2,) float64 or None
         Where to pick (None: a random lit vertex away from the rim, see below).
     """
-    from sketchforge.errors import SculptError
+    from sketchforge.plugin_api import SculptError
 
     from .isophote import picked_isophote
 
@@ -236,7 +236,7 @@ def random_pair(shape: str, ld, rng: np.random.Generator, kinds=KINDS):  # pragm
 
 def draw_pairs(shape: str, mesh, rng, light, pairs: int, kinds=KINDS) -> list:  # pragma: no mutate block
     """``pairs`` random pairs of edits on one layer (:func:`random_pair`)."""
-    from sketchforge.geometry.reflectance import LAMBERTIAN
+    from sketchforge.plugin_api import LAMBERTIAN
 
     from .layerdata import layer_data
 
@@ -336,7 +336,7 @@ def corpus_layers(shapes=SHAPES, per_shape: int = 4, seed: int = 0, resolution: 
 def draw_edits(shape: str, mesh, rng, light, edits: int, kinds=KINDS) -> list[Edit]:  # pragma: no mutate block
     """``edits`` random edits on one layer (kinds in turn), drawn before any runs: so two
     solvers can be given the very same edits."""
-    from sketchforge.geometry.reflectance import LAMBERTIAN
+    from sketchforge.plugin_api import LAMBERTIAN
 
     from .layerdata import layer_data
 
@@ -357,8 +357,8 @@ def run_edit(mesh, light, e: Edit, solver=None, params=None) -> Outcome:
 
     import shapely
 
-    from sketchforge.errors import SketchforgeError
-    from sketchforge.geometry.reflectance import LAMBERTIAN
+    from sketchforge.plugin_api import SketchforgeError
+    from sketchforge.plugin_api import LAMBERTIAN
 
     from .fidelity import beside_distance, isophote_lines
     from .layerdata import layer_data, vertex_shading
@@ -533,7 +533,7 @@ def _pair_distances(ld0, first, second, z):
     """Each stroke's distance (edge lengths) to its own isophote E = c_i of heights ``z``, over
     the samples a single edit of it would honour on the layer before the pair (c_i, band and
     samples from that layer), and the distances before."""
-    from sketchforge.geometry.band import band_radius
+    from sketchforge.plugin_api import band_radius
 
     from .fidelity import isophote_lines, mean_distance
     from .layerdata import vertex_shading
@@ -553,8 +553,8 @@ def run_pair(mesh, light, pair, solver=None, params=None) -> tuple[PairOutcome, 
     (``sculpt`` twice, the second on the first's result); measure both the same way."""
     import time
 
-    from sketchforge.errors import SketchforgeError
-    from sketchforge.geometry.reflectance import LAMBERTIAN
+    from sketchforge.plugin_api import SketchforgeError
+    from sketchforge.plugin_api import LAMBERTIAN
 
     from .joint import sculpt_many
     from .layerdata import layer_data

@@ -19,9 +19,9 @@ import time
 
 import numpy as np
 
-from sketchforge.errors import ParameterError, quote
-from sketchforge.plugins.sculpt_problem import SculptProblem, SculptSolution
-from sketchforge.plugins.solvers import SculptSolver, number, validate_params
+from sketchforge.plugin_api import ParameterError, quote
+from sketchforge.plugin_api import SculptProblem, SculptSolution
+from sketchforge.plugin_api import SculptSolver, declare_params, number, validate_params
 
 from .heights import GN_STEPS, solve_heights
 
@@ -120,10 +120,22 @@ def solve(problem: SculptProblem, params: dict) -> SculptSolution:
     return SculptSolution(dz, dE, info={"reach": r + ring, "timings": T})
 
 
+#: The form the app shows: the checks above, and the steps ``check_params`` checks by hand.
+FORM = {**_CHECKS, "steps": number("steps", 1, 50, integer=True)}
+HELP = {
+    "smoothness": "α: weight of the squared Laplacian of the height change, in units of h² (h: the edge length)",
+    "ring": "Width of the ring where heights return to the old ones, in edge lengths (automatic: rim margin + 2h)",
+    "ring_weight": "Data weight at the outer edge of the ring (1 in the edit zone)",
+    "rim_margin": "Drawing units kept from the outline (automatic: max(3h, 0.12·size), less on thin parts)",
+    "steps": "Gauss–Newton steps",
+    "stroke_weight": "Weight of E = c along the stroke in the height solve",
+    "joint_stroke_weight": "The stroke weight of an edit of several isophotes",
+}
+
 GAUSS_NEWTON = SculptSolver(
     "gauss_newton",
     solve,
-    check_params=check_params,
+    check_params=declare_params(check_params, DEFAULT_PARAMS, FORM, HELP),
     version=VERSION,
     label="Gauss–Newton (local)",
     description="R(p(z), q(z)) = E + δE fitted on the layer's vertices, heights changed only near the stroke",

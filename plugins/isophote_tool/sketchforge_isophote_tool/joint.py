@@ -39,8 +39,8 @@ import numpy as np
 import scipy.sparse as sp
 import shapely
 
-from sketchforge.geometry.band import band_radius
-from sketchforge.geometry.reflectance import LAMBERTIAN
+from sketchforge.plugin_api import band_radius
+from sketchforge.plugin_api import LAMBERTIAN
 from sketchforge.plugin_api import Mesh, NothingToDoError, ReflectanceModel, SculptError, SculptProblem, SolverError
 
 from .layerdata import layer_data

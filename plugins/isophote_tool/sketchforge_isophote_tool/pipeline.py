@@ -31,12 +31,12 @@ import numpy as np
 import shapely
 from scipy.spatial import cKDTree
 
-from sketchforge.errors import NothingToDoError, ParameterError, PluginError, SculptError, SketchforgeError, SolverError
-from sketchforge.geometry.band import band_radius
-from sketchforge.geometry.mesh import Mesh
-from sketchforge.geometry.reflectance import LAMBERTIAN
-from sketchforge.plugins.registry import ReflectanceModel
-from sketchforge.plugins.sculpt_problem import SculptProblem, SculptSolution
+from sketchforge.plugin_api import NothingToDoError, ParameterError, PluginError, SculptError, SketchforgeError, SolverError
+from sketchforge.plugin_api import band_radius
+from sketchforge.plugin_api import Mesh
+from sketchforge.plugin_api import LAMBERTIAN
+from sketchforge.plugin_api import ReflectanceModel
+from sketchforge.plugin_api import SculptProblem, SculptSolution
 
 from .fidelity import honoured_samples, isophote_lines, mean_distance
 from .isophote import band_around, picked_isophote
@@ -243,8 +243,8 @@ def _slopes(ld: LayerData):
     """(p, q, E, R_p, R_q) at the vertices of a layer, once per LayerData."""
     got = getattr(ld, "_slopes_cache", None)
     if got is None:
-        from sketchforge.geometry.heightfield import slopes_from_heights
-        from sketchforge.geometry.reflectance import evaluate_pq
+        from sketchforge.plugin_api import slopes_from_heights
+        from sketchforge.plugin_api import evaluate_pq
 
         pd = ld.planar
         p, q = slopes_from_heights(pd.Gp, pd.Gq, ld.z)

@@ -13,8 +13,8 @@ import threading
 import numpy as np
 from PySide6.QtCore import QObject, QTimer, Signal
 
-from sketchforge.document.commands import new_gesture_id
-from sketchforge.errors import SketchforgeError
+from sketchforge.plugin_api import new_gesture_id
+from sketchforge.plugin_api import SketchforgeError
 from sketchforge.qt.panel_api import error_text
 
 from ..commands import AddPin, CopyMotion, HoldPin, MovePin, RecordMotion, RemovePin

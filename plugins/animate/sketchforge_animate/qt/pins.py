@@ -8,7 +8,7 @@ import numpy as np
 from PySide6.QtCore import QEvent, QObject, Qt
 from PySide6.QtWidgets import QWidget
 
-from sketchforge.errors import SketchforgeError
+from sketchforge.plugin_api import SketchforgeError
 from sketchforge.qt.panel_api import error_text
 
 from ..picking import pick_vertex, unproject_at_depth
