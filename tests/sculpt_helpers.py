@@ -6,8 +6,10 @@ import numpy as np
 import shapely
 import shapely.ops
 
-from sketchforge.plugin_api import isophote_through, isophotes, layer_normals
+from sketchforge.plugin_api import LAMBERTIAN, isophote_through, isophotes, layer_normals
 from sketchforge_isophote_tool.fidelity import honoured_samples, mean_distance
+from sketchforge_isophote_tool.isophote import picked_isophote
+from sketchforge_isophote_tool.layerdata import layer_data
 from sketchforge_isophote_tool.testing import LIGHT
 
 

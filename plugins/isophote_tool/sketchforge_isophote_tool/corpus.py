@@ -465,7 +465,7 @@ def chain_measures(fresh, edited, light) -> dict:
         triangles near the rim folded after the chain that were not before
         (:func:`folded_faces`).
     """
-    from sketchforge.geometry.reflectance import LAMBERTIAN
+    from sketchforge.plugin_api import LAMBERTIAN
 
     from .layerdata import layer_data
 
