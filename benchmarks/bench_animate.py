@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from sketchforge.plugins import default_host
 from sketchforge_animate.arap import ArapSolver
 from sketchforge_animate.pose import FRAME_ITERATIONS
 
@@ -46,7 +47,7 @@ def tube(n_target: int):
 def creature():
     from sketchforge.document import fileformat as ff
 
-    m = ff.load(ROOT / "examples" / "creature.json").export_mesh()
+    m = ff.load(ROOT / "examples" / "creature.json", default_host()).export_mesh()
     return np.array(m.V), np.array(m.F)
 
 

@@ -9,7 +9,12 @@ Prints figures only (no assertions):
 - shade: display shader + compositing + isophote lines from that buffer (numpy only);
 - light-drag step: what one mouse move of a light drag costs in the app: the SetLight command
   through the document, the canvas re-shading its buffer into a QImage, and a synchronous
-  repaint of the canvas (offscreen platform, so no compositor or vsync).
+  repaint of the canvas (offscreen platform, so no compositor or vsync);
+- shade / light-drag step with a reflectance model (issue 37: one BRDF definition for the
+  sculpt and the display): the model's own jax.numpy R(n, l) and dR/dn evaluated, compiled, on
+  the buffer's normals (``geometry/model_shading.py``), for the example plugin's soft Lambert
+  (when installed) and a rim-lit model that is not a function of n·l; the first call (the
+  compile, once per model) is printed apart.
 
 Each figure is the median (p90, worst) over STEPS light directions around the circle, in wall
 time and in CPU time of this process: on a shared machine (other processes on the cores) the
@@ -54,9 +59,11 @@ class _Timer:
 def core() -> None:
     from sketchforge.document import fileformat as ff
     from sketchforge.geometry import gbuffer as gb
+    from sketchforge.geometry.model_shading import model_shader
     from sketchforge.geometry.shaders import cel_shade, lambert_shade
+    from sketchforge.plugins import default_host
 
-    doc = ff.load(EXAMPLE)
+    doc = ff.load(EXAMPLE, default_host())
     meshes = [l.mesh if l.visible else None for l in doc.layers]
     view = gb.View.framing([m for m in meshes if m is not None], *SIZE, margin=0.1)
     print(f"load average {os.getloadavg()[0]:.1f} on {os.cpu_count()} cores")
@@ -87,9 +94,46 @@ def core() -> None:
             with timer:  # as the canvas does: over the previous picture of this buffer
                 picture = gb.shade(g, l, shader, bg, isophotes=K, bgrx=True, outline_alpha=0.45, out=picture)
         _figures(label, timer.wall, timer.cpu)
+    for model in _models():
+        shader = model_shader(model)
+        t0, c0 = time.perf_counter(), time.process_time()
+        gb.shade(g, np.array([1.0, 0.0, 0.0]), shader.shade, bg, intensity=shader.intensity)
+        print(f"model {model.name}: first shade (compile) wall {1e3 * (time.perf_counter() - t0):.0f} ms, "
+              f"cpu {1e3 * (time.process_time() - c0):.0f} ms")
+        for K in (0, 8):
+            timer = _Timer()
+            picture = None
+            for a in np.linspace(0, 2 * np.pi, STEPS, endpoint=False):
+                l = np.array([np.cos(a), np.sin(a), 0.0])
+                with timer:
+                    picture = gb.shade(g, l, shader.shade, bg, isophotes=K, bgrx=True, outline_alpha=0.45, out=picture,
+                                       intensity=shader.intensity)
+            _figures(f"shade model {model.name}" + (f" + {K} isophotes" if K else ""), timer.wall, timer.cpu)
+
+
+def _rim(n, l):
+    import jax.numpy as jnp
+
+    c = jnp.dot(n, l)
+    return 0.7 * (c + 0.3) / 1.3 + 0.2 * n[2] * c - 0.1 * n[0] * n[1]
+
+
+def _models() -> list:
+    """Reflectance models to time: the example soft Lambert (if installed) and a rim-lit one."""
+    from sketchforge.geometry.reflectance_model import ReflectanceModel
+
+    out = []
+    try:
+        from sketchforge_soft_brdf import SOFT_LAMBERT
+
+        out.append(SOFT_LAMBERT)
+    except ImportError:
+        pass
+    return out + [ReflectanceModel("rim_wrap", _rim)]
 
 
 def app() -> None:
+    from sketchforge.geometry.model_shading import model_shader
     from sketchforge.document import commands as C
     from sketchforge.document import fileformat as ff
     from sketchforge.qt.app import ensure_qapp, plugin_host
@@ -114,6 +158,19 @@ def app() -> None:
                                     gesture="bench"))
                 canvas.viewport().repaint()
         _figures(f"light-drag step, {K} isophotes ({vw}x{vh})", timer.wall, timer.cpu)
+    for model in _models():
+        name = f"model:{model.name}"
+        canvas.host.display_shadings = (lambda real=host.display_shadings, m=model, n=name: {**real(), n: model_shader(m)})
+        canvas.set_shader(name)
+        for K in (0, 8):
+            canvas.set_isoline_count(K)
+            timer = _Timer()
+            for a in np.linspace(0, 360, STEPS, endpoint=False):
+                with timer:
+                    doc.push(C.SetLight(direction=[float(np.cos(np.radians(a))), float(np.sin(np.radians(a))), 0.0],
+                                        gesture="bench"))
+                    canvas.viewport().repaint()
+            _figures(f"light-drag step, {model.name}, {K} isophotes", timer.wall, timer.cpu)
     canvas.close()
 
 

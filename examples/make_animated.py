@@ -16,6 +16,7 @@ import numpy as np
 from sketchforge.atomic import write_bytes_atomic
 from sketchforge.document import fileformat as ff
 from sketchforge.geometry.mesh import Mesh
+from sketchforge.plugins import default_host
 
 HERE = Path(__file__).resolve().parent
 FPS = 24
@@ -30,7 +31,7 @@ def surface_point(V: np.ndarray, x: float, y: float) -> list[float]:
 
 
 def main(out: Path = HERE / "animated.json") -> None:
-    doc = ff.load(HERE / "creature.json", use_snapshot=False)
+    doc = ff.load(HERE / "creature.json", default_host(), use_snapshot=False)
     V = doc.export_mesh().V
     pins = {"foot_l": (-0.47, -1.18), "foot_r": (0.43, -1.18), "tail": (-1.42, 0.93), "head": (1.05, 0.55)}
     at = {}
@@ -61,7 +62,7 @@ def strip(doc_path: Path, png: Path, frames=(0, 8, 16, 24, 32, 40), size: int = 
     from sketchforge.geometry.raster import render_top, write_png
     from sketchforge_animate import Animation, Animator
 
-    doc = ff.load(doc_path)
+    doc = ff.load(doc_path, default_host())
     mesh = doc.export_mesh()
     anim = Animation.of(doc)
     posed = list(Animator(mesh, anim).frames(anim, max(frames) + 1))

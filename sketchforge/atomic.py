@@ -6,9 +6,10 @@ The temp file lives in the target's folder (so the final rename is atomic) under
 file behind; the next save of the same file removes those whose writer is no longer running
 (and the ``.NAME.XXXXXXXX.tmp`` files of the previous release once they are a minute old).
 
-An existing target keeps its permission bits; a new one gets the user's umask (the temp file is
-created with mode 0666 and the kernel applies the umask). A target without any write bit is
-read-only: it is refused, even for root, who could otherwise overwrite it.
+An existing target keeps its permission bits (rwx, not setuid, setgid or sticky); a new one
+gets the user's umask (the temp file is created with mode 0666 and the kernel applies the
+umask). A target without any write bit is read-only: it is refused, even for root, who could
+otherwise overwrite it.
 """
 
 from __future__ import annotations
@@ -97,6 +98,33 @@ def remove_stale_temps(path) -> list[Path]:
     return removed
 
 
+#: Any temp name this module makes: ``.<name>.<10 hex>.<pid>.<8 hex>.tmp``.
+_TEMP_NAME = re.compile(r"\A\..*\.[0-9a-f]{10}\.(\d+)\.[0-9a-f]{8}\.tmp\Z", re.DOTALL)
+
+
+def remove_stale_temps_in(folder) -> list[Path]:
+    """Remove every temp file in ``folder`` that a killed save left (its writer process is
+    gone), whatever file it was for. For folders whose targets change name at each session
+    (the autosaves: a fresh name each time, so "the next save of the same file" never
+    comes). A live writer's temp is left alone. Returns what was removed; never raises."""
+    removed = []
+    try:
+        entries = list(os.scandir(folder))
+    except OSError:
+        return removed
+    for e in entries:
+        m = _TEMP_NAME.match(e.name)
+        if m is None or pid_alive(int(m.group(1))):
+            continue
+        try:
+            if e.is_file(follow_symlinks=False):
+                os.unlink(e.path)
+                removed.append(Path(e.path))
+        except OSError:
+            pass
+    return removed
+
+
 def check_writable(path) -> os.stat_result | None:
     """Refuse a target that is a directory, a non-regular file or read-only (no write bit at
     all, checked on the mode so root is refused too). Returns the target's stat, or None when
@@ -149,8 +177,10 @@ def refuse_input_as_output(out, inputs, what: str = "output") -> None:
             raise ExportError(f"cannot write {out}: it is the input document {src}; choose another {what} file")
 
 
-def write_bytes_atomic(path, data: bytes) -> None:
+def write_bytes_atomic(path, data: bytes) -> os.stat_result:
     """Write ``data`` to ``path`` via a temp file in the same folder, fsync, then rename.
+    Returns the written file's ``fstat`` (the rename keeps its inode and times), so a caller
+    can tell later whether someone else replaced it (no window for a race in between).
 
     Raises ExportError (an OSError) with a readable message when the folder does not exist or
     refuses new files, the path is a directory or read-only, or the write fails; the old file,
@@ -168,12 +198,15 @@ def write_bytes_atomic(path, data: bytes) -> None:
         # 0o666: the kernel applies the umask, as for any new file the user makes.
         fd = os.open(tmp, os.O_WRONLY | os.O_CREAT | os.O_EXCL | getattr(os, "O_CLOEXEC", 0), 0o666)
         if old is not None:
-            os.fchmod(fd, stat.S_IMODE(old.st_mode))
+            # The permission bits only: setuid, setgid and sticky do not pass to new contents
+            # (a write to a file clears setuid too); an export over a setuid file kept the bit.
+            os.fchmod(fd, stat.S_IMODE(old.st_mode) & 0o777)
         with os.fdopen(fd, "wb") as fh:
             fd = None  # the file object owns it now
             _write_all(fh, data)
             fh.flush()
             os.fsync(fh.fileno())
+            written = os.fstat(fh.fileno())
         os.replace(tmp, path)
     except BaseException as exc:
         if fd is not None:
@@ -196,6 +229,7 @@ def write_bytes_atomic(path, data: bytes) -> None:
             os.close(dfd)
     except OSError:
         pass
+    return written
 
 
 def _write_all(fh, data: bytes) -> None:

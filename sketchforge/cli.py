@@ -7,30 +7,17 @@ Errors a user can cause print one line on stderr and exit with status 2; no trac
 from __future__ import annotations
 
 import argparse
+import os
 import sys
-import unicodedata
+import warnings
 from pathlib import Path
 
 from sketchforge.atomic import check_target, refuse_input_as_output, same_file
-from sketchforge.errors import SketchforgeError, quote, shorten
+from sketchforge.errors import SketchforgeError, printable, quote, shorten
 
-SUBCOMMANDS = ("replay", "info", "render", "batch", "dataset")
+SUBCOMMANDS = ("replay", "info", "render", "plugins", "batch", "dataset")
 #: ``render --isophotes``: more lines than this are closer than a pixel apart at any size.
 MAX_ISOPHOTES = 255
-
-
-def printable(text) -> str:
-    """``text`` safe for a terminal: control and format characters (escape sequences, line
-    breaks, bidi overrides) and lone surrogates are written as ``\\xNN`` / ``\\uNNNN``, so
-    a name can never fake or hide an output line, and printing never fails to encode."""
-    out = []
-    for ch in str(text):
-        if unicodedata.category(ch) in ("Cc", "Cf", "Cs", "Zl", "Zp"):
-            o = ord(ch)
-            out.append(f"\\x{o:02x}" if o < 0x100 else f"\\u{o:04x}")
-        else:
-            out.append(ch)
-    return "".join(out)
 
 
 def _warn_plugin_problems() -> None:
@@ -107,6 +94,11 @@ def cmd_replay(args) -> int:
         host.exporter_for(Path(args.export))  # an unknown format, before the replay
     data = ff.read_json(args.doc)
     light, journal = ff.validate_header(data, str(args.doc))
+    if args.check and data.get("snapshot") is None:
+        # Exit 0 with nothing said read as a pass; without a snapshot nothing was compared.
+        raise SketchforgeError(
+            f"{args.doc} has no snapshot: nothing to compare (--check compares the replay with the saved snapshot)"
+        )
     check_available(data, host, str(args.doc))  # names every missing plugin at once
 
     def progress(i, n):
@@ -114,8 +106,8 @@ def cmd_replay(args) -> int:
             print(f"replayed {i}/{n}", file=sys.stderr)
 
     doc = ff.replay_journal(light, journal, str(args.doc), host=host, progress=progress)
-    if args.check and data.get("snapshot") is not None:
-        snap = ff.document_from_dict(data, str(args.doc))
+    if args.check:
+        snap = ff.document_from_dict(data, str(args.doc), host=host)
         diffs = ff.compare(snap, doc)
         if diffs:
             from sketchforge.document.provenance import version_notes
@@ -138,6 +130,10 @@ def cmd_replay(args) -> int:
                 summary = doc.host.export(out, mesh=doc.export_mesh(args.layer))
             else:
                 summary = doc.host.export(out, doc=doc)
+                # the parts the assembly had to leave free, and why (issue 34): said, never silent
+                model = doc.assembled() if doc.host.has_assembler() else None
+                for text in getattr(model, "warnings", ()):
+                    print(f"sketchforge: warning: {printable(text)}", file=sys.stderr)
             print(f"wrote {printable(out)} ({summary})", file=sys.stderr)
     if args.save:
         ff.save(doc, args.save)
@@ -145,13 +141,29 @@ def cmd_replay(args) -> int:
 
 
 def cmd_info(args) -> int:
+    """Layers, light and journal of a document. A document whose plugins are missing is still
+    described (from its snapshot, read without them), followed by what it needs."""
     from sketchforge.document import fileformat as ff
+    from sketchforge.document.provenance import missing_plugins
+    from sketchforge.plugins.manager import default_host
 
-    doc = ff.load(args.doc)
-    l = doc.light
-    print(f"{printable(args.doc)}: {len(doc.layers)} layers, light ({l.x:.4f}, {l.y:.4f}, {l.z:.4g}; elevation "
-          f"{l.elevation:.1f}°), {len(doc.journal())} journal entries")
-    for i, layer in enumerate(doc.layers):
+    host = default_host()
+    data = ff.read_json(args.doc)
+    _, journal = ff.validate_header(data, str(args.doc))
+    missing = missing_plugins(data, host)
+    if missing:
+        from sketchforge.document.summary import read_snapshot
+
+        layers, l = read_snapshot(data, str(args.doc))
+    else:
+        doc = ff.document_from_dict(data, str(args.doc), host=host)
+        layers, l = doc.layers, doc.light
+    count = "?" if layers is None else len(layers)
+    print(f"{printable(args.doc)}: {count} layers, light ({l.x:.4f}, {l.y:.4f}, {l.z:.4g}; elevation "
+          f"{l.elevation:.1f}°), {len(journal)} journal entries")
+    if layers is None:
+        print("  (no snapshot: its layers are made by replaying the journal, which needs the missing plugins)")
+    for i, layer in enumerate(layers or ()):
         nv = layer.mesh.n_vertices if layer.mesh is not None else 0
         nf = layer.mesh.n_faces if layer.mesh is not None else 0
         # As the assembly sees it: an open stroke whose ends met has no junction (a free part).
@@ -159,26 +171,64 @@ def cmd_info(args) -> int:
         kind = "closed" if free else "open"
         vis = "" if layer.visible else " (hidden)"
         print(f"  {i}: {printable(layer.id)} '{printable(layer.name)}'{vis} {kind}, {nv} vertices, {nf} triangles, {len(layer.edits)} sculpt edits")
+    if missing:
+        print(f"{printable(args.doc)} needs plugins that are not installed:")
+        for item in missing:
+            print(f"  {printable(item)}")
     return 0
+
+
+def cmd_plugins(args) -> int:
+    """Every plugin with its version, what it registers and its problems (as Help > Plugins)."""
+    from sketchforge.plugins.inventory import format_inventory, plugin_inventory, unattributed_problems
+    from sketchforge.plugins.manager import default_host
+
+    host = default_host()
+    entries = plugin_inventory(host)
+    for line in format_inventory(entries, unattributed_problems(host, entries)):
+        print(printable(line))
+    return 0
+
+
+def shading_for(host, shader: str | None, model: str | None, cel: bool) -> dict:
+    """``render_top``'s shading arguments for ``--shader``, ``--model`` or ``--cel``: a display
+    shader by name, or a reflectance model's own R(n, l); one line listing the installed ones
+    for an unknown name."""
+    if model is not None:
+        models = host.reflectance_models
+        if model not in models:
+            raise SketchforgeError(f"--model {quote(model, 40)}: no such reflectance model is installed "
+                                   f"(installed: {', '.join(sorted(models))})")
+        return {"model": models[model]}
+    if shader is not None:
+        shaders = host.shaders
+        if shader not in shaders:
+            raise SketchforgeError(f"--shader {quote(shader, 40)}: no such display shader is installed "
+                                   f"(installed: {', '.join(sorted(shaders))}; or --model NAME for a reflectance model)")
+        return {"shader": shaders[shader].shade}
+    return {"cel": cel}
 
 
 def cmd_render(args) -> int:
     from sketchforge.document import fileformat as ff
     from sketchforge.geometry.raster import render_top, write_png
+    from sketchforge.plugins.manager import default_host
 
     if args.size < 16 or args.size > 8192:
         raise SketchforgeError(f"--size must be between 16 and 8192, got {args.size}")
     if not 0 <= args.isophotes <= MAX_ISOPHOTES:
         raise SketchforgeError(f"--isophotes must be between 0 and {MAX_ISOPHOTES}, got {args.isophotes}")
     light = None if args.light is None else light_argument(args.light)
+    host = default_host()
+    shading = shading_for(host, args.shader, args.model, args.cel)
     refuse_input_as_output(args.png, [args.doc], "PNG")
     check_target(args.png)
-    doc = ff.load(args.doc)
+    doc = ff.load(args.doc, host)
     meshes = [l.mesh for l in doc.layers if l.visible and l.mesh is not None]
     if not meshes:
         raise SketchforgeError(f"{args.doc}: no visible layer with a mesh to render")
     # --light shades the picture only: the document (and its sculpt edits) keep their own.
-    img = render_top(meshes, (light or doc.light).direction, size=args.size, isophotes=args.isophotes, cel=args.cel)
+    img = render_top(meshes, (light or doc.light).direction, size=args.size, isophotes=args.isophotes, **shading)
     write_png(args.png, img)
     print(f"wrote {printable(args.png)} ({img.shape[1]}x{img.shape[0]})", file=sys.stderr)
     return 0
@@ -197,15 +247,21 @@ def build_parser() -> argparse.ArgumentParser:
     r.add_argument("--save", help="save the replayed document (with a fresh snapshot)")
     r.add_argument("-v", "--verbose", action="store_true")
     r.set_defaults(func=cmd_replay)
-    i = sub.add_parser("info", help="print layers and vertex counts")
+    i = sub.add_parser("info", help="print layers and vertex counts (and the plugins a document needs that are missing)")
     i.add_argument("doc", type=Path)
     i.set_defaults(func=cmd_info)
+    pl = sub.add_parser("plugins", help="list every plugin: version, what it registers, its problems")
+    pl.set_defaults(func=cmd_plugins)
     d = sub.add_parser("render", help="render the top view of the shaded layers to PNG (no OpenGL)")
     d.add_argument("doc", type=Path)
     d.add_argument("--png", required=True)
     d.add_argument("--size", type=whole_number, default=512)
     d.add_argument("--isophotes", type=whole_number, default=0, help="draw K isophote lines")
-    d.add_argument("--cel", action="store_true", help="three-tone cel shading")
+    look = d.add_mutually_exclusive_group()
+    look.add_argument("--cel", action="store_true", help="three-tone cel shading")
+    look.add_argument("--shader", metavar="NAME", help="a display shader: lambert, cel or a plugin's (sketchforge plugins)")
+    look.add_argument("--model", metavar="NAME",
+                      help="shade with a reflectance model's own R(n, l): lambertian or a plugin's (sketchforge plugins)")
     d.add_argument("--light", metavar="X,Y[,Z]",
                    help="shade with this light instead of the document's: a direction towards it, z >= 0 "
                         "(0,0,1 straight overhead; write --light=-1,0,1 when x is negative)")
@@ -224,13 +280,50 @@ def build_app_parser() -> argparse.ArgumentParser:
     return p
 
 
+def _warning_note(caught) -> str:
+    """The numeric warnings (RuntimeWarning: numpy's "overflow encountered in multiply") a
+    failed command raised, folded into its error line: " (on the way: ...)", or "". Other
+    warnings (a library's deprecations) say nothing about the user's input: dropped."""
+    texts = list(dict.fromkeys(str(w.message).strip().splitlines()[0] for w in caught
+                               if issubclass(w.category, RuntimeWarning) and str(w.message).strip()))
+    if not texts:
+        return ""
+    more = f" and {len(texts) - 2} more" if len(texts) > 2 else ""
+    return f" (on the way: {'; '.join(texts[:2])}{more})"
+
+
+def _stdout_gone() -> int:
+    """The reader of stdout went away (``info | head -1``): the rest of the output has nowhere
+    to go, which is no error. Later writes (the interpreter's own flush at exit) go to
+    /dev/null, so no BrokenPipeError traceback follows; the status is a SIGPIPE death's."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError, AttributeError):
+        pass
+    return 141
+
+
 def main(argv=None) -> int:
     argv = list(sys.argv[1:] if argv is None else argv)
     try:
         if argv and argv[0] in SUBCOMMANDS:
             args = build_parser().parse_args(argv)
-            _warn_plugin_problems()
-            return args.func(args)
+            if args.cmd != "plugins":  # which lists them itself, each under its plugin
+                _warn_plugin_problems()
+            # One line, always: a solver's numeric warnings (RuntimeWarning lines before the
+            # error line) are collected; a failure folds them into its line, a success has
+            # been checked for non-finite results by the core and drops them.
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                try:
+                    rc = args.func(args)
+                except SketchforgeError as exc:
+                    print(f"sketchforge: error: {printable(shorten(str(exc) + _warning_note(caught)))}", file=sys.stderr)
+                    return 2
+            sys.stdout.flush()  # here, where a closed pipe is caught, not at exit
+            return rc
         args = build_app_parser().parse_args(argv)
         if args.screenshot and args.doc is not None:
             refuse_input_as_output(args.screenshot, [args.doc], "screenshot")
@@ -240,6 +333,8 @@ def main(argv=None) -> int:
     except SketchforgeError as exc:
         print(f"sketchforge: error: {printable(shorten(str(exc)))}", file=sys.stderr)
         return 2
+    except BrokenPipeError:
+        return _stdout_gone()
     except KeyboardInterrupt:
         print("sketchforge: interrupted", file=sys.stderr)
         return 130

@@ -4,6 +4,8 @@ Every error a user can cause derives from :class:`SketchforgeError`; the CLI pri
 message on one line and the app shows it in a dialog. Anything else escaping is a bug.
 """
 
+import unicodedata
+
 
 #: An error's sentence is cut to this many characters: every message is one readable line,
 #: whatever size of value a file or a script put in it (issue 30: a 5 MB layer id was echoed
@@ -106,3 +108,17 @@ class PluginError(SketchforgeError):
 class UnknownSolverError(SketchforgeError, ValueError):
     """A document or command names a solver (inflater, sculpt solver, assembler) that no
     installed plugin provides; the message lists the installed ones."""
+
+
+def printable(text) -> str:
+    """``text`` safe for a terminal: control and format characters (escape sequences, line
+    breaks, bidi overrides) and lone surrogates are written as ``\\xNN`` / ``\\uNNNN``, so
+    a name can never fake or hide an output line, and printing never fails to encode."""
+    out = []
+    for ch in str(text):
+        if unicodedata.category(ch) in ("Cc", "Cf", "Cs", "Zl", "Zp"):
+            o = ord(ch)
+            out.append(f"\\x{o:02x}" if o < 0x100 else f"\\u{o:04x}")
+        else:
+            out.append(ch)
+    return "".join(out)

@@ -1,4 +1,5 @@
-"""Inflation in a child process, so that a long solve never stalls the window (issue 30, point 4).
+"""Inflation in a child process, so that a long solve never stalls the window (issue 30, point 4),
+watched so that a hung or dead child never stalls the app (issue 38, point 2).
 
 The app prepares every inflation on a worker thread (``Command.prepare``), but the fairing's
 sparse factorisation and the inflation's solve hold Python's GIL in native code: drawing a
@@ -6,24 +7,38 @@ part of 24k vertices stopped the event loop for 0.5 s, one of 46k for 1.5 s, pro
 indicator included. A child process has its own interpreter. The child builds the same plugin
 host from the same entry points and answers only for an inflater whose implementation (plugin,
 function, version) is the one the window's host has under that name; otherwise (a test host,
-a plugin object passed in by hand) the inflation stays in this process. A native crash in the child no longer ends the app either: it
-becomes a one-line SolverError and the child is started again.
+a plugin object passed in by hand) the inflation stays in this process.
+
+The watchdog: the caller waits for the child's answer in short slices, never longer than
+:data:`INFLATE_TIMEOUT_S` in all, and :meth:`OffloadedInflation.cancel` (the app's Cancel)
+ends the wait at once. A child that hangs (even stopped with SIGSTOP), crashes, passes the
+timeout or is cancelled mid-job is killed and a new one started; the job ends in one
+SolverError line (nothing was changed) and the next job runs in the new child. A child that
+died while idle is found dead before the next job is sent and replaced first; the job then
+runs normally. Every restart is reported through ``notify`` (one line; the app's status bar).
 
 No Qt here: the window wraps its document's host with :class:`OffloadedInflation`.
 """
 
 from __future__ import annotations
 
-import concurrent.futures as cf
 import multiprocessing
+import os
 import threading
+import time
+from typing import Callable
 
 import numpy as np
 
-from sketchforge.errors import SolverError
+from sketchforge.errors import SketchforgeError, SolverError
 
 #: Seconds to wait for the child to start (imports and plugin host) before inflating here.
 START_TIMEOUT_S = 60.0
+#: Seconds one inflation may take in the child before it is stopped (the largest layer the
+#: limits allow, 200 000 vertices, inflates in well under a minute).
+INFLATE_TIMEOUT_S = 180.0
+#: How often a waiting caller looks at Cancel, the deadline and the child's pulse.
+POLL_S = 0.05
 
 _CHILD_HOST = None
 
@@ -39,14 +54,6 @@ def _inflaters_key(host) -> dict:
     return out
 
 
-def _child_start():
-    global _CHILD_HOST
-    from sketchforge.plugins.manager import PluginHost
-
-    _CHILD_HOST = PluginHost.create(skip_broken=True)
-    return _inflaters_key(_CHILD_HOST)
-
-
 def _child_inflate(points, closed, params, holes, solver):
     mesh = _CHILD_HOST.inflate(points, closed, params, holes, solver=solver)
     if mesh is None:
@@ -56,68 +63,251 @@ def _child_inflate(points, closed, params, holes, solver):
             tuple(np.asarray(h) for h in mesh.holes))
 
 
-class OffloadedInflation:
-    """The wrapped plugin host, with ``inflate`` run in one child process when the child's
-    inflate implementation is the host's own. Every other attribute is the host's."""
+def _child_main(conn) -> None:  # the child process
+    """Build the host, say which inflaters answer here, then serve one request at a time:
+    ``(args)`` in, ``("ok", result)`` or ``("error", exception)`` out."""
+    global _CHILD_HOST
+    try:
+        from sketchforge.plugins.manager import PluginHost
 
-    def __init__(self, host) -> None:
+        _CHILD_HOST = PluginHost.create(skip_broken=True)
+        conn.send(("ready", _inflaters_key(_CHILD_HOST)))
+    except BaseException as exc:  # noqa: BLE001 - the parent inflates itself then
+        conn.send(("error", SolverError(f"the solver process could not start: {type(exc).__name__}: {exc}")))
+        return
+    while True:
+        try:
+            args = conn.recv()
+        except (EOFError, OSError):
+            return  # the parent is gone or closed the pipe
+        try:
+            out = ("ok", _child_inflate(*args))
+        except BaseException as exc:  # noqa: BLE001 - reported to the parent
+            out = ("error", exc)
+        try:
+            conn.send(out)
+        except Exception as exc:  # noqa: BLE001 - an exception that does not pickle
+            conn.send(("error", SolverError(f"{type(out[1]).__name__}: {out[1]}" if out[0] == "error" else str(exc))))
+
+
+class _Child:
+    """One child process and the parent's end of its pipe."""
+
+    def __init__(self) -> None:
+        ctx = multiprocessing.get_context("spawn")
+        self.conn, theirs = ctx.Pipe()
+        self.process = ctx.Process(target=_child_main, args=(theirs,), daemon=True, name="sketchforge-inflate")
+        self.process.start()
+        theirs.close()
+        self.key: dict | None = None  # the inflaters it answers for, once it said so
+        self.failed = False  # it could not start
+
+    def wait_ready(self, timeout: float) -> dict | None:
+        """The child's inflaters once it has started (None: not within ``timeout``, or it
+        could not start)."""
+        if self.key is None and not self.failed:
+            try:
+                if self.conn.poll(timeout):
+                    kind, value = self.conn.recv()
+                    if kind == "ready":
+                        self.key = value
+                    else:
+                        self.failed = True
+            except (EOFError, OSError):
+                self.failed = True
+        return self.key
+
+    def alive(self) -> bool:
+        return self.process.is_alive()
+
+    def kill(self) -> None:
+        try:
+            self.process.kill()  # SIGKILL: ends a stopped (SIGSTOP) process too
+            self.process.join(5.0)
+        except (OSError, ValueError, AttributeError):
+            pass
+        try:
+            self.conn.close()
+        except OSError:
+            pass
+
+
+class OffloadedInflation:
+    """The wrapped plugin host, with ``inflate`` run in one watched child process when the
+    child's inflate implementation is the host's own. Every other attribute is the host's.
+
+    ``notify(text)`` is called (from the thread that saw it) with one line whenever the child
+    is replaced: after a crash, a timeout, a cancel, or when found dead while idle."""
+
+    def __init__(self, host, notify: Callable[[str], None] | None = None, timeout_s: float | None = None) -> None:
         self._host = host
-        self._lock = threading.Lock()
-        self._pool: cf.ProcessPoolExecutor | None = None
-        self._started: cf.Future | None = None
+        self.notify = notify
+        self.timeout_s = INFLATE_TIMEOUT_S if timeout_s is None else float(timeout_s)
+        self._lock = threading.Lock()  # guards _child and _cancel
+        self._busy = threading.Lock()  # one job in the child at a time
+        self._child: _Child | None = None
+        self._cancel: threading.Event | None = None  # the running job's
         self.start()
 
     @property
     def wrapped(self):
         return self._host
 
+    @property
+    def child_pid(self) -> int | None:
+        """The child's process id (tests stop or kill it)."""
+        child = self._child
+        return child.process.pid if child is not None else None
+
     def start(self) -> None:
         """Start the child (in the background: the first inflation waits for it)."""
         with self._lock:
-            if self._pool is None:
-                self._pool = cf.ProcessPoolExecutor(max_workers=1, mp_context=multiprocessing.get_context("spawn"))
-                self._started = self._pool.submit(_child_start)
+            if self._child is None:
+                self._child = _Child()
+
+    def _current(self) -> _Child:
+        self.start()
+        return self._child
 
     def offloading(self, solver: str | None = None) -> bool:
         """True when inflations by the inflater ``solver`` (None: the default) go to the child
         (waits for it to start, at most START_TIMEOUT_S)."""
-        self.start()
-        try:
-            child = self._started.result(timeout=START_TIMEOUT_S)
-        except Exception:  # noqa: BLE001 - no child (no fork, no memory): inflate here
+        return self._answers(self._current().wait_ready(START_TIMEOUT_S), solver)
+
+    def _answers(self, key: dict | None, solver: str | None) -> bool:
+        if key is None:
             return False
         name = solver if solver is not None else self._host.default_solver_name("inflate")
-        return name is not None and name in child and child[name] == _inflaters_key(self._host).get(name)
+        return name is not None and name in key and key[name] == _inflaters_key(self._host).get(name)
 
     def inflate(self, points, closed: bool, params: dict, holes=(), solver: str | None = None):
-        if not self.offloading(solver):
-            return self._host.inflate(points, closed, params, holes, solver=solver)
-        from sketchforge.geometry.mesh import Mesh
-
-        holes = [] if holes is None else [np.asarray(h, dtype=np.float64) for h in holes]
+        if not self._busy.acquire(timeout=self.timeout_s):
+            raise SolverError("the solver process is still busy with an earlier inflation; nothing was changed")
+        cancel = threading.Event()
+        with self._lock:
+            self._cancel = cancel
         try:
-            out = self._pool.submit(_child_inflate, np.asarray(points, dtype=np.float64), bool(closed), dict(params), holes,
-                                    solver).result()
-        except cf.process.BrokenProcessPool:
-            self.restart()
-            raise SolverError("the inflation stopped in native code (the solver process crashed); nothing was changed") from None
+            self._revive_if_dead()
+            child = self._current()
+            if not self._answers(self._wait_ready(child, cancel), solver):
+                return self._host.inflate(points, closed, params, holes, solver=solver)
+            holes = [] if holes is None else [np.asarray(h, dtype=np.float64) for h in holes]
+            args = (np.asarray(points, dtype=np.float64), bool(closed), dict(params), holes, solver)
+            out = self._run(child, args, cancel)
+        finally:
+            with self._lock:
+                if self._cancel is cancel:
+                    self._cancel = None
+            self._busy.release()
         if out is None:
             return None
+        from sketchforge.geometry.mesh import Mesh
+
         V, F, boundary, junction, rings = out
         return Mesh(V, F, boundary, junction, tuple(rings))
 
+    def _wait_ready(self, child: _Child, cancel: threading.Event) -> dict | None:
+        """The child's inflaters once it has started, waiting in slices so that Cancel ends the
+        wait (a child stopped while starting hung the job for START_TIMEOUT_S)."""
+        deadline = time.monotonic() + START_TIMEOUT_S
+        while time.monotonic() < deadline:
+            key = child.wait_ready(POLL_S)
+            if key is not None or child.failed:
+                return key
+            if cancel.is_set():
+                self._replace(child)
+                self._say("cancelled: the solver process was stopped and a new one started")
+                raise SolverError("the inflation was cancelled; nothing was changed")
+        return None
+
+    def _revive_if_dead(self) -> None:
+        """A child that died while idle (killed, out of memory) is replaced before use: the next
+        job must not be the one that finds out."""
+        child = self._child
+        if child is not None and child.key is not None and not child.alive():
+            self._replace(child)
+            self._say("the solver process had stopped; a new one was started")
+
+    def _run(self, child: _Child, args, cancel: threading.Event):
+        """Send ``args`` to the child and wait for its answer, watching Cancel, the deadline and
+        the child's pulse. Raises SolverError (the child replaced) or the inflater's error."""
+        try:
+            child.conn.send(args)
+        except (OSError, ValueError):
+            self._replace(child)
+            raise SolverError("the solver process had stopped; a new one was started: try again") from None
+        deadline = time.monotonic() + self.timeout_s
+        while True:
+            try:
+                ready = child.conn.poll(POLL_S)
+            except (OSError, ValueError):
+                ready = False
+            kind = None
+            if ready:
+                try:
+                    kind, value = child.conn.recv()
+                except (EOFError, OSError):
+                    kind, value = "crashed", None
+                if kind == "ok":
+                    return value
+                if kind == "error":
+                    raise value
+            if kind == "crashed" or (not ready and not child.alive()):
+                self._replace(child)
+                self._say("the solver process crashed; a new one was started")
+                raise SolverError("the inflation stopped in native code (the solver process crashed); nothing was changed")
+            if cancel.is_set():
+                self._replace(child)
+                self._say("cancelled: the solver process was stopped and a new one started")
+                raise SolverError("the inflation was cancelled; nothing was changed")
+            if time.monotonic() > deadline:
+                self._replace(child)
+                self._say(f"the inflation took longer than {self.timeout_s:g} s: the solver process was stopped and a new one started")
+                raise SolverError(
+                    f"the inflation took longer than {self.timeout_s:g} s and was stopped (the solver process was "
+                    "restarted); nothing was changed"
+                )
+
+    def cancel(self) -> bool:
+        """Stop the inflation running in the child, if any (the app's Cancel): the child is
+        killed and a new one started, and the waiting thread returns at once. True when one
+        was running."""
+        with self._lock:
+            cancel = self._cancel
+        if cancel is None:
+            return False
+        cancel.set()
+        return True
+
+    def _replace(self, child: _Child) -> None:
+        with self._lock:
+            if self._child is child:
+                self._child = None
+        child.kill()
+        self.start()  # the next one starts now, in the background
+
+    def _say(self, text: str) -> None:
+        if self.notify is not None:
+            try:
+                self.notify(text)
+            except Exception:  # noqa: BLE001 - a message must never fail the job
+                pass
+
     def restart(self) -> None:
         with self._lock:
-            pool, self._pool = self._pool, None
-        if pool is not None:
-            pool.shutdown(wait=False, cancel_futures=True)
+            child, self._child = self._child, None
+        if child is not None:
+            child.kill()
         self.start()
 
     def shutdown(self) -> None:
         with self._lock:
-            pool, self._pool = self._pool, None
-        if pool is not None:
-            pool.shutdown(wait=False, cancel_futures=True)
+            child, self._child = self._child, None
+            cancel = self._cancel
+        if cancel is not None:
+            cancel.set()
+        if child is not None:
+            child.kill()
 
     def __getattr__(self, name):
         if name.startswith("__"):

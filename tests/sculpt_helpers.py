@@ -6,9 +6,7 @@ import numpy as np
 import shapely
 import shapely.ops
 
-from sketchforge.geometry.heightfield import layer_normals
-from sketchforge.geometry.isophotes import isophotes
-from sketchforge.geometry.reflectance import LAMBERTIAN
+from sketchforge.plugin_api import LAMBERTIAN, isophote_through, isophotes, layer_normals
 from sketchforge_isophote_tool.fidelity import honoured_samples, mean_distance
 from sketchforge_isophote_tool.isophote import picked_isophote
 from sketchforge_isophote_tool.layerdata import layer_data
@@ -18,8 +16,8 @@ from sketchforge_isophote_tool.testing import LIGHT
 def isophote_stroke(mesh, pick, offset=0.0, half=0.25, light=LIGHT):
     """A stroke along the isophote through ``pick`` (length 2·half), offset sideways (> 0: towards
     the darker side)."""
-    ld = layer_data(mesh, light, LAMBERTIAN)
-    c, iso = picked_isophote(ld, pick)
+    c, line = isophote_through(mesh, pick, light)  # the public helper (as the isophote tool picks)
+    iso = shapely.LineString(line)
     s0 = iso.project(shapely.Point(pick))
     seg = shapely.ops.substring(iso, max(s0 - half, 0.0), min(s0 + half, iso.length))
     if offset:
@@ -42,3 +40,23 @@ def fidelity(result, light=LIGHT):
     E = layer_normals(result.mesh) @ np.asarray(light, dtype=np.float64)
     lines = [L for L in isophotes(result.mesh.V[:, :2], result.mesh.F, E, result.c)[0] if len(L) > 1]
     return mean_distance(P, result.isophote), mean_distance(P, shapely.MultiLineString(lines)), pd.h
+
+
+def stroke_moving_only_in_the_margin(mesh, pick, shift_edges):
+    """The isophote through ``pick`` from the pick to the rim, the part inside the rim margin
+    moved sideways by ``shift_edges`` edge lengths, the rest left on the isophote."""
+    ld = layer_data(mesh, LIGHT, LAMBERTIAN)
+    pd = ld.planar
+    _, iso = picked_isophote(ld, pick)
+    s0 = iso.project(shapely.Point(pick))
+    seg = shapely.ops.substring(iso, s0, iso.length)
+    P = np.array([seg.interpolate(t, normalized=True).coords[0] for t in np.linspace(0, 1, 200)])
+    d = np.gradient(P, axis=0)
+    d /= np.linalg.norm(d, axis=1, keepdims=True)
+    normal = np.column_stack([-d[:, 1], d[:, 0]])
+    inside_margin = pd.rim_distance(P) < pd.margin_at(P)
+    # The move fades in over the margin's first edge length (a hand would not jump).
+    depth = pd.margin_at(P) - pd.rim_distance(P)
+    move = np.clip(depth / pd.h, 0.0, 1.0) * shift_edges * pd.h
+    assert inside_margin.any() and (~inside_margin).sum() > 10
+    return P + move[:, None] * normal, ld

@@ -11,6 +11,7 @@ import pytest
 from sketchforge.document import fileformat as ff
 from sketchforge.document.document import Document
 from sketchforge.errors import DocumentFormatError, SketchforgeError
+from sketchforge.plugins import default_host
 from sketchforge_animate import Animation, ArapSolver, animated_glb_bytes
 from sketchforge_animate.arap import edge_weights
 from sketchforge_animate.gltf import accessor_array, read_glb
@@ -285,7 +286,7 @@ def test_example_is_rebuilt_deterministically_and_is_closed(tmp_path):
     spec.loader.exec_module(mod)
     mod.main(tmp_path / "animated.json")
     assert (tmp_path / "animated.json").read_bytes() == (root / "examples" / "animated.json").read_bytes()
-    doc = ff.load(root / "examples" / "animated.json")
+    doc = ff.load(root / "examples" / "animated.json", default_host())
     anim = Animation.of(doc)
     assert len(anim.pins) >= 2 and anim.loop >= 48  # >= 2 s at 24 fps
     mesh = doc.export_mesh()

@@ -214,26 +214,43 @@ def test_moving_a_layer_behind_flips_what_the_ray_sees():
 # --- edge cases ------------------------------------------------------------------------------
 
 
-def test_junction_spanning_two_layers_is_a_clear_error_or_a_free_part():
+def test_junction_spanning_two_layers_attaches_to_the_one_holding_most_of_it():
+    # issue 34, point 3: an open stroke whose closing segment runs from inside `left` to inside
+    # `right` is glued to the one that holds the longer stretch of it, and says so
     left = _inflate(_ellipse(-0.5, 0, 0.5, 0.4), True)
-    right = _inflate(_ellipse(0.5, 0, 0.5, 0.4), True)
-    # an open stroke whose closing segment runs from inside `left` to inside `right`
-    part = _inflate(_arc(0.0, -0.1, 0.4, 180, 360), False)
+    right = _inflate(_ellipse(0.55, 0, 0.5, 0.4), True)
+    part = _inflate(_arc(-0.05, -0.1, 0.4, 180, 360), False)
     assert part.junction.size
-    with pytest.raises(AttachmentError, match="spans two layers") as err:
-        assemble_detailed([left, right, part], names=["left", "right", "part"])
-    assert isinstance(err.value, SketchforgeError)
-    res = assemble_detailed([left, right, part], params={"on_bad_junction": "free"})
-    assert res.warnings and res.attachments == []
+    res = assemble_detailed([left, right, part], names=["left", "right", "part"])
+    assert [(a.upper, a.lower) for a in res.attachments] == [(2, 0)]  # left holds more of it
+    first, last = res.attachments[0].keep
+    assert 0 < last - first < len(part.junction) - 1
+    assert len(res.notes) == 1 and "spans 'left' and 'right'" in res.notes[0] and "glued to 'left'" in res.notes[0]
+    assert not res.warnings and res.free == []
     _, count = dg.edge_counts(res.mesh.F)
-    assert np.all(count == 2)
+    assert np.all(count == 2) and len(dg.intersecting_pairs(res.mesh.V, res.mesh.F)) == 0
+    # a junction with no stretch inside either (they are too far apart) is free, with a word
+    far = _inflate(_ellipse(0.9, 0, 0.3, 0.4), True)
+    res = assemble_detailed([left, far, _inflate(_arc(0.3, -0.1, 0.35, 180, 360), False)], names=["left", "far", "part"])
+    assert res.attachments == [] and res.free == [2] and len(res.warnings) == 1 and "'part'" in res.warnings[0]
+    with pytest.raises(AttachmentError, match="free part") as err:
+        assemble_detailed([left, far, _inflate(_arc(0.3, -0.1, 0.35, 180, 360), False)],
+                          names=["left", "far", "part"], params={"on_bad_junction": "raise"})
+    assert isinstance(err.value, SketchforgeError)
 
 
-def test_junction_partly_outside_the_layer_below_is_an_error():
+def test_junction_partly_outside_the_layer_below_glues_the_stretch_inside():
     body = _inflate(_ellipse(0, 0, 0.6, 0.4), True)
     part = _inflate(_arc(0.45, 0.0, 0.35, 120, 420), False)  # closing segment pokes out of the body
-    with pytest.raises(AttachmentError, match="outside"):
-        assemble_meshes([body, part])
+    res = assemble_detailed([body, part], names=["body", "part"])
+    assert [(a.upper, a.lower) for a in res.attachments] == [(1, 0)]
+    first, last = res.attachments[0].keep
+    J = part.V[part.junction[first:last + 1], :2]
+    inside = shapely.contains_xy(shapely.Polygon(body.V[body.boundary, :2]), J[:, 0], J[:, 1])
+    assert inside.all() and last - first < len(part.junction) - 1
+    assert len(res.notes) == 1 and "runs off 'body'" in res.notes[0]
+    _, count = dg.edge_counts(res.mesh.F)
+    assert np.all(count == 2) and dg.euler_characteristics(res.mesh.F) == [2]
 
 
 def test_layers_without_mesh_are_skipped_and_hook_returns_a_mesh():
@@ -344,7 +361,9 @@ def test_active_set_swaps_a_row_for_a_dependent_tighter_copy():
     _, _, act = _active_set(P, q, Aeq, beq, Ain, bin_, np.zeros(0, np.int64), 1e-10, 1000)
     A2, b2 = sp.vstack([Ain, Ain]).tocsr(), np.r_[bin_, bin_ + 1e-6]
     x2, _, act2 = _active_set(P, q, Aeq, beq, A2, b2, act, 1e-10, 1000)
-    assert sorted(act2.tolist()) == sorted((act + n).tolist())
+    # every original row left for its tighter copy (the optimum's working set is unique only
+    # up to nearly dependent rows, so it is compared by size, and the answer to 1e-12 below)
+    assert np.all(act2 >= n) and len(act2) == len(act)
     xr, _, _ = _active_set(P, q, Aeq, beq, Ain, bin_ + 1e-6, np.zeros(0, np.int64), 1e-10, 1000)
     assert np.abs(x2 - xr).max() < 1e-12
     assert np.max(b2 - A2 @ x2) <= 1e-9
@@ -422,9 +441,9 @@ def test_a_loop_of_attachments_is_a_clear_error_or_a_free_part():
     b = _inflate(_arc(0.3, 0.0, 0.5, 220, 500), False)
     assert a.junction.size and b.junction.size
     with pytest.raises(AttachmentError, match=r"loop \('b' -> 'a' -> 'b'") as err:
-        assemble_detailed([a, b], names=["a", "b"])
+        assemble_detailed([a, b], names=["a", "b"], params={"on_bad_junction": "raise"})
     assert isinstance(err.value, SketchforgeError)
-    res = assemble_detailed([a, b], params={"on_bad_junction": "free"}, names=["a", "b"])
+    res = assemble_detailed([a, b], names=["a", "b"])  # the default: the part closing the loop is free
     assert len(res.attachments) == 1 and len(res.warnings) == 1 and "loop" in res.warnings[0]
     _, count = dg.edge_counts(res.mesh.F)
     assert np.all(count == 2) and dg.euler_characteristics(res.mesh.F) == [2]

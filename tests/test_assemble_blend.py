@@ -96,9 +96,10 @@ def test_junctions_blend_on_the_examples(name):
     # toucan 178.9 -> 85.4 (99.94% <= 45), both faired in the narrow zone
     top0, over0, _ = _folds(plain)
     top, over, flat = _folds(blended)
-    assert top0 > 170 and over0 > 50
+    assert top0 > 170 and over0 > 40
     assert top <= 90 and over == 0 and flat >= 0.999
-    assert blended.solver["fair_zone"] == "narrow"
+    # the narrow zone, widened (issue 34) only near a fold it leaves: the toucan's head over the body
+    assert blended.solver["fair_zone"] == ("narrow" if name == "creature" else "narrow+wide")
     # the blend only reshapes junctions: depth order and glue still hold
     assert blended.max_violation <= 1e-6 and blended.glue_error < 1e-3
 
@@ -159,7 +160,8 @@ def test_unsafe_fairing_falls_back_to_the_plain_sleeve(monkeypatch):
     import sketchforge_assemble.assemble as asm
 
     layers, meshes, closed = _example("creature")
-    monkeypatch.setattr(asm, "fairing_is_fit", lambda *a, **k: False)
+    monkeypatch.setattr(asm, "fair_clear", lambda V, F, moved, *a, **k: (V, False, np.zeros(0, np.int64),
+                                                                          np.zeros(len(V), bool)))
     res = assemble_detailed(meshes, closed)
     plain = assemble_detailed(meshes, closed, params={"fillet": 0.0})
     assert res.mesh.identical(plain.mesh)
@@ -229,30 +231,51 @@ def test_a_model_inside_the_fairing_rings_keeps_its_fillet():
 def test_narrow_fairing_keeps_the_parts_and_widens_only_where_a_fold_is_left(monkeypatch):
     # The default fairs 12 rings around each junction's ends and 7 along the rest of it, held
     # softly; the first blended default faired 14 rings around the whole seam, which refitted
-    # heads and tails (a web between head and body, a leg thinned to a neck). A person sees
-    # that as the blend moving the model away from the solved shape: measured as the vertices
-    # it moves and how far (creature: 6.2k vertices, p95 2.9 edge lengths, max 8.4; the wide
-    # zone, 14 rings around the whole seam: 8.4k, 6.0, 14.9).
+    # heads and tails (a web between head and body, a leg thinned to a neck). A fold the narrow
+    # zone leaves widens the zone of the junctions near it only (issue 34: widening every
+    # junction for one fold pinched thin limbs elsewhere into necks).
     import sketchforge_assemble.assemble as asm
+    import sketchforge_assemble.fair as fair
     from sketchforge_assemble.fair import hold_weights
 
     layers, meshes, closed = _example("creature")
+    ids = [layer.id for layer in layers]
     raw = assemble_detailed(meshes, closed, params={"fair": 0})
     narrow = assemble_detailed(meshes, closed)
-    # a fold left by the narrow zone (here: any bend at all) widens the zone instead
-    monkeypatch.setattr(asm, "MAX_BEND", -1.0)
+    assert narrow.solver["fair_zone"] == "narrow"
+    # a fold left near the tail's junction (planted: the narrow zone leaves none here)
+    tail = ids.index("tail")
+    tail_v = np.unique(narrow.mesh.F[narrow.face_layer == tail])
+    jx = meshes[tail].V[meshes[tail].junction[len(meshes[tail].junction) // 2], :2]
+    seed = tail_v[np.argmin(np.linalg.norm(narrow.mesh.V[tail_v, :2] - jx, axis=1))]
+    real = fair.fair_clear
+    calls = []
+
+    def planted(V, F, moved, A, h, hold=None, bend_limit=180.0, edges=None):
+        out = real(V, F, moved, A, h, hold, bend_limit, edges)
+        calls.append(bend_limit)
+        return (out[0], out[1], np.array([seed]), out[3]) if len(calls) == 1 else out
+
+    monkeypatch.setattr(asm, "fair_clear", planted)
     wide = assemble_detailed(meshes, closed)
-    assert (narrow.solver["fair_zone"], wide.solver["fair_zone"]) == ("narrow", "wide")
-    assert not wide.warnings and np.array_equal(wide.mesh.F, narrow.mesh.F)
+    assert wide.solver["fair_zone"] == "narrow+wide" and not wide.warnings
+    assert np.array_equal(wide.mesh.F, narrow.mesh.F)
+    d_n = np.linalg.norm(narrow.mesh.V - raw.mesh.V, axis=1)
+    d_w = np.linalg.norm(wide.mesh.V - raw.mesh.V, axis=1)
+    assert np.sum(d_w > 0) > np.sum(d_n > 0)  # the tail's junction faired wider
+    # ... and only there: the front legs and the head, far from the tail, are as the narrow zone left them
     h = 0.03
-    moves = []
-    for r in (narrow, wide):
-        d = np.linalg.norm(r.mesh.V - raw.mesh.V, axis=1)
-        moves.append((int(np.sum(d > 0)), np.percentile(d[d > 0], 95) / h, d.max() / h))
-    (n_n, p_n, m_n), (n_w, p_w, m_w) = moves
-    assert n_n < 0.8 * n_w and p_n < 0.6 * p_w and m_n < 0.7 * m_w, moves
-    assert p_n < 4.0 and m_n < 10.0, moves
-    # the wide zone still meets the target: it is a fallback, not a failure
+    for part in ("head", "leg_r", "arm_front"):
+        v = np.unique(narrow.mesh.F[narrow.face_layer == ids.index(part)])
+        far = v[np.linalg.norm(narrow.mesh.V[v, :2] - jx, axis=1) > 0.6]
+        # (one solve over every moved vertex, whose zones touch through the body: the other
+        # junctions move by a hundredth of an edge length at most, nothing a person sees)
+        assert len(far) > 50 and np.abs(wide.mesh.V[far] - narrow.mesh.V[far]).max() < 0.01 * h, part
+    p_n, m_n = np.percentile(d_n[d_n > 0], 95) / h, d_n.max() / h
+    # measured on the creature: p95 3.7 edge lengths, max 12.5 (8.4 before issue 34's full-thickness
+    # joins: the fairing now rounds the turn of a limb that arrives at its own thickness)
+    assert p_n < 4.0 and m_n < 14.0, (p_n, m_n)
+    # the widened fairing still meets the target
     top, over, flat = _folds(wide)
     assert top <= 90 and flat >= 0.999
     # the hold: none at the seam, growing outwards, and the zone's edge held at its full weight

@@ -125,6 +125,9 @@ def test_each_sheet_gets_one_point_locator_per_assembly(monkeypatch):
     import sketchforge_assemble.depth as depth
 
     monkeypatch.setattr(depth, "TriangleLocator", Counting)
+    import sketchforge.plugin_api as api  # the blend's locator comes through the public API
+
+    monkeypatch.setattr(api, "TriangleLocator", Counting)
     body = _inflate(_ellipse(0, 0, 0.6, 0.4), True)
     arm = _inflate(_arc(0.35, -0.2, 0.25, 100, 400), False)
     res = assemble_detailed([body, arm])

@@ -25,6 +25,8 @@ from assemble_shapes import ellipse as _ellipse
 from assemble_shapes import inflate as _inflate
 from sketchforge_assemble import BACK, FRONT, assemble_detailed
 from sketchforge_assemble.attach import lo_chain_index
+from sketchforge_assemble.depth import _sheet_operators
+from sketchforge_assemble import diagnostics as dg
 
 
 @lru_cache(maxsize=None)
@@ -59,14 +61,14 @@ def test_the_energy_is_each_layer_s_dirichlet_energy_plus_its_pull_to_rest(fille
     assert info["reg_weight"] == pytest.approx(w, rel=1e-12)
     assert abs(P - P.T).max() <= 1e-12
     rest = np.repeat(info["rest_depth"], np.diff(offsets))
-    M = sp.block_diag([laplacian_and_mass(s.xy, s.F)[1] for s in sheets]).tocsr()
+    M = sp.block_diag([_sheet_operators(s)[1] for s in sheets]).tocsr()
     # a shift of a layer as a whole costs only the pull: P·1 = w·M·1 (the springs of a blended
     # junction are differences too)
     assert np.abs(P @ np.ones(P.shape[0]) - w * (M @ np.ones(P.shape[0]))).max() <= 1e-9 * w
     if fillet == 0.0:
         # no springs: the blocks are (1 + stiffness on a host)·(-L) + w·M, q pulls towards rest
         for k, s in enumerate(sheets):
-            L, Mk = laplacian_and_mass(s.xy, s.F)
+            L, Mk = _sheet_operators(s)
             a, b = offsets[k], offsets[k + 1]
             want = (1.0 + (stiffness if s.chains else 0.0)) * (-L) + w * Mk
             assert abs(P[a:b, a:b] - want).max() <= 1e-9
@@ -122,9 +124,9 @@ def test_depth_rows_stack_the_rest_depths_and_count_the_overlapping_pairs(fillet
     lay = {(int(layer_of[Ain.indices[Ain.indptr[r]:Ain.indptr[r + 1]]].min()),
             int(layer_of[Ain.indices[Ain.indptr[r]:Ain.indptr[r + 1]]].max())) for r in range(Ain.shape[0])}
     assert lay == set(pairs)
-    # each overlapping sheet's point locator is left in the dict the caller passed (the
-    # assembly shares it with the fillets' springs: one locator per sheet)
-    assert set(got["kw"]["locators"]) >= {i for pair in pairs for i in pair}
+    # each overlapping sheet face's point locator is left in the dict the caller passed (the
+    # assembly shares it with the fillets' springs: one locator per sheet face)
+    assert {i for i, _ in got["kw"]["locators"]} >= {i for pair in pairs for i in pair}
     # the rest depths stack the layers back to front: at rest every depth row holds, and each
     # layer in front of another sits as low as its rows allow
     rest = np.asarray(info["rest_depth"])
@@ -270,10 +272,11 @@ def test_a_fairing_taken_from_the_cache_still_reports_its_time():
     assert 0.0 <= again.timings["fair"] <= wall and again.timings["fair_check"] == 0.0
 
 
-def test_two_junctions_touching_on_one_layer_name_both_parts():
+def test_two_junctions_touching_on_one_layer_keep_apart_and_say_so():
     # two legs side by side whose junctions (the closing segments of their strokes) meet at one
-    # point on the body
-    from sketchforge_assemble import AttachmentError
+    # point on the body (issue 34: twin ears, legs drawn close): the later keeps the longest
+    # stretch of its junction clear of the earlier one's, and the note names both
+    from sketchforge.geometry.attachment import SEPARATION_EDGES
 
     body = _inflate(_ellipse(0, 0, 0.6, 0.4), True)
     def leg(pts):
@@ -282,16 +285,24 @@ def test_two_junctions_touching_on_one_layer_name_both_parts():
 
     left = _inflate(leg([[0.0, 0.0], [-0.1, -0.7], [-0.35, -0.7], [-0.25, 0.0]]), False)
     right = _inflate(leg([[0.25, 0.0], [0.35, -0.7], [0.1, -0.7], [0.0, 0.0]]), False)
-    with pytest.raises(AttachmentError) as err:
-        assemble_detailed([body, left, right], names=["body", "left", "right"])
-    assert str(err.value) == ("The junctions of layers 'left' and 'right' cross or touch on layer 'body'; "
-                              "move one of them apart.")
-    # moved apart by a few edges, the same two legs attach
+    res = assemble_detailed([body, left, right], names=["body", "left", "right"])
+    assert sorted((a.upper, a.lower, a.side) for a in res.attachments) == [(1, 0, FRONT), (2, 0, FRONT)]
+    kept = {a.upper: a.keep for a in res.attachments}
+    assert kept[1] is None and kept[2] is not None  # the first drawn keeps all of its junction
+    first, last = kept[2]
+    J = right.V[right.junction[first:last + 1], :2]
+    other = left.V[left.junction, :2]
+    gap = np.min(np.linalg.norm(J[:, None] - other[None], axis=2))
+    assert gap >= SEPARATION_EDGES * 0.05 * 0.99 and last - first >= 2
+    assert len(res.notes) == 1 and "layer 'right' meets 'left'" in res.notes[0] and "'body'" in res.notes[0]
+    assert not res.warnings
+    _, count = dg.edge_counts(res.mesh.F)
+    assert np.all(count == 2) and len(dg.intersecting_pairs(res.mesh.V, res.mesh.F)) == 0
+    # moved apart by a few edges, the same two legs attach whole
     apart = _inflate(leg([[0.45, 0.0], [0.55, -0.7], [0.3, -0.7], [0.2, 0.0]]), False)
     res = assemble_detailed([body, left, apart], names=["body", "left", "right"])
-    assert sorted((a.upper, a.lower) for a in res.attachments) == [(1, 0), (2, 0)]
-
-
+    assert sorted((a.upper, a.lower, a.keep) for a in res.attachments) == [(1, 0, None), (2, 0, None)]
+    assert not res.notes
 def test_assemble_meshes_passes_closed_and_params_on():
     from sketchforge_assemble import assemble_meshes
 

@@ -102,8 +102,10 @@ def test_the_same_seed_gives_the_same_bytes_in_this_process_and_another_seed_oth
         assert r.data == (dataset / r.record["npz"]).read_bytes()
         assert r.extra == (dataset / r.record["document"]).read_bytes()
         records.append(r.record)
-    models = json.loads((dataset / MANIFEST_NAME).read_text())["models"]
-    assert manifest_bytes(SEED, COUNT, SIZE, records, [], expected, models) == (dataset / MANIFEST_NAME).read_bytes()
+    manifest = json.loads((dataset / MANIFEST_NAME).read_text())
+    assert manifest["generators"] == {"shape": ["creature", "holes"], "edit": ["isophote"]}
+    assert manifest_bytes(SEED, COUNT, SIZE, records, [], expected, manifest["models"],
+                          manifest["generators"]) == (dataset / MANIFEST_NAME).read_bytes()
     other = dataset_sample(SEED + 1, 0, COUNT, SIZE, expected)
     assert other.ok and other.data != (dataset / "sample-000000.npz").read_bytes()
 

@@ -465,7 +465,7 @@ def test_pair_rows_constrain_every_vertex_over_the_other_sheet_at_its_exact_poin
     skip_i = np.zeros(si.n)
     skip_i[si.boundary[:5]] = 1.0
     out = _Rows()
-    _pair_rows(out, [si, sk], {0: 0, 1: si.n}, 1, 0, TriangleLocator(si.xy, si.F), skip_k, skip_i, off_k, off_i,
+    _pair_rows(out, [si, sk], {0: 0, 1: si.n}, 1, 0, TriangleLocator(si.xy, si.F), si.F, skip_k, skip_i, off_k, off_i,
                0.05, sign)
     A, b = out.matrix(si.n + sk.n)
     inside = shapely.contains_xy(si.polygon().buffer(-1e-9), sk.xy[:, 0], sk.xy[:, 1])

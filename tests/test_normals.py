@@ -139,3 +139,105 @@ def test_a_zero_crease_angle_gives_each_corner_its_own_face_s_normal():
     n /= np.linalg.norm(n)
     C1 = corner_normals(np.array([[0, 0, 0], [1, 0, 0.3], [0, 1, 0.7]], float), np.array([[0, 1, 2]]), 0.0)
     assert np.allclose(C1, n, atol=1e-12) and n[2] < 0.8
+
+
+def test_face_cross_products_keep_the_textbook_formula_s_bits():
+    """The cross products behind every normal were rewritten on coordinate rows for speed
+    (issue 34: a played frame computes them); they must stay the same operations, so every
+    normal the core computes keeps its bits. Random triangles over 6 orders of magnitude."""
+    from sketchforge.geometry.normals import _face_cross
+
+    rng = np.random.default_rng(34)
+    V = rng.normal(size=(500, 3)) * 10.0 ** rng.uniform(-3, 3, (500, 1))
+    F = rng.integers(0, 500, (3000, 3))
+    a = V[F[:, 0]]
+    u, v = V[F[:, 1]] - a, V[F[:, 2]] - a
+    ref = np.column_stack([u[:, 1] * v[:, 2] - u[:, 2] * v[:, 1],
+                           u[:, 2] * v[:, 0] - u[:, 0] * v[:, 2],
+                           u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]])
+    got = _face_cross(V, F)
+    assert got.flags.c_contiguous and got.shape == (3000, 3)
+    assert np.array_equal(got, ref)
+    assert _face_cross(V, F[:0]).shape == (0, 3)
+
+
+@pytest.mark.parametrize("noise", [0.0, 0.01, 0.03, 0.08, 0.2])
+def test_shading_vertices_shade_every_corner_as_its_own_normal_would(noise):
+    """The 3D view draws the model as an indexed mesh whose vertices are the corners that
+    shade alike (issue 34): each corner must keep its vertex and its normal bit for bit, rest
+    and posed, and corners merge exactly where they sit on one vertex and smooth over the same
+    faces. Hemispheres roughened by seeded noise, from smooth (one vertex each) to creased."""
+    from sketchforge.geometry.normals import corner_normals_grouped, crease_groups, group_normals, shading_vertices
+
+    rng = np.random.default_rng(int(noise * 1000) + 34)
+    m = hemisphere(1.0, 0.12)
+    V, F = m.V + rng.normal(0.0, noise, m.V.shape), m.F
+    groups = crease_groups(V, F, 50.0)
+    src, tris, rows = shading_vertices(F, groups)
+    assert tris.shape == F.shape and rows.shape == (len(src), len(F))
+    np.testing.assert_array_equal(src[tris], F)
+    np.testing.assert_array_equal(group_normals(V, F, rows)[tris], corner_normals_grouped(V, F, groups))
+    posed = V + rng.normal(0.0, 0.05, V.shape)
+    np.testing.assert_array_equal(group_normals(posed, F, rows)[tris], corner_normals_grouped(posed, F, groups))
+    distinct = {(F.ravel()[c], tuple(groups.indices[groups.indptr[c]:groups.indptr[c + 1]])) for c in range(3 * len(F))}
+    assert len(src) == len(distinct)
+    if noise == 0.0:
+        assert len(src) == len(V)  # a smooth surface: one shading vertex per vertex
+    else:
+        assert len(V) < len(src) < 3 * len(F)
+
+
+def test_a_box_has_one_shading_vertex_per_corner_and_side():
+    from sketchforge.geometry.normals import crease_groups, group_normals, shading_vertices
+
+    V = np.array([[x, y, z] for x in (0.0, 1.0) for y in (0.0, 2.0) for z in (0.0, 0.5)])
+    F = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
+                  [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]])
+    src, tris, rows = shading_vertices(F, crease_groups(V, F, 50.0))
+    assert len(src) == 24 and np.bincount(src).tolist() == [3] * 8  # 8 corners x 3 sides
+    N = group_normals(V, F, rows)
+    # each face's three corners carry the face's own normal: the box stays sharp
+    Nf, _ = face_normals(V, F)
+    np.testing.assert_allclose(N[tris], np.repeat(Nf[:, None, :], 3, axis=1), atol=1e-12)
+    # without creases (crease angle above 90°) every vertex is one shading vertex
+    src, _, _ = shading_vertices(F, crease_groups(V, F, 100.0))
+    assert len(src) == 8
+
+
+def test_faces_outward_only_for_a_closed_surface_wound_outwards():
+    """The 3D view skips triangles facing away only on such a surface (issue 34): a box and
+    a seeded random convex hull pass; turned inside out, with a face missing or flipped, with
+    a degenerate triangle, or an open sheet (a layer's surface) they do not."""
+    from scipy.spatial import ConvexHull
+
+    from sketchforge.geometry.normals import faces_outward
+
+    V = np.array([[x, y, z] for x in (0.0, 1.0) for y in (0.0, 2.0) for z in (0.0, 0.5)])
+    F = np.array([[0, 1, 3], [0, 3, 2], [4, 6, 7], [4, 7, 5], [0, 4, 5], [0, 5, 1],
+                  [2, 3, 7], [2, 7, 6], [0, 2, 6], [0, 6, 4], [1, 5, 7], [1, 7, 3]])
+    if not faces_outward(V, F):
+        F = F[:, ::-1]  # whichever way the box was written, one winding is outward
+    assert faces_outward(V, F) and not faces_outward(V, F[:, ::-1])
+    assert not faces_outward(V, F[1:])  # a hole
+    flipped = F.copy()
+    flipped[3] = flipped[3, ::-1]
+    assert not faces_outward(V, flipped)
+    assert not faces_outward(V, np.r_[F, [[0, 0, 1]]])
+    assert not faces_outward(V, np.r_[F, F])  # every edge twice
+    rng = np.random.default_rng(34)
+    P = rng.normal(size=(300, 3))
+    hull = ConvexHull(P)
+    H = hull.simplices.copy()
+    # orient every hull triangle away from the centroid, as a closed outward surface is
+    c = P.mean(axis=0)
+    n = np.cross(P[H[:, 1]] - P[H[:, 0]], P[H[:, 2]] - P[H[:, 0]])
+    inward = np.einsum("ij,ij->i", n, P[H[:, 0]] - c) < 0
+    H[inward] = H[inward][:, ::-1]
+    assert faces_outward(P, H) and not faces_outward(P, H[:, ::-1])
+    # two pieces (a part left free): each must face out, a bigger one cannot hide the other
+    Q = np.r_[P, V + 10.0]
+    box = F + len(P)
+    assert faces_outward(Q, np.r_[H, box])
+    assert not faces_outward(Q, np.r_[H, box[:, ::-1]])
+    m = hemisphere(1.0, 0.12)
+    assert not faces_outward(m.V, m.F)

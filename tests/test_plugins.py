@@ -96,7 +96,7 @@ def test_allowlist_limits_entry_points(monkeypatch):
 
 def test_every_hook_is_documented_with_arguments():
     specs = [f for name, f in inspect.getmembers(hookspecs, inspect.isfunction) if name.startswith("sketchforge_")]
-    assert len(specs) == 11  # the registries, the pose hook, the panels and the plugin data validators
+    assert len(specs) == 12  # the registries, the pose hook, the panels, the plugin data validators, the dataset generators
     for f in specs:
         doc = inspect.getdoc(f) or ""
         assert len(doc) > 80, f.__name__

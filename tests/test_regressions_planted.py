@@ -162,18 +162,25 @@ def test_a_part_attaches_to_the_nearest_layer_behind_it():
     assert [(a.upper, a.lower, a.side) for a in res.attachments] == [(2, 1, FRONT)]
 
 
-def test_a_junction_poking_out_by_four_percent_is_refused():
-    # planted: junction tolerance raised from 1e-6 to 0.1 of its length
-    from sketchforge_assemble import AttachmentError, assemble_meshes
+def test_a_junction_poking_out_by_four_percent_is_glued_only_inside():
+    # planted: junction tolerance raised from 1e-6 to 0.1 of its length (issue 34: the stretch
+    # inside is glued, never the part outside the plate)
+    import shapely
+
+    from sketchforge_assemble import assemble_detailed
 
     plate = _inflate(_ellipse(0, 0, 0.6, 0.4), True)
     length = 0.5 / 0.96  # from x = 0.1 to 4% of the junction's length past the rim at x = 0.6
     part = _inflate(_u_stroke(0.1, 0.1 + length, 0.0), False)
-    with pytest.raises(AttachmentError, match="outside"):
-        assemble_meshes([plate, part])
-    # the same part 4% shorter, fully inside, attaches
+    res = assemble_detailed([plate, part], names=["plate", "part"])
+    (a,) = res.attachments
+    assert a.keep is not None and "runs off 'plate'" in res.notes[0]
+    J = part.V[part.junction[a.keep[0]:a.keep[1] + 1], :2]
+    assert shapely.contains_xy(shapely.Polygon(plate.V[plate.boundary, :2]), J[:, 0], J[:, 1]).all()
+    # the same part 4% shorter, fully inside, is glued whole
     inside = _inflate(_u_stroke(0.1, 0.1 + 0.96 * 0.45, 0.0), False)
-    assemble_meshes([plate, inside])
+    res = assemble_detailed([plate, inside], names=["plate", "part"])
+    assert res.attachments[0].keep is None and not res.notes
 
 
 # --- autosave and recovery ------------------------------------------------------------------

@@ -2,7 +2,9 @@
 ``sculpt_isophotes`` command. Jointly the isophotes land where a sequence of single edits
 undoes the first; none ends farther from its stroke than it started (the per-stroke
 fallback); crossing strokes of different values are refused in one line, as is a solver that
-redraws one isophote per edit; the command is one undo step, re-applies on re-inflation,
+redraws one isophote per edit; the single edit's host rules hold per stroke (issue 36: a band
+narrower than an edge, a stroke moving only in the rim margin, the 60% bound, no tolerance
+for a stroke on its isophote); the command is one undo step, re-applies on re-inflation,
 follows transforms and replays bit for bit."""
 
 from __future__ import annotations
@@ -14,13 +16,13 @@ import math
 import numpy as np
 import pytest
 
-from sculpt_helpers import isophote_stroke
+from sculpt_helpers import isophote_stroke, stroke_moving_only_in_the_margin
 from sketchforge.document import fileformat as ff
 from sketchforge.document.document import Document
-from sketchforge.errors import DocumentFormatError, SculptError
+from sketchforge.errors import DocumentFormatError, NothingToDoError, SculptError
 from sketchforge_isophote_tool.gauss_newton import GAUSS_NEWTON
 from sketchforge_isophote_tool.joint import sculpt_many
-from sketchforge_isophote_tool.pipeline import sculpt
+from sketchforge_isophote_tool.pipeline import MAX_CHANGE, sculpt
 from sketchforge_isophote_tool.testing import LIGHT, inflated
 
 P1, P2 = [0.3, 0.2], [0.0, -0.05]
@@ -151,6 +153,95 @@ def test_a_stroke_every_version_leaves_worse_is_refused_by_name(pair):
 
 def _always_spoil(solve, problem, params):
     return _spoiled(GAUSS_NEWTON.solve(problem, params), problem.parts[1], params)
+
+
+# --- the host's rules of a single edit, per stroke (issue 36) --------------------------------
+
+
+def test_a_band_narrower_than_one_edge_length_is_refused_naming_the_stroke(pair):
+    mesh, s1, s2 = pair
+    h = sculpt(mesh, LIGHT, P1, 0.2, s1).h
+    with pytest.raises(SculptError) as info:
+        sculpt_many(mesh, LIGHT, [(P1, 0.2, s1), (P2, 0.9 * h, s2)])
+    text = str(info.value)
+    assert text.startswith("stroke 2: the band (") and "narrower than one edge length" in text and "\n" not in text
+
+
+def test_a_stroke_moving_only_in_the_rim_margin_is_refused_naming_it(pair):
+    mesh, _, s2 = pair
+    margin_only, _ = stroke_moving_only_in_the_margin(mesh, [0.2, 0.1], 1.5)
+    calls = []
+    spy = dataclasses.replace(GAUSS_NEWTON, name="spy", solve=lambda p, q: calls.append(1) or GAUSS_NEWTON.solve(p, q))
+    with pytest.raises(SculptError, match=r"^stroke 2: the stroke runs within the rim margin .*draw it further inside"):
+        sculpt_many(mesh, LIGHT, [(P2, 0.2, s2), ([0.2, 0.1], 0.3, margin_only)], solver=spy)
+    assert not calls  # refused before any solve: nothing changes
+
+
+def _lump(mesh, amplitude):
+    """A bump of ``amplitude`` × the peak far from both strokes."""
+    peak = mesh.V[:, 2].max()
+    return amplitude * peak * np.exp(-np.sum((mesh.V[:, :2] - [-0.5, -0.2]) ** 2, axis=1) / 0.02)
+
+
+def test_a_joint_change_over_60_percent_of_the_peak_is_scaled_down_and_says_so(pair):
+    mesh, s1, s2 = pair
+    lump = _lump(mesh, 1.2)
+    huge = dataclasses.replace(GAUSS_NEWTON, name="huge", solve=lambda p, q: GAUSS_NEWTON.solve(p, q).dz + lump)
+    r = sculpt_many(mesh, LIGHT, [(P1, 0.2, s1), (P2, 0.2, s2)], solver=huge)
+    peak = mesh.V[:, 2].max()
+    assert np.abs(r.mesh.V[:, 2] - mesh.V[:, 2]).max() <= MAX_CHANGE * peak * (1 + 1e-9)
+    assert r.bounded_from == pytest.approx(1.2, abs=0.02)
+    for p in r.parts:
+        assert p.bounded_from == r.bounded_from and p.fraction == pytest.approx(MAX_CHANGE / r.bounded_from)
+        assert p.after < p.before
+    text = r.describe()
+    assert f"would have changed heights by {r.bounded_from:.0%} of the peak, at most 60% is allowed" in text
+    assert "\n" not in text
+    # Within the bound nothing is scaled.
+    plain = sculpt_many(mesh, LIGHT, [(P1, 0.2, s1), (P2, 0.2, s2)])
+    assert plain.bounded_from == 0.0 and [p.fraction for p in plain.parts] == [1.0, 1.0]
+    # Scaled down and still pulling the isophotes away: refused by stroke, with the figure.
+    wrong = dataclasses.replace(GAUSS_NEWTON, name="wrong", solve=lambda p, q: lump - GAUSS_NEWTON.solve(p, q).dz)
+    with pytest.raises(SculptError, match=r"^stroke \d \(isophote n·l = .*would change heights by 1\d\d% of the "
+                                          r"peak; at most 60% is applied"):
+        sculpt_many(mesh, LIGHT, [(P1, 0.2, s1), (P2, 0.2, s2)], solver=wrong)
+
+
+def _pusher(mesh):
+    """gauss_newton plus, in every round, the change of a single edit that moves the first
+    isophote 0.12 h towards its brighter side: a stroke within the tolerance ends a little
+    farther, still within a quarter edge length (what the first release let through)."""
+    h = sculpt(mesh, LIGHT, P1, 0.2, isophote_stroke(mesh, P1, offset=0.1, half=0.22)[0]).h
+    other, _, _ = isophote_stroke(mesh, P1, offset=-0.12 * h, half=0.22)
+    push = sculpt(mesh, LIGHT, P1, 0.2, other, never_worse=False).mesh.V[:, 2] - mesh.V[:, 2]
+    return dataclasses.replace(GAUSS_NEWTON, name="pusher", solve=lambda p, q: GAUSS_NEWTON.solve(p, q).dz + push), h
+
+
+def test_a_stroke_within_the_tolerance_may_not_end_farther_in_a_joint_edit(pair):
+    mesh, _, s2 = pair
+    pusher, h = _pusher(mesh)
+    on, _, _ = isophote_stroke(mesh, P1, offset=0.05 * h, half=0.22)
+    edits = [(P1, 0.2, on), (P2, 0.2, s2)]
+    # Without the rule the first isophote ends farther, yet within a quarter edge length.
+    loose = sculpt_many(mesh, LIGHT, edits, solver=pusher, never_worse=False)
+    first = loose.parts[0]
+    assert first.before < first.after <= 0.25 * h
+    with pytest.raises(SculptError) as info:
+        sculpt_many(mesh, LIGHT, edits, solver=pusher)
+    text = str(info.value)
+    assert text.startswith("stroke 1 (isophote n·l = ") and "lies on its isophote already" in text
+    assert "left it farther" in text and "\n" not in text
+    # Every stroke within the tolerance: nothing to do, as for a single stroke.
+    on2, _, _ = isophote_stroke(mesh, P2, offset=0.05 * h, half=0.22)
+    with pytest.raises(NothingToDoError, match="every stroke lies on its isophote already"):
+        sculpt_many(mesh, LIGHT, [(P1, 0.2, on), (P2, 0.2, on2)], solver=pusher)
+    # The built-in solver on the same strokes: applied with none farther, or refused as done.
+    try:
+        r = sculpt_many(mesh, LIGHT, [(P1, 0.2, on), (P2, 0.2, s2)])
+    except NothingToDoError:
+        pass
+    else:
+        assert all(p.after <= p.before for p in r.parts), [(p.before / h, p.after / h) for p in r.parts]
 
 
 # --- the command ------------------------------------------------------------------------------

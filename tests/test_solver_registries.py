@@ -16,7 +16,7 @@ from sketchforge.document import fileformat as ff
 from sketchforge.document.commands import ReplaceLayerCommand
 from sketchforge.errors import DocumentFormatError, ParameterError, PluginError, SolverError, UnknownSolverError
 from sketchforge.plugin_api import Assembler, SculptSolver, hookimpl, validate_params
-from sketchforge.plugins import manager
+from sketchforge.plugins import default_host, manager
 from sketchforge.plugins.testing import FanInflater, make_test_host
 from third_party_solvers import ThirdPartySolvers, probe_params, probe_solve
 
@@ -80,7 +80,7 @@ def test_provenance_names_every_solver_with_its_plugin_and_version(third_party_d
     assert solvers["inflate"]["rings"] == {"plugin": PLUGIN, "version": None, "solver_version": "2"}
     assert solvers["inflate"]["poisson"]["plugin"] == "inflate"
     assert solvers["sculpt"] == {"probe": {"plugin": PLUGIN, "version": None, "solver_version": "3"}}
-    assert solvers["assemble"] == {"depth_qp": {"plugin": "assemble", "version": "0.1.0", "solver_version": "1"}}
+    assert solvers["assemble"] == {"depth_qp": {"plugin": "assemble", "version": "0.1.0", "solver_version": "2"}}
 
 
 def test_replay_check_names_a_solver_that_is_not_installed(third_party_doc, tmp_path, capsys):
@@ -96,7 +96,7 @@ def test_replay_check_names_a_solver_that_is_not_installed(third_party_doc, tmp_
                        f"solver 'probe' (plugin '{PLUGIN}'), which are not installed")
     # Opening it says the same, once, instead of failing on the first layer.
     with pytest.raises(DocumentFormatError, match="was made with the inflater 'rings'"):
-        ff.load(path)
+        ff.load(path, default_host())
 
 
 def test_replay_check_explains_a_difference_by_the_solver_versions(third_party_doc, tmp_path, capsys, monkeypatch):
@@ -297,7 +297,7 @@ def test_a_plugin_whose_dependency_is_missing_is_one_line_for_document_and_cli(m
 
     monkeypatch.setattr(manager, "entry_points", with_broken)
     monkeypatch.setattr(manager, "_default", None)
-    doc = Document()  # no traceback: the other plugins work
+    doc = Document(manager.default_host())  # no traceback: the other plugins work
     doc.execute({"command": "add_layer", "id": "a"})
     doc.execute({"command": "set_contour", "layer": "a", "points": ELLIPSE, "closed": True})
     assert doc.layer("a").mesh is not None

@@ -38,3 +38,33 @@ def test_strips_edits_land_where_drawn(outcomes):
     assert len(misses) <= 1 + int(0.05 * len(ok)), misses
     assert np.median([o.after for o in ok]) < 0.5
     assert sum(o.shape == "thin" for o in ok) >= 2  # thin limbs are editable
+
+
+@pytest.mark.parametrize("shape", ["star", "thin"])
+def test_a_chain_of_strips_edits_keeps_the_surface_free_of_creases_and_folds(shape):
+    """Issue 36, point 1, on a seeded chain of 6 accepted edits (the benchmark runs 12 chains of
+    10): interior creases (dihedral angle, shading jump) within 2.5x the fresh layer's, no new
+    fold near the rim, and a stroke on the isophote afterwards changes heights by < 1%."""
+    from sketchforge.errors import SketchforgeError
+    from sketchforge.geometry.reflectance import LAMBERTIAN
+    from sketchforge_isophote_tool import sculpt
+    from sketchforge_isophote_tool.corpus import chain_measures, random_edit
+    from sketchforge_isophote_tool.layerdata import layer_data
+
+    _, _, fresh, rng = next(corpus_layers((shape,), per_shape=1, seed=36))
+    mesh, done, tries = fresh, 0, 0
+    while done < 6 and tries < 40:
+        tries += 1
+        e = random_edit(shape, layer_data(mesh, LIGHT, LAMBERTIAN), rng, kind="shift")
+        if e is None:
+            continue
+        try:
+            mesh = sculpt(mesh, LIGHT, e.pick, e.band, e.stroke, solver=STRIPS).mesh
+        except SketchforgeError:
+            continue
+        done += 1
+    assert done == 6
+    m = chain_measures(fresh, mesh, LIGHT)
+    assert m["dihedral"] <= 2.5 * m["dihedral_fresh"], m
+    assert m["jump"] <= 2.5 * m["jump_fresh"], m
+    assert m["folds"] == 0, m

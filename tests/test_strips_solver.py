@@ -63,25 +63,34 @@ def test_the_isophote_lands_where_drawn(ellipse, edit):
     assert info["strips"] >= 10 and info["samples"] > 100  # seeded across the stroke, sampled along
 
 
-def test_the_change_is_carried_downstream_to_the_rim_and_nothing_moves_upstream(ellipse, edit):
-    """SfS fixes heights up to a function constant along the characteristics: the thesis keeps
-    the surface upstream of the band and shifts it downstream, to the rim."""
+def test_the_shift_is_shared_by_both_ends_and_returns_to_zero_across_the_rim_margin(ellipse, edit):
+    """SfS fixes heights up to a function constant along the characteristics: the strips carry
+    the change to both ends (half each, where both reach the rim margin) and it returns to 0
+    smoothly across the margin."""
+    from sketchforge_isophote_tool.layerdata import planar_data
+
     stroke, r = edit
+    pd = planar_data(ellipse)
     V2 = ellipse.V[:, :2]
     dz = r.mesh.V[:, 2] - ellipse.V[:, 2]
+    peak = ellipse.V[:, 2].max()
     line = shapely.LineString(stroke)
-    # The characteristics run roughly towards the light here (an in-plane light at 45°).
-    light = LIGHT[:2]
-    side = (V2 - np.asarray(stroke).mean(axis=0)) @ light
+    side = (V2 - np.asarray(stroke).mean(axis=0)) @ LIGHT[:2]  # the flow runs roughly along the light
     far = shapely.distance(shapely.points(V2), line) > 0.3 + 0.2  # beyond the band and its ring
-    upstream, downstream = far & (side < 0), far & (side > 0)
-    assert upstream.sum() > 50 and downstream.sum() > 20
-    # The surface before the band is kept (to the spline's ringing around the shading change:
-    # a millionth of the peak).
-    assert np.abs(dz[upstream]).max() < 1e-6 * ellipse.V[:, 2].max()
-    moved = np.abs(dz[downstream]) > 1e-3 * ellipse.V[:, 2].max()
-    assert moved.mean() > 0.3  # the shift reaches the far side
+    up, down = far & (side < 0), far & (side > 0)
+    big = 0.3 * np.abs(dz).max()
+    # Both sides shifted, in opposite directions, each by about half the change across the band.
+    assert (dz[up] > big).sum() > 20 and (dz[down] < -big).sum() > 20 or \
+        (dz[up] < -big).sum() > 20 and (dz[down] > big).sum() > 20
+    assert abs(np.abs(dz[up]).max() - np.abs(dz[down]).max()) < 0.35 * np.abs(dz).max()
+    # Across the rim margin the shift returns to 0: no more than the smoothstep of the depth
+    # allows (with the final smoothing's slack), and exactly 0 on the rim.
+    rho = np.clip(pd.d_rim / pd.margin_v, 0.0, 1.0)
+    rho = rho * rho * (3.0 - 2.0 * rho)
+    deep = pd.d_rim < 0.5 * pd.margin_v
+    assert np.all(np.abs(dz[deep]) <= 1.5 * rho[deep] * np.abs(dz).max() + 1e-3 * peak)
     assert np.all(r.mesh.V[ellipse.boundary, 2] == 0.0)
+    assert np.abs(dz).max() < 0.6 * peak
 
 
 def test_a_stroke_on_the_isophote_changes_nothing(ellipse):
@@ -106,7 +115,9 @@ def test_kvaerno5_and_tsit5_integrate_the_same_strips(ellipse, edit):
     k = sculpt(ellipse, LIGHT, PICK, 0.3, stroke, solver=STRIPS, params={"integrator": "kvaerno5"})
     dz_t = r.mesh.V[:, 2] - ellipse.V[:, 2]
     dz_k = k.mesh.V[:, 2] - ellipse.V[:, 2]
-    assert np.abs(dz_k - dz_t).max() < 1e-3 * np.abs(dz_t).max()
+    # The paths agree to the adaptive tolerance; the local fits turn that into 0.5% at a few
+    # vertices where a neighbourhood of supports changes.
+    assert np.abs(dz_k - dz_t).max() < 1e-2 * np.abs(dz_t).max()
     assert k.after <= max(2.0 * k.h, 0.3 * k.before)
 
 
@@ -130,7 +141,9 @@ def test_its_parameters_are_checked_and_unknown_ones_refused():
     assert check_params({}) == DEFAULT_PARAMS
     assert check_params({"integrator": "kvaerno5", "rbf_neighbors": 64})["rbf_neighbors"] == 64
     for bad, message in (({"integrator": "euler"}, "'integrator' must be one of 'tsit5', 'kvaerno5', got 'euler'"),
-                         ({"rtol": 0}, "'rtol' must be >= 1e-12, got 0"),
+                         ({"rtol": 0}, "'rtol' must be >= 1e-08, got 0"),
+                         ({"rbf_neighbors": 512}, "'rbf_neighbors' must be <= 64, got 512"),
+                         ({"sample_spacing": 0.1}, "'sample_spacing' must be >= 0.25, got 0.1"),
                          ({"rbf_neighbors": 3.5}, "'rbf_neighbors' must be a whole number, got 3.5"),
                          ({"lambda": 0.05}, "unknown parameter 'lambda' (known: ")):
         with pytest.raises(ParameterError) as info:
@@ -150,3 +163,57 @@ def test_a_strips_edit_through_the_command_replays_bit_identically(make_sketchfo
     assert not doc.layer("a").mesh.identical(mesh)
     replayed = assert_replays(doc)
     assert replayed.layer("a").edits == doc.layer("a").edits
+
+
+@pytest.mark.parametrize("elevation", [45, 90])
+def test_a_tilted_light_lands_without_diverging(elevation):
+    """A light above the drawing plane: the characteristic equations hold for any light
+    (R_p, R_q of R(n, l)), but the flow stops at the brightest point, where every strip meets
+    (README, thesis corrections). The shift is 0 there and the edit stays bounded."""
+    mesh = inflated("ellipse", 0.04)
+    e = np.radians(elevation)
+    light = np.array([np.cos(e) / np.sqrt(2.0), np.cos(e) / np.sqrt(2.0), np.sin(e)])
+    peak = mesh.V[:, 2].max()
+    landed = 0
+    for pick, offset in (([0.2, 0.1], 0.08), ([-0.3, -0.2], -0.08), ([0.4, -0.1], 0.06)):
+        stroke, _, _ = isophote_stroke(mesh, pick, offset=offset, light=light)
+        r = sculpt(mesh, light, pick, 0.3, stroke, solver=STRIPS)
+        assert np.isfinite(r.mesh.V).all() and r.after <= r.before
+        assert np.abs(r.mesh.V[:, 2] - mesh.V[:, 2]).max() <= 0.6 * peak + 1e-12
+        landed += r.after <= max(2.0 * r.h, 0.3 * r.before)
+    assert landed >= 2
+
+
+def test_one_compiled_integration_serves_every_strip_count_and_layer(ellipse):
+    from sketchforge_strips.integrate import _segment_function
+
+    fn = _segment_function("tsit5", False)
+    for pick, offset, band in (([0.2, 0.1], 0.1, 0.3), ([-0.3, -0.2], 0.05, 0.2), ([0.1, 0.3], -0.06, 0.4)):
+        stroke, _, _ = isophote_stroke(ellipse, pick, offset=offset, half=0.1 + abs(offset))
+        sculpt(ellipse, LIGHT, pick, band, stroke, solver=STRIPS)
+    other = inflated("pillow", 0.05)
+    stroke, _, _ = isophote_stroke(other, [0.2, 0.1], offset=0.1)
+    sculpt(other, LIGHT, [0.2, 0.1], 0.3, stroke, solver=STRIPS)
+    assert fn._cache_size() == 1
+
+
+def test_the_compiled_strips_are_kept_for_the_next_process(tmp_path):
+    """JAX's persistent compilation cache under the user's cache directory: a second process
+    (the app, `replay`) finds the strip integration compiled."""
+    code = ("import sys; sys.path.insert(0, %r)\n"
+            "from sculpt_helpers import isophote_stroke\n"
+            "from sketchforge_isophote_tool import sculpt\n"
+            "from sketchforge_isophote_tool.testing import LIGHT, inflated\n"
+            "from sketchforge_strips.solver import STRIPS\n"
+            "import jax\n"
+            "m = inflated('ellipse', 0.06)\n"
+            "s, _, _ = isophote_stroke(m, [0.2, 0.1], offset=0.1)\n"
+            "sculpt(m, LIGHT, [0.2, 0.1], 0.3, s, solver=STRIPS)\n"
+            "print(jax.config.jax_compilation_cache_dir)\n") % str(ROOT / "tests")
+    env = {**__import__("os").environ, "SKETCHFORGE_CACHE_DIR": str(tmp_path)}
+    env.pop("JAX_COMPILATION_CACHE_DIR", None)
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300, env=env)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip().splitlines()[-1] == str(tmp_path / "jax")
+    kept = [p for p in (tmp_path / "jax").rglob("*") if p.is_file()]
+    assert kept, "nothing was written to the compilation cache"

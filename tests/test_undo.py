@@ -120,7 +120,7 @@ def test_abort_macro_restores(fan_host):
 def test_solver_producing_nan_rolls_back_and_says_so():
     import numpy as np
 
-    from sketchforge.errors import SolverError
+    from sketchforge.errors import PluginError
     from sketchforge.geometry.mesh import Mesh
     from sketchforge.plugins.hookspecs import hookimpl
     from sketchforge.plugins.testing import make_test_host
@@ -140,6 +140,8 @@ def test_solver_producing_nan_rolls_back_and_says_so():
     doc = Document(host=make_test_host(NaNInflater()))
     doc.push(AddLayer(id="a"))
     before = doc.layer("a")
-    with pytest.raises(SolverError, match="non-finite heights; nothing was changed"):
+    # Refused by the host's check on what an inflater returns, naming the inflater and its plugin.
+    with pytest.raises(PluginError, match=r"^the inflater 'nan' \(plugin 'plugin-0-NaNInflater'\) returned a mesh "
+                                          r"with non-finite coordinates at 4 of 4 vertices; nothing was changed$"):
         doc.push(SetContour(layer="a", points=SQUARE))
     assert doc.layer("a") is before and doc.undo_stack.count() == 1

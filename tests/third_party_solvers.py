@@ -34,6 +34,11 @@ def rings_params(params) -> dict:
 
 def rings_inflate(points, closed, params, holes):
     P = np.asarray(points, dtype=np.float64)
+    # A point repeated (the closing one, a mouse resting) would give flat rings: drop them.
+    keep = np.r_[True, np.linalg.norm(np.diff(P, axis=0), axis=1) > 1e-9]
+    P = P[keep]
+    if len(P) > 1 and np.linalg.norm(P[0] - P[-1]) <= 1e-9:
+        P = P[:-1]
     if len(P) < 3:
         raise ContourError("rings: an outline needs at least 3 points")
     area = 0.5 * float(np.sum(P[:, 0] * np.roll(P[:, 1], -1) - np.roll(P[:, 0], -1) * P[:, 1]))

@@ -236,6 +236,6 @@ def run_batch(entries: list[Entry], out_dir: Path, fmt: str, size: int, engine, 
 
 
 def _printable(text: str) -> str:
-    from sketchforge.cli import printable
+    from sketchforge.errors import printable
 
     return printable(text)

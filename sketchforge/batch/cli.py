@@ -73,7 +73,7 @@ def _check_size(size: int) -> None:
 def cmd_batch(args: argparse.Namespace) -> int:
     from sketchforge.batch.batch import plan, prepare_output_dir, run_batch
     from sketchforge.batch.engine import Engine
-    from sketchforge.cli import printable
+    from sketchforge.errors import printable
     from sketchforge.plugins.manager import default_host
 
     fmt = args.format.strip().lstrip(".").lower()
@@ -100,7 +100,7 @@ def cmd_batch(args: argparse.Namespace) -> int:
 def cmd_dataset(args: argparse.Namespace) -> int:
     from sketchforge.batch.dataset import MANIFEST_NAME, prepare_dataset_dir, run_dataset
     from sketchforge.batch.engine import Engine
-    from sketchforge.cli import printable
+    from sketchforge.errors import printable
 
     if not 1 <= args.count <= MAX_COUNT:
         raise SketchforgeError(f"--count must be between 1 and {MAX_COUNT:,}, got {quote(args.count, 40)}")

@@ -1,6 +1,7 @@
 """``sketchforge dataset``: samples for learning shape from shading, made on the batch engine.
 
-Each sample (:mod:`.samples`: a random creature or a drawn shape with holes, random isophote
+Each sample (:mod:`.samples`: a shape and random edits from the plugins' dataset generators,
+e.g. a random creature or a drawn shape with holes, random isophote
 edits, a random light and a random installed reflectance model) is rendered from +z by the
 project's renderer (:func:`sketchforge.geometry.gbuffer.front_surface`: the assembled model's
 per-pixel normals, as ``sketchforge render`` shades them) and written as
@@ -25,7 +26,7 @@ The ``.npz`` arrays (S = ``--size``):
 ``model`` str
     The reflectance model's name.
 ``kind`` str
-    ``"creature"`` or ``"holes"``.
+    The shape generator's name: ``"creature"``, ``"holes"`` (the built-ins) or a plugin's.
 ``scale`` float64, ``origin`` (2,) float64
     Pixels per document unit, and the document point (x, y) at the image's top-left corner:
     pixel (row r, column c) has its centre at x = origin[0] + (c + 0.5) / scale,
@@ -160,8 +161,11 @@ def prepare_dataset_dir(out_dir: Path) -> None:
         raise ExportError(f"cannot make the folder {out_dir}: {exc.strerror or exc}") from None
 
 
-def manifest_bytes(seed: int, count: int, size: int, records: list[dict], failed: list[dict], software: tuple, models: list[str]) -> bytes:
-    """The manifest: what made the dataset, and one entry per sample in index order."""
+def manifest_bytes(seed: int, count: int, size: int, records: list[dict], failed: list[dict], software: tuple, models: list[str],
+                   generators: dict | None = None) -> bytes:
+    """The manifest: what made the dataset (``generators``: {"shape": [names], "edit": [names]},
+    the dataset generators the samples were drawn from), and one entry per sample in index
+    order."""
     body: dict[str, Any] = {
         "format": MANIFEST_FORMAT,
         "version": 1,
@@ -169,6 +173,7 @@ def manifest_bytes(seed: int, count: int, size: int, records: list[dict], failed
         "count": count,
         "size": size,
         "models": models,
+        "generators": generators or {},
         "lights": "hemisphere facing the viewer (z >= 0)",
         "software": {name: version for name, version in software},
         "arrays": {
@@ -178,7 +183,7 @@ def manifest_bytes(seed: int, count: int, size: int, records: list[dict], failed
             "mask": "(S, S) bool",
             "light": "(3,) float64: unit direction towards the light",
             "model": "str: the reflectance model",
-            "kind": "str: creature or holes",
+            "kind": "str: the shape generator (creature, holes, or a plugin's)",
             "scale": "float64: pixels per document unit",
             "origin": "(2,) float64: document (x, y) at the top-left corner",
         },
@@ -197,7 +202,11 @@ def run_dataset(out_dir: Path, count: int, size: int, seed: int, engine, progres
 
     bar = progress(count) if callable(progress) else progress
     expected = software()
+    from sketchforge.batch.samples import generators as installed_generators
+
     models = sorted(default_host().reflectance_models)
+    shapes, edits = installed_generators(default_host())
+    generators = {"shape": [g.name for g in shapes], "edit": [g.name for g in edits]}
     records: list[dict] = []
     failed: list[dict] = []
     t0 = time.perf_counter()
@@ -221,11 +230,12 @@ def run_dataset(out_dir: Path, count: int, size: int, seed: int, engine, progres
                     bar.advance(True)
                     continue
             failed.append({"index": i, "error": message})
-            from sketchforge.cli import printable
+            from sketchforge.errors import printable
 
             bar.advance(False)
             bar.line(f"sketchforge: failed: {printable(message)}")
     finally:
         bar.close()
-    write_bytes_atomic(out_dir / MANIFEST_NAME, manifest_bytes(seed, count, size, records, failed, expected, models))
+    write_bytes_atomic(out_dir / MANIFEST_NAME, manifest_bytes(seed, count, size, records, failed, expected, models,
+                                                                 generators))
     return len(records), len(failed), time.perf_counter() - t0

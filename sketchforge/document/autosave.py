@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import itertools
 import json
+import math
 import os
 import socket
 import time
@@ -44,7 +45,7 @@ import uuid
 from dataclasses import dataclass
 from pathlib import Path
 
-from sketchforge.atomic import pid_alive, write_bytes_atomic
+from sketchforge.atomic import pid_alive, remove_stale_temps_in, write_bytes_atomic
 from sketchforge.document import fileformat as ff
 from sketchforge.errors import SketchforgeError
 
@@ -145,6 +146,9 @@ class Recoverable:
     has_document: bool = True
     #: the record file of ``running`` (None when there is none)
     pending_path: Path | None = None
+    #: SHA-256 of ``original`` as the session last opened or saved it (None: unknown): a save
+    #: of the recovered work over it asks first if it changed since
+    original_sha256: str | None = None
 
 
 class Autosaver:
@@ -153,9 +157,11 @@ class Autosaver:
     :meth:`begin_solve` / :meth:`end_solve`. When the document is saved or replaced, use the
     Autosaver that :meth:`hand_over` returns; at a normal close, :meth:`discard`."""
 
-    def __init__(self, doc, original_path=None, interval_s: float = DEFAULT_INTERVAL_S, folder: Path | None = None) -> None:
+    def __init__(self, doc, original_path=None, interval_s: float = DEFAULT_INTERVAL_S, folder: Path | None = None,
+                 original_sha256: str | None = None) -> None:
         self.doc = doc
         self.original_path = None if original_path is None else str(Path(original_path).resolve())
+        self.original_sha256 = original_sha256 if self.original_path is not None else None
         self.interval_s = float(interval_s)
         self.folder = Path(folder) if folder is not None else autosave_dir()
         self._last_revision = -1
@@ -193,6 +199,8 @@ class Autosaver:
         _ensure_folder(self.folder)
         data = ff.document_to_dict(self.doc)
         data["autosave"] = {"original": self.original_path, "saved_at": time.time(), **this_writer()}
+        if self.original_sha256 is not None:
+            data["autosave"]["original_sha256"] = self.original_sha256
         write_bytes_atomic(self.path, json.dumps(data, separators=(",", ":")).encode("utf-8"))
         self._last_revision = self.doc.revision
         return True
@@ -279,14 +287,14 @@ class Autosaver:
         write_bytes_atomic(self.pending_path, json.dumps(data, separators=(",", ":")).encode("utf-8"))
 
     # --- saved, replaced, closed ------------------------------------------------------------------
-    def hand_over(self, original_path=None) -> "Autosaver":
+    def hand_over(self, original_path=None, original_sha256: str | None = None) -> "Autosaver":
         """The document was saved (to ``original_path``) or replaced (opened, new, recovered):
         returns its new Autosaver (a new file name) and removes this one's autosave. The solves
         still running keep their record until they end: the new Autosaver takes them over, in
         the same record file, and :meth:`end_solve` on this one passes their tokens on. If that
         file cannot be rewritten (the disk), it keeps naming them beside the old autosave's
         name, and still goes when the last of them ends."""
-        new = Autosaver(self.doc, original_path, self.interval_s, self.folder)
+        new = Autosaver(self.doc, original_path, self.interval_s, self.folder, original_sha256)
         new.pending_path = self.pending_path
         clean = self.doc.undo_stack.is_clean()
         # Saved, or replaced at the person's choice: no unsaved changes of theirs are at stake.
@@ -328,22 +336,80 @@ def _read_json_dict(path: Path) -> dict:
     return data
 
 
+#: Where :func:`find_recoverable` moves an autosave it cannot use (inside the autosave folder,
+#: so the user still has it; never offered again).
+SET_ASIDE_FOLDER = "set-aside"
+#: The longest ``original`` path an autosave may name (Linux's PATH_MAX).
+MAX_PATH_CHARS = 4096
+
+
+def _autosave_meta(data: dict) -> tuple[str | None, float | None, str | None]:
+    """The ``original`` path, ``saved_at`` time and ``original_sha256`` an autosave records,
+    checked: ``original`` None or a path (a string without NUL, at most MAX_PATH_CHARS),
+    ``saved_at`` absent or a finite number of seconds, the digest absent or 64 hex digits.
+    Raises ValueError naming the bad field (issue 38: an ``original`` of 5 made the app exit
+    with a TypeError once the user chose to recover)."""
+    meta = data.get("autosave", {})
+    if not isinstance(meta, dict):
+        raise ValueError("its 'autosave' record is not an object")
+    original = meta.get("original")
+    if original is not None and not (isinstance(original, str) and original and "\0" not in original
+                                     and len(original) <= MAX_PATH_CHARS):
+        raise ValueError("its 'original' is not a file path")
+    saved_at = meta.get("saved_at")
+    if saved_at is not None:
+        if isinstance(saved_at, bool) or not isinstance(saved_at, (int, float)) or not math.isfinite(saved_at):
+            raise ValueError("its 'saved_at' is not a time")
+        saved_at = float(saved_at)
+    for key, kind in (("pid", int), ("host", str)):
+        if key in meta and (not isinstance(meta[key], kind) or isinstance(meta[key], bool)):
+            raise ValueError(f"its '{key}' is malformed")
+    digest = meta.get("original_sha256")
+    if digest is not None and not (isinstance(digest, str) and len(digest) == 64
+                                   and all(c in "0123456789abcdef" for c in digest)):
+        raise ValueError("its 'original_sha256' is malformed")
+    return original, saved_at, digest
+
+
+def set_aside(path: Path, why: str) -> str:
+    """Move an autosave (and its record) that cannot be used into :data:`SET_ASIDE_FOLDER`,
+    kept for the user but never offered again; returns one line saying so."""
+    dest_dir = path.parent / SET_ASIDE_FOLDER
+    try:
+        dest_dir.mkdir(exist_ok=True)
+        dest = dest_dir / path.name
+        os.replace(path, dest)
+        record = pending_path_for(path)
+        if record.exists():
+            os.replace(record, dest_dir / record.name)
+    except OSError as exc:
+        return f"the autosave {path} cannot be used ({why}) and could not be moved aside ({exc.strerror or exc})"
+    return f"the autosave {path.name} cannot be used ({why}); it was moved to {dest}"
+
+
 def _running_records(raw) -> tuple:
     if not isinstance(raw, list):
         return ()
     return tuple(r for r in raw if isinstance(r, dict) and isinstance(r.get("text"), str))
 
 
-def find_recoverable(folder: Path | None = None) -> list[Recoverable]:
+def find_recoverable(folder: Path | None = None, set_aside_notes: list | None = None) -> list[Recoverable]:
     """Autosaves left by sessions that did not end normally, newest first, each with the solves
     that were running when it stopped (``running``; see :meth:`Autosaver.begin_solve`). A
     ``.pending`` record without an autosave (the document had no unsaved changes) is listed
     with ``has_document=False``. The files of another sketchforge still running on this host
-    are left out (:func:`writer_alive`). Unreadable files are skipped (never deleted: the user
-    may want them)."""
+    are left out (:func:`writer_alive`).
+
+    An autosave that cannot be used (not JSON, malformed metadata) is skipped, and, when
+    ``set_aside_notes`` is a list (the app at start), moved to :data:`SET_ASIDE_FOLDER` (never
+    deleted: the user may want it) with one line appended there saying so. Temp files of
+    autosaves killed mid-write (their writer process is gone) are removed: their names are
+    new at each session, so no later save of the same name would ever remove them."""
     folder = Path(folder) if folder is not None else autosave_dir()
     if not folder.is_dir():
         return []
+    if set_aside_notes is not None:
+        remove_stale_temps_in(folder)
     records: dict[str, tuple[Path, dict]] = {}  # autosave name -> (record file, its contents)
     for q in sorted(folder.glob("*" + PENDING_SUFFIX)):
         try:
@@ -359,14 +425,20 @@ def find_recoverable(folder: Path | None = None) -> list[Recoverable]:
     out = []
     for p in sorted(folder.glob("*.json")):
         try:
-            meta = _read_json_dict(p).get("autosave", {})
-            if writer_alive(meta):
+            data = _read_json_dict(p)
+            if writer_alive(data.get("autosave")):
                 continue
-            original, saved_at = meta.get("original"), float(meta.get("saved_at", p.stat().st_mtime))
-        except (OSError, ValueError, AttributeError, TypeError):
+            original, saved_at, digest = _autosave_meta(data)
+            saved_at = p.stat().st_mtime if saved_at is None else saved_at
+        except ValueError as exc:
+            if set_aside_notes is not None:
+                set_aside_notes.append(set_aside(p, str(exc)))
+            continue
+        except OSError:
             continue
         q, data = records.pop(p.name, (None, {}))
-        out.append(Recoverable(p, original, saved_at, _running_records(data.get("running")), pending_path=q))
+        out.append(Recoverable(p, original, saved_at, _running_records(data.get("running")), pending_path=q,
+                               original_sha256=digest))
     for name, (q, data) in records.items():
         doc_path = folder / name
         if doc_path.exists():
@@ -405,7 +477,7 @@ def describe_stop(item: Recoverable) -> str:
     return f"sketchforge stopped while computing {parts[0]}."
 
 
-def recover(item: Recoverable, host=None):
+def recover(item: Recoverable, host):
     """Open an autosave as a document with unsaved changes. The file itself is left alone;
     the caller removes it (:func:`forget`) once a new autosaver has taken over. A step that
     was running when the session stopped is not in it: its result was never pushed."""

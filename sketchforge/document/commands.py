@@ -470,7 +470,7 @@ class SetInflateParams(ReplaceLayerCommand):
 def parse_params(d: dict, cmd: str, key: str = "params") -> dict:
     """A journal entry's solver parameters: an object of JSON values (the solver checks the
     keys and values when the command runs, and when a document with a snapshot is opened)."""
-    from sketchforge.plugins.solvers import json_value
+    from sketchforge.solver_kinds import json_value
 
     params = parse_field(d, key, dict, cmd, {})
     if not json_value(params):
@@ -497,7 +497,7 @@ class SetAssembly(Command):
         return "Set assembly"
 
     def do(self, doc) -> None:
-        from sketchforge.plugins.solvers import SolverChoice
+        from sketchforge.solver_kinds import SolverChoice
 
         old = doc.assembly
         switch = self.solver is not None and self.solver != old.solver
@@ -531,30 +531,36 @@ MIRROR_AXES = ("host", "own")
 
 def _attachments(doc, which=None) -> dict:
     """{layer id: JunctionHost or None} for the layers ``which`` (None: every layer) by the one
-    rule the assembly uses too (:func:`sketchforge.geometry.attachment.find_host`, on the
-    layers the assembly takes: the visible ones with a mesh); None for a part without a
-    junction. The layers' regions and edge lengths are built once for all of them (the app
-    checks every part before an assembly and after a redraw)."""
-    import shapely
-
-    from sketchforge.geometry.attachment import find_host, median_edge_length
+    rule the assembly uses too (:func:`sketchforge.geometry.attachment.plan_attachments`, on
+    the layers the assembly takes: the visible ones with a mesh; parts glued to one face of a
+    host kept apart as the assembly keeps them); None for a part without a junction. The
+    layers' regions and edge lengths are built once for all of them (the app checks every
+    part before an assembly and after a redraw)."""
+    from sketchforge.geometry.attachment import find_host, median_edge_length, plan_attachments
 
     layers = doc.layers
     wanted = [l for l in layers if which is None or l.id in which]
-    parts = [l for l in wanted if not l.closed and l.mesh is not None and len(l.mesh.junction) >= 2]
     out: dict = {l.id: None for l in wanted}
-    if not parts:
+    if not any(not l.closed and l.mesh is not None and len(l.mesh.junction) >= 2 for l in wanted):
         return out
-    regions = [_region(l) if l.visible else None for l in layers]
+    taken = [l.visible and l.mesh is not None for l in layers]
+    regions = [_region(l) if t else None for l, t in zip(layers, taken)]
     h = [median_edge_length(l.mesh.V[:, :2], l.mesh.F) if l.mesh is not None else 0.0 for l in layers]
-    ends = [l.mesh.V[l.mesh.junction[[0, -1]], :2] if l.mesh is not None and len(l.mesh.junction) >= 2 else None
-            for l in layers]
+    ends = [l.mesh.V[l.mesh.junction[[0, -1]], :2] if t and len(l.mesh.junction) >= 2 and not l.closed else None
+            for l, t in zip(layers, taken)]
     names = [quote(l.name or l.id) for l in layers]
-    for part in parts:
-        line = shapely.LineString(part.mesh.V[part.mesh.junction, :2])
-        if line.length > 0:
-            k = doc.index_of(part.id)
-            out[part.id] = find_host(line, k, regions, h, names, h[k], ends)
+    # every glued part the assembly takes counts for the separation on a face, asked about
+    # or not; a hidden part is not assembled (it gets its host alone: to mirror about it)
+    junctions = [l.mesh.V[l.mesh.junction, :2] if t and not l.closed and len(l.mesh.junction) >= 2 else None
+                 for l, t in zip(layers, taken)]
+    plans = plan_attachments(junctions, regions, h, names, ends)
+    for k, l in enumerate(layers):
+        if l.id not in out:
+            continue
+        if plans[k] is not None:
+            out[l.id] = plans[k]
+        elif not taken[k] and l.mesh is not None and not l.closed and len(l.mesh.junction) >= 2:
+            out[l.id] = find_host(l.mesh.V[l.mesh.junction, :2], k, regions, h, names, h[k], ends)
     return out
 
 
@@ -591,17 +597,26 @@ def _region(layer: Layer):
 
 def attachment(doc, layer: Layer) -> tuple[Layer | None, str | None]:
     """Where the assembly glues ``layer`` — the one rule of
-    :func:`sketchforge.geometry.attachment.find_host`, which the assemble plugin applies too:
-    (host, None) for a part whose junction lies inside the nearest layer behind it that it
-    lies over, or else inside the nearest one in front; (None, problem) when the nearest layer
-    it lies over does not hold all of it (the junction runs outside it, or spans two layers),
-    the problem a sentence naming both; (None, None) for a free part (closed, or a junction
-    over empty space).
+    :func:`sketchforge.geometry.attachment.plan_attachments`, which the assemble plugin applies
+    too: (host, None) for a part glued to a layer (the one that holds the longest stretch of
+    its junction; see :func:`attachment_note` for a part glued by a stretch only); (None,
+    problem) when no stretch long enough lies inside one layer, clear of the layers between
+    and of the junctions glued to that face, the problem a sentence saying the part is
+    assembled free and why; (None, None) for a free part (closed, or a junction over empty
+    space).
 
     Cheap (shapely on the outlines), so the app can say at once why an assembly will fail and
     check, after a redraw, whether the parts glued to a layer still are (for many layers at
     once: :func:`attachments`)."""
     return attachments(doc, {layer.id})[layer.id]
+
+
+def attachment_note(doc, layer: Layer) -> str | None:
+    """What to tell the person about how ``layer`` is glued although it is (only the stretch
+    of its junction inside its host is glued, it spans two layers and goes to the one holding
+    most of it, or it touches another part's junction on one face), or None."""
+    found = _attachments(doc, {layer.id})[layer.id]
+    return None if found is None else found.note
 
 
 def attachments(doc, which=None) -> dict:

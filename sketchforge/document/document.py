@@ -30,7 +30,7 @@ from sketchforge.document.layer import Layer, Light
 from sketchforge.document.undo import UndoStack
 from sketchforge.errors import LayerNotFoundError, LimitError, SketchforgeError, SolverError, quote, shorten
 from sketchforge.geometry.merge import merge_meshes
-from sketchforge.plugins.solvers import SolverChoice
+from sketchforge.solver_kinds import SolverChoice
 
 
 #: Layers a document may hold. A Monster Mash model has tens of parts; every layer costs
@@ -46,11 +46,12 @@ def check_layer_count(doc) -> None:
 
 
 class Document:
-    def __init__(self, host=None, light: Light | None = None) -> None:
+    def __init__(self, host, light: Light | None = None) -> None:
         if host is None:
-            from sketchforge.plugins.manager import default_host
-
-            host = default_host()
+            raise TypeError("a Document is handed its plugin host: Document(host), e.g. "
+                            "Document(sketchforge.plugins.default_host()) for every installed plugin")
+        #: The plugin host (:class:`~sketchforge.document.host.DocumentHost`): whoever makes the
+        #: document hands it over (the app, the CLI, a test); the document never builds one.
         self.host = host
         self._layers: list[Layer] = []
         self._light = light or Light()

@@ -175,6 +175,8 @@ class Light:
             comps = [float(c) for c in v]
         except OverflowError:
             raise ParameterError("the light direction must be numbers within float range") from None
+        except ParameterError:
+            raise  # Light's own sentence (the zero vector): not wrapped in "must be numbers: ..."
         except (TypeError, ValueError) as exc:
             raise ParameterError(f"the light direction must be numbers: {exc}") from None
         return cls(*comps)

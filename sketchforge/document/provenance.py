@@ -49,7 +49,7 @@ def used_solvers(host, journal: Iterable, layers: Iterable = (), assembly=None, 
     edit of a solver command (its class's ``solver_kind``), each layer's inflater, the
     document's assembler; with ``defaults``, the default of a kind whose commands name none
     (what ran for them on this host)."""
-    from sketchforge.plugins.solvers import SOLVER_KINDS
+    from sketchforge.solver_kinds import SOLVER_KINDS
 
     out: dict[str, set] = {k: set() for k in SOLVER_KINDS}
     unnamed: set[str] = set()
@@ -134,7 +134,7 @@ def _from(info: Any) -> str:
 def missing_solvers(data: dict, host) -> list[str]:
     """One phrase per solver the document was made with that is not installed: "the inflater
     'fan' (plugin 'x' version 1.0)"; from the snapshot, the journal and ``providers``."""
-    from sketchforge.plugins.solvers import SOLVER_KINDS
+    from sketchforge.solver_kinds import SOLVER_KINDS
 
     if not hasattr(host, "solvers"):
         return []
@@ -163,7 +163,7 @@ def version_notes(data: dict, host) -> list[str]:
     """Solvers the document records with another version than the installed one: a replay
     that differs from its snapshot is then explained ("the sculpt solver 'strips' was version
     1 of plugin 'strips' 0.1.0; installed: version 2 of 0.2.0")."""
-    from sketchforge.plugins.solvers import SOLVER_KINDS
+    from sketchforge.solver_kinds import SOLVER_KINDS
 
     providers = data.get("providers") if isinstance(data.get("providers"), dict) else {}
     notes = []
@@ -184,6 +184,26 @@ def version_notes(data: dict, host) -> list[str]:
                              f"{of(info.get('plugin'), then['version'])}; installed: version {now['solver_version']} of "
                              f"{of(now['plugin'], now['version'])}")
     return notes
+
+
+def missing_plugins(data: dict, host) -> list[str]:
+    """One phrase per command, reflectance model and solver the document needs that no
+    installed plugin provides, with the plugin and version the file records: "the command
+    'bump_brush' (plugin 'bump_brush' version 0.1.0)". Empty when everything is installed
+    (what ``sketchforge info`` lists for a document it can still describe)."""
+    journal = data.get("journal", [])
+    snap = data.get("snapshot")
+    layers = snap.get("layers", []) if isinstance(snap, dict) and isinstance(snap.get("layers"), list) else []
+    commands, models = _used(journal if isinstance(journal, list) else [], layers)
+    providers: Any = data.get("providers")
+    providers = providers if isinstance(providers, dict) else {}
+    out = []
+    for kind, names, what in (("commands", sorted(commands - set(host.commands.names())), "command"),
+                              ("reflectance_models", sorted(models - set(host.reflectance_models)) if models else [],
+                               "reflectance model")):
+        table = providers.get(kind) if isinstance(providers.get(kind), dict) else {}
+        out += [f"the {what} {quote(name)} ({_from(table.get(name))})" for name in names]
+    return out + missing_solvers(data, host)
 
 
 def check_available(data: dict, host, source: str) -> None:

@@ -159,6 +159,33 @@ class GBuffer:
             cache.extend((dx, dy, cols, bound))
         return cache
 
+    def _stencil(self):
+        """Per owned pixel (``front_frag`` order), for x then y: the indices of its neighbour
+        after and before it that belong to the same layer (itself where none does) and the
+        divisor (2: central, 1: one-sided or none), so that (v[hi] - v[lo]) / div is a field's
+        difference per pixel; kept with the buffer."""
+        cache = self.__dict__.setdefault("_stencil_cache", [])
+        if not cache:
+            W, H = self.view.width, self.view.height
+            owned = np.nonzero(self.front >= 0)[0]
+            own_layer = np.full(W * H, -1, dtype=np.int32)
+            own_layer[owned] = self.layer[self.front[owned]]
+            index = np.full(W * H, -1, dtype=np.int64)
+            index[owned] = np.arange(len(owned))
+            r, c = np.divmod(owned, W)
+            mine = own_layer[owned]
+            me = np.arange(len(owned))
+            for step, lo_ok, hi_ok in ((1, c > 0, c < W - 1), (W, r > 0, r < H - 1)):
+                q_hi = np.where(hi_ok, owned + step, owned)
+                q_lo = np.where(lo_ok, owned - step, owned)
+                same_hi = hi_ok & (own_layer[q_hi] == mine)
+                same_lo = lo_ok & (own_layer[q_lo] == mine)
+                hi = np.where(same_hi, index[q_hi], me)
+                lo = np.where(same_lo, index[q_lo], me)
+                div = np.maximum(same_hi.astype(np.float32) + same_lo, 1.0).astype(np.float32)
+                cache.append((hi, lo, div))
+        return cache
+
     def front_layer(self) -> np.ndarray:
         """(height, width) int32: the layer in front at each pixel centre, -1 for none."""
         out = np.full(self.front.shape, -1, dtype=np.int32)
@@ -486,6 +513,7 @@ def shade(
     outline_alpha: float = 0.0,
     outline_width: float = 1.0,
     out: np.ndarray | None = None,
+    intensity=None,
 ) -> np.ndarray:
     """Shade a GBuffer and composite it back to front over the background.
 
@@ -513,6 +541,10 @@ def shade(
         With ``bgrx``: the result of an earlier ``shade`` of this very buffer with the same
         background, written over in place. Pixels no fragment reaches never change between
         lights, so only the others are written (a light drag at 10^6 pixels).
+    intensity : callable or None
+        ``intensity(normals (k, 3), light (3,)) -> E (k,)``: the reflectance the isophote lines
+        follow (a model's, called before ``shader`` so that it may reuse E:
+        :mod:`sketchforge.geometry.model_shading`); None: n·l.
 
     Returns
     -------
@@ -535,7 +567,8 @@ def shade(
         out = np.empty(H * W, dtype=np.uint32)
         out[:] = bg32
     if len(gbuf.pix):
-        colour = np.asarray(shader(gbuf.normal, l), dtype=np.float32)
+        lines = intensity(gbuf.normal, l) if intensity is not None and isophotes > 0 else None
+        colour = np.asarray(shader(gbuf.normal, l), dtype=np.float32)  # a model's reuses the R of ``lines``
         # one summing pass: a NaN or an infinity anywhere makes the sum non-finite
         if colour.shape != (len(gbuf.pix), 3) or not np.isfinite(colour.sum(dtype=np.float64)):
             raise ValueError(
@@ -552,7 +585,7 @@ def shade(
             if b[li + 1] > b[li]:
                 colour[b[li] : b[li + 1]] *= scale[li]
         if isophotes > 0:
-            cov = isophote_coverage(gbuf, l, isophotes, line_width)
+            cov = isophote_coverage(gbuf, l, isophotes, line_width, lines)
             hit = np.nonzero(cov > 0)[0]
             f = gbuf.front_frag[hit]
             lc = np.asarray(line_colour, dtype=np.float32).reshape(3) * 255.0
@@ -599,13 +632,15 @@ def _pack(c: np.ndarray) -> np.ndarray:
     return p4.view("<u4").ravel()
 
 
-def isophote_coverage(gbuf: GBuffer, light, K: int, width: float = 1.2) -> np.ndarray:
+def isophote_coverage(gbuf: GBuffer, light, K: int, width: float = 1.2, intensity=None) -> np.ndarray:
     """Antialiased isophote lines n·l = j/(K+1) of the front layers, as coverage per owning
     fragment (``gbuf.front_frag``).
 
     The distance of a pixel to the nearest level, |E - c| / |∇E|, uses the screen-space gradient
     of the front layer's own E (normal differences that never cross into another layer), so a
     line keeps ``width`` pixels whatever the zoom, and stops where a layer in front begins.
+    ``intensity``: E (k,) per fragment, a reflectance model's (lines at E = j/(K+1), their
+    distance in pixels from E's differences between neighbouring pixels); None: E = n·l.
 
     Returns
     -------
@@ -613,6 +648,8 @@ def isophote_coverage(gbuf: GBuffer, light, K: int, width: float = 1.2) -> np.nd
     """
     l = np.asarray(light, dtype=np.float32).reshape(3)
     K = int(K)
+    if intensity is not None:
+        return _model_coverage(gbuf, K, width, intensity)
     dn_dx, dn_dy, (nx, ny, nz), bound = gbuf._line_data()
     t = nx * (l[0] * (K + 1))
     t += ny * (l[1] * (K + 1))
@@ -629,6 +666,22 @@ def isophote_coverage(gbuf: GBuffer, light, K: int, width: float = 1.2) -> np.nd
         g = np.sqrt(gx * gx + gy * gy)
         cov[cand] = np.clip(reach - d[cand] / np.maximum(g, 1e-6), 0.0, 1.0)
     return cov
+
+
+def _model_coverage(gbuf: GBuffer, K: int, width: float, E) -> np.ndarray:
+    """:func:`isophote_coverage` of a reflectance model's E per fragment: the distance to a
+    level in pixels from E's own differences between neighbouring pixels of the same layer
+    (central where both belong to it, one-sided where one does: :meth:`GBuffer._stencil`)."""
+    f = gbuf.front_frag
+    t = np.take(E, f).astype(np.float32)
+    t *= np.float32(K + 1)
+    d = np.abs(t - np.clip(np.rint(t), 1, K))
+    reach = np.float32(0.5 * width + 0.5)
+    (hx, lx, dx), (hy, ly, dy) = gbuf._stencil()
+    gx = (np.take(t, hx) - np.take(t, lx)) / dx
+    gy = (np.take(t, hy) - np.take(t, ly)) / dy
+    g = np.sqrt(gx * gx + gy * gy)
+    return np.clip(reach - d / np.maximum(g, np.float32(1e-6)), 0.0, 1.0)
 
 
 def _dot(N: np.ndarray, l: np.ndarray) -> np.ndarray:

@@ -118,3 +118,26 @@ class Mesh:
                 *zip(self.holes, other.holes),
             )
         )
+
+
+@dataclass(frozen=True, eq=False)
+class AssembledMesh(Mesh):
+    """The assembled model: a closed :class:`Mesh` and what the person should know about how it
+    was made (issue 34: one part never refuses the model).
+
+    Attributes
+    ----------
+    free : tuple of str
+        Ids of the layers whose junction could not be glued (they are in the model as free
+        parts) or that had no room where they were drawn (left out of it).
+    warnings : tuple of str
+        One sentence per such part (naming it and why), and any other degradation (a junction
+        glued with a plain fold).
+    notes : tuple of str
+        One sentence per part glued by a stretch of its junction only (it runs off its host,
+        spans two layers or touches another part's junction on the same face).
+    """
+
+    free: tuple = ()
+    warnings: tuple = ()
+    notes: tuple = ()

@@ -43,6 +43,7 @@ def render_top(
     shader=None,
     tints=None,
     max_cost: int = MAX_RASTER_COST,
+    model=None,
 ) -> np.ndarray:
     """Render meshes seen from above, shaded by a directional light.
 
@@ -70,6 +71,9 @@ def render_top(
     max_cost : int
         Refuse (LimitError, before any fragment is made) when twice the image's pixels plus
         the triangles' bounding-box pixels exceed this: memory and time grow with both.
+    model : ReflectanceModel or None
+        Shade with this reflectance model's own R(n, l) (clay lit by it, its isophote lines at
+        R = j / (K + 1); :mod:`sketchforge.geometry.model_shading`) instead of ``shader``.
 
     Returns
     -------
@@ -102,9 +106,15 @@ def render_top(
     view = View.framing(shown, size, size, margin)
     check_raster_cost(shown, view, max_cost)
     gbuf = rasterise(list(meshes), view)
-    if shader is None:
+    intensity = None
+    if model is not None:
+        from sketchforge.geometry.model_shading import model_shader
+
+        shader, intensity = model_shader(model).shade, model_shader(model).intensity
+    elif shader is None:
         shader = cel_shade if cel else lambert_shade
-    return shade(gbuf, l, shader, bg, tints=tints, isophotes=K, line_colour=LINE_COLOUR, line_alpha=LINE_ALPHA)
+    return shade(gbuf, l, shader, bg, tints=tints, isophotes=K, line_colour=LINE_COLOUR, line_alpha=LINE_ALPHA,
+                 intensity=intensity)
 
 
 def _to_uint8(image: np.ndarray) -> np.ndarray:

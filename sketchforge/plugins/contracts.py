@@ -177,3 +177,15 @@ def check_panel(panel, plugin: str) -> None:
         _fail(plugin, f"panel {panel.name!r}: create must be callable as create(app) -> QWidget (ignored)")
     if panel.available is not None and not callable(panel.available):
         _fail(plugin, f"panel {panel.name!r}: available must be callable as available(host) -> bool (ignored)")
+
+
+def check_dataset_generator(gen, plugin: str) -> None:
+    from sketchforge.plugins.registry import DATASET_KINDS, DatasetGenerator
+
+    if not isinstance(gen, DatasetGenerator):
+        _fail(plugin, f"sketchforge_dataset_generators must return DatasetGenerator values, got {type(gen).__name__} (ignored)")
+    if gen.kind not in DATASET_KINDS:
+        _fail(plugin, f"dataset generator {gen.name!r}: kind must be one of {', '.join(DATASET_KINDS)}, got {gen.kind!r} (ignored)")
+    if not callable(gen.make):
+        _fail(plugin, f"dataset generator {gen.name!r}: make must be callable (ignored)")
+

@@ -20,7 +20,8 @@ Registries (every implementation is called, results are collected):
 
 - :func:`sketchforge_tools`, :func:`sketchforge_reflectance_models`,
   :func:`sketchforge_shaders`, :func:`sketchforge_commands`, :func:`sketchforge_exporters`,
-  the three solver registries above, and :func:`sketchforge_qt_panels` (the app's panels)
+  the three solver registries above, :func:`sketchforge_qt_panels` (the app's panels) and
+  :func:`sketchforge_dataset_generators` (random shapes and edits for ``sketchforge dataset``)
 
 One override rule for every kind: a name belongs to one plugin. A plugin that registers a name
 the core already has is refused; two plugins registering the same name is an error naming
@@ -117,7 +118,11 @@ def sketchforge_assemblers():
     (``set_assembly``; default ``"depth_qp"``), with ``layers`` the visible layers that have a
     mesh, back to front (read-only ``Layer`` values: ``id``, ``mesh`` whose ``junction`` marks
     Γ_conn, ``closed``), and the dict ``check_params`` returned. Returns one ``Mesh``,
-    outward-oriented triangles, ``boundary`` and ``junction`` empty.
+    outward-oriented triangles, ``boundary`` and ``junction`` empty; or an ``AssembledMesh``
+    (a ``Mesh`` that also says which layers it could not glue, ``free``, with one sentence
+    each in ``warnings``, and ``notes`` on parts glued by a stretch of their junction), which
+    the app shows over the model. One part that cannot be glued should never refuse the
+    whole model (issue 34): assemble it free and say so.
     """
 
 
@@ -212,6 +217,23 @@ def sketchforge_qt_panels():
     no QWidget) is named with its plugin in the status bar and the log and left out, and the
     app starts without it. The animation panel (plugin ``animate``) and the isophote tool's
     SCULPTURE controls (plugin ``isophote_tool``) come through this hook.
+    """
+
+
+@hookspec
+def sketchforge_dataset_generators():
+    """Return a list of dataset generators (:class:`sketchforge.plugin_api.DatasetGenerator`).
+
+    ``sketchforge dataset`` draws each sample's shape from the ``"shape"`` generators and its
+    sculpt edits from the ``"edit"`` generators (both sorted by name; the core knows no shape
+    of its own). A shape generator's ``make(rng)`` returns the journal entries that build the
+    sample's layers (any installed commands); an edit generator's ``make(doc, layer, model,
+    rng)`` returns one journal entry that edits the layer ``layer`` (an id) of ``doc`` under
+    its light and the reflectance model named ``model``, or None when it found nothing to
+    edit there. ``rng`` is a ``numpy.random.Generator`` seeded by the sample alone: draw every
+    random choice from it, so a sample is the same on any worker. Raise a SketchforgeError for
+    a draw that cannot be built (the sample draws again). Built in: ``creature`` (plugin
+    ``assemble``), ``holes`` and ``isophote`` (plugin ``isophote_tool``).
     """
 
 # --- document data ----------------------------------------------------------------------------

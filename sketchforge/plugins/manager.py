@@ -25,8 +25,11 @@ import pluggy
 
 from sketchforge.errors import ParameterError, PluginError, SketchforgeError, UnknownSolverError, quote
 from sketchforge.plugins import contracts, hookspecs
+from sketchforge.plugins.outputs import check_solver_output
 from sketchforge.plugins.solvers import SOLVER_KINDS, json_value
 
+#: Problems are logged at INFO: the front ends show each one once (the CLI on stderr, the app in
+#: Help > Plugins and its status bar); a warning here reached stderr once more per host built.
 log = logging.getLogger("sketchforge.plugins")
 #: The built-in plugin's registration name.
 CORE = "sketchforge-core"
@@ -43,6 +46,15 @@ LEGACY_HOOKS = {
     "sketchforge_inflate": "sketchforge_inflaters (return [Inflater('my_inflater', inflate, check_params)])",
     "sketchforge_assemble": "sketchforge_assemblers (return [Assembler('my_assembler', assemble, check_params)])",
 }
+
+
+def add_problem(pm: pluggy.PluginManager, text: str, *plugins: str) -> None:
+    """Record one problem line naming ``plugins`` (once: the same line twice is one problem)."""
+    owners = pm.problem_owners.setdefault(text, [])
+    if text not in pm.problems:
+        pm.problems.append(text)
+        log.info("%s", text)
+    owners.extend(p for p in plugins if p not in owners)
 
 
 def _hook_problem(pm: pluggy.PluginManager, plugin, name: str) -> str | None:
@@ -73,8 +85,9 @@ def make_plugin_manager(
     Each plugin's hooks are checked as it is registered (:func:`_hook_problem`). A plugin given
     in ``plugins`` that fails raises PluginError. With ``skip_broken`` an entry point that
     fails to import or to register is left out instead of failing the whole host (the app, the
-    CLI and ``Document()`` must start even if one plugin is broken or lacks a dependency); the
-    failures are in ``pm.skipped`` ({name: one line}) and ``pm.problems``."""
+    CLI and a script's document must start even if one plugin is broken or lacks a dependency);
+    the failures are in ``pm.skipped`` ({name: one line}) and ``pm.problems``, each with the
+    plugins it concerns in ``pm.problem_owners``."""
     from sketchforge.plugins import builtin
 
     pm = pluggy.PluginManager("sketchforge")
@@ -82,7 +95,11 @@ def make_plugin_manager(
     pm.register(builtin, name=CORE)
     pm.skipped = {}
     pm.problems = []
+    #: {problem line: [plugin names it concerns]}
+    pm.problem_owners = {}
     pm.versions = {}
+    #: {plugin name: distribution name} of the entry points loaded
+    pm.distributions = {}
 
     def register(plugin, name: str, explicit: bool) -> bool:
         pm.register(plugin, name=name)
@@ -93,8 +110,7 @@ def make_plugin_manager(
         if explicit or not skip_broken:
             raise PluginError(problem)
         pm.skipped[name] = problem
-        pm.problems.append(problem)
-        log.warning("%s", problem)
+        add_problem(pm, problem, name)
         return False
 
     for i, plugin in enumerate(plugins):
@@ -115,14 +131,14 @@ def make_plugin_manager(
                     # ModuleNotFoundError naming the module).
                     text = f"plugin {ep.name!r} could not be loaded: {type(exc).__name__}: {exc}"
                     pm.skipped[ep.name] = f"{type(exc).__name__}: {exc}"
-                    pm.problems.append(text)
-                    log.warning("%s", text)
+                    add_problem(pm, text, ep.name)
                     continue
                 if not register(plugin, ep.name, False):
                     continue
                 dist = getattr(ep, "dist", None)
                 if dist is not None:
                     pm.versions[ep.name] = dist.version
+                    pm.distributions[ep.name] = dist.metadata["Name"] or ep.name
     pm.check_pending()
     return pm
 
@@ -240,6 +256,26 @@ class PluginHost:
                               f"return a dict of JSON values, got {quote(out)}")
         return out
 
+    def solver_fields(self, kind: str, name: str | None = None) -> list:
+        """The parameter form of the solver ``name`` of ``kind`` (None: the default): one
+        :class:`~sketchforge.plugins.param_forms.ParamField` per parameter, from what its
+        ``check_params`` declares (:func:`~sketchforge.plugins.param_forms.describe_params`).
+
+        Raises
+        ------
+        UnknownSolverError, PluginError
+            No such solver; its ``check_params({})`` fails (named with its plugin).
+        """
+        from sketchforge.plugins.param_forms import describe_params
+
+        spec = SOLVER_KINDS[kind]
+        solver = self.solver(kind, name)
+        try:
+            return describe_params(solver.check_params)
+        except Exception as exc:  # noqa: BLE001 - foreign code
+            raise PluginError(f"the {spec.what} {solver.name!r} (plugin {self.provider_of(solver)!r}) failed to "
+                              f"describe its parameters: {type(exc).__name__}: {exc}") from exc
+
     def run_solver(self, kind: str, solver, *args):
         """Call ``solver``'s function; a bug in it (not a SketchforgeError) becomes a
         PluginError naming the solver and its plugin."""
@@ -267,7 +303,8 @@ class PluginHost:
             raise ContourError(f"the inflater {inflater.name!r} (plugin {self.provider_of(inflater)!r}) cannot cut holes; "
                                "remove the holes or choose one that can")
         full = self.solver_params("inflate", inflater, params)
-        return self.run_solver("inflate", inflater, points, closed, full, holes)
+        mesh = self.run_solver("inflate", inflater, points, closed, full, holes)
+        return check_solver_output("inflate", inflater, self.provider_of(inflater), mesh)
 
     def has_assembler(self) -> bool:
         return bool(self.solvers("assemble"))
@@ -276,7 +313,8 @@ class PluginHost:
         """Assemble with the assembler ``solver`` (None: the default) and its ``params``."""
         assembler = self.solver("assemble", solver)
         full = self.solver_params("assemble", assembler, params)
-        return self.run_solver("assemble", assembler, list(layers), full)
+        mesh = self.run_solver("assemble", assembler, list(layers), full)
+        return check_solver_output("assemble", assembler, self.provider_of(assembler), mesh)
 
     # registries
     @property
@@ -286,10 +324,18 @@ class PluginHost:
         in the status bar and log; the CLI on stderr."""
         return list(self.pm.problems)
 
-    def _report(self, text: str) -> None:
-        if text not in self.pm.problems:
-            self.pm.problems.append(text)
-            log.warning("%s", text)
+    def report_problem(self, text: str, *plugins: str) -> None:
+        """Add a problem a front end found (a panel whose ``create`` failed), naming its
+        plugins: it is listed with the others (Help > Plugins, ``problems_of``)."""
+        self._report(text, *plugins)
+
+    def problems_of(self, plugin_name: str) -> list[str]:
+        """The problem lines that concern ``plugin_name`` (a plugin left out, a contribution
+        refused, a name it shares with another plugin)."""
+        return [t for t in self.pm.problems if plugin_name in self.pm.problem_owners.get(t, ())]
+
+    def _report(self, text: str, *plugins: str) -> None:
+        add_problem(self.pm, text, *plugins)
 
     def disable(self, plugin_name: str, reason: str) -> None:
         """Unregister a misbehaving plugin (never the core) and forget every registry built so
@@ -299,8 +345,9 @@ class PluginHost:
             raise PluginError(reason)
         self.pm.unregister(name=plugin_name)
         self.pm.skipped[plugin_name] = reason
-        self._report(f"plugin {plugin_name!r} disabled: {reason}")
-        for attr in ("commands", "tools", "reflectance_models", "shaders", "exporters", "qt_panels", "_providers",
+        self._report(f"plugin {plugin_name!r} disabled: {reason}", plugin_name)
+        for attr in ("commands", "tools", "reflectance_models", "shaders", "exporters", "_exporter_suffixes", "qt_panels",
+                     "dataset_generators", "_providers",
                      "_ambiguous", *(f"_solvers_{k}" for k in SOLVER_KINDS)):
             self.__dict__.pop(attr, None)
 
@@ -329,13 +376,15 @@ class PluginHost:
                     continue
                 if not isinstance(items, (list, tuple)):
                     self._report(
-                        f"plugin {plugin!r}: {hookname} must return a list of {what}s, got {type(items).__name__} (ignored)"
+                        f"plugin {plugin!r}: {hookname} must return a list of {what}s, got {type(items).__name__} (ignored)",
+                        plugin,
                     )
                     continue
                 for item in items:
                     name = getattr(item, "name", None)
                     if not name or not isinstance(name, str):
-                        self._report(f"plugin {plugin!r}: a {what} without a name was registered: {quote(item)} (ignored)")
+                        self._report(f"plugin {plugin!r}: a {what} without a name was registered: {quote(item)} (ignored)",
+                                     plugin)
                         continue
                     if name in out and out[name] is item:
                         continue  # the same value twice (one module registered under two names)
@@ -343,23 +392,25 @@ class PluginHost:
                         try:
                             check(item, plugin)
                         except PluginError as exc:
-                            self._report(str(exc))
+                            self._report(str(exc), plugin, *getattr(exc, "plugins", ()))
                             continue
                     if name in clashes:
                         clashes[name].append(plugin)
                         self._report(f"plugin {plugin!r} also registers the {what} {name!r} (registered by "
-                                     f"{' and '.join(map(repr, clashes[name][:-1]))}): error, the name is not usable")
+                                     f"{' and '.join(map(repr, clashes[name][:-1]))}): error, the name is not usable",
+                                     *clashes[name])
                         continue
                     if name in out:
                         first = owner[name]
                         if first == CORE:
                             self._report(f"plugin {plugin!r}: the {what} {name!r} is sketchforge's own; a plugin cannot "
-                                         "replace it (refused: register it under another name)")
+                                         "replace it (refused: register it under another name)", plugin)
                             continue
                         clashes[name] = [first, plugin]
                         del out[name], owner[name]
                         self._report(f"plugins {first!r} and {plugin!r} both register the {what} {name!r}: error, neither "
-                                     f"is used until one of them is uninstalled (or left out with {ALLOWLIST_ENV})")
+                                     f"is used until one of them is uninstalled (or left out with {ALLOWLIST_ENV})",
+                                     first, plugin)
                         continue
                     out[name] = item
                     owner[name] = plugin
@@ -384,6 +435,7 @@ class PluginHost:
         shader or exporter), None when it is not registered."""
         kinds = [("command", "commands"), ("tool", "tools"), ("reflectance model", "reflectance_models"),
                  ("shader", "shaders"), ("exporter", "exporters"), ("panel", "qt_panels"),
+                 ("dataset generator", "dataset_generators"),
                  *((spec.what, f"_solvers_{k}") for k, spec in SOLVER_KINDS.items())]
         for kind, attr in kinds:
             if kind == "reflectance model" and (kind, getattr(item, "name", None)) not in self._providers:
@@ -433,43 +485,93 @@ class PluginHost:
         return self._collect("sketchforge_shaders", "shader", contracts.check_shader)
 
     @cached_property
+    def dataset_generators(self) -> dict:
+        """{name: DatasetGenerator}: the random shapes and edits of ``sketchforge dataset``."""
+        return self._collect("sketchforge_dataset_generators", "dataset generator", contracts.check_dataset_generator)
+
+    @cached_property
     def qt_panels(self) -> dict:
         """Panels for the desktop app ({name: Panel}); only the app calls their ``create``."""
         return self._collect("sketchforge_qt_panels", "panel", contracts.check_panel)
 
     @cached_property
     def exporters(self) -> dict:
-        suffix_owner: dict = {}
+        """{name: Exporter}. A suffix is written by one mesh exporter and at most one document
+        exporter (an animation, chosen for the documents it handles): a plugin cannot take a
+        suffix of the core's (its exporter is refused), and two plugins claiming one suffix is
+        an error naming both, the suffix then unusable until one of them goes
+        (:meth:`exporter_for`), never "the first one loaded wins"."""
+        core: dict = {}
 
         def check(exp, plugin):
             contracts.check_exporter(exp, plugin)
             for s in exp.suffixes:
-                # A second mesh exporter for a suffix would never be chosen; a document
-                # exporter (chosen only for documents it handles) may share one.
-                if s in suffix_owner and exp.write_document is None:
-                    other_name, other_plugin = suffix_owner[s]
+                if exp.write_document is None and s in core and plugin != CORE:
                     raise PluginError(
                         f"plugin {plugin!r}: exporter {exp.name!r} claims {s!r}, already written by exporter "
-                        f"{other_name!r} of plugin {other_plugin!r} (ignored)"
+                        f"{core[s]!r} of plugin {CORE!r} (ignored)"
                     )
-            for s in exp.suffixes:
-                if exp.write_document is None:
-                    suffix_owner[s] = (exp.name, plugin)
+            if plugin == CORE and exp.write_document is None:
+                core.update((s, exp.name) for s in exp.suffixes)
 
         return self._collect("sketchforge_exporters", "exporter", check)
+
+    @cached_property
+    def _exporter_suffixes(self) -> tuple[dict, dict]:
+        """({(suffix, kind): Exporter}, {(suffix, kind): clash message}), kind "mesh" or
+        "document"; a suffix two plugins claim is only in the second."""
+        claims: dict = {}
+        for exp in self.exporters.values():
+            kind = "mesh" if exp.write_document is None else "document"
+            for s in exp.suffixes:
+                claims.setdefault((s, kind), []).append(exp)
+        table, clashes = {}, {}
+        for (suffix, kind), exps in claims.items():
+            if len(exps) == 1:
+                table[(suffix, kind)] = exps[0]
+                continue
+            plugins = [self.provider_of(e) or "?" for e in exps]
+            what = "document exporters" if kind == "document" else "exporters"
+            text = (f"plugins {' and '.join(map(repr, plugins))} both write {suffix!r} ({what} "
+                    f"{' and '.join(repr(e.name) for e in exps)}): error, neither is used for {suffix!r} until one of "
+                    f"them is uninstalled (or left out with {ALLOWLIST_ENV})")
+            clashes[(suffix, kind)] = text
+            self._report(text, *plugins)
+        return table, clashes
 
     def validate(self) -> list[str]:
         """Build every registry now (the app at start-up), so a broken plugin is disabled
         before any document uses it. Returns :attr:`problems`."""
-        for attr in ("commands", "tools", "shaders", "exporters", "reflectance_models", "qt_panels"):
+        for attr in ("commands", "tools", "shaders", "exporters", "_exporter_suffixes", "reflectance_models", "qt_panels",
+                     "dataset_generators"):
             getattr(self, attr)
         for kind in SOLVER_KINDS:
             self.solvers(kind)
         impls = self.pm.hook.sketchforge_pose.get_hookimpls()
         if len(impls) > 1:
             self._report(f"plugins {' and '.join(repr(i.plugin_name) for i in impls)} both implement sketchforge_pose: "
-                         "error, posing is refused until one of them is uninstalled")
+                         "error, posing is refused until one of them is uninstalled", *(i.plugin_name for i in impls))
         return self.problems
+
+    def display_shadings(self) -> dict:
+        """Every way the display can shade: {key: shader}, the display shaders by their name,
+        then each reflectance model as ``"model:NAME"`` shading by its own R(n, l) (one BRDF
+        definition for the sculpt and the display: :mod:`sketchforge.geometry.model_shading`).
+        A shader has ``name``, ``shade(N, l)``, ``description``; a model's also
+        ``intensity(N, l)`` (its isophote lines)."""
+        from sketchforge.geometry.model_shading import model_shader
+
+        out = dict(self.shaders)
+        for name, model in self.reflectance_models.items():
+            out[f"model:{name}"] = model_shader(model)
+        return out
+
+    def validate_plugin_data(self, plugin_data: dict, where: str) -> None:
+        """Check a file's plugin data (``snapshot.plugin_data``) with the validators the
+        plugins register (:mod:`sketchforge.plugins.plugin_data`)."""
+        from sketchforge.plugins.plugin_data import validate_plugin_data
+
+        validate_plugin_data(self, plugin_data, where)
 
     def export(self, path, mesh=None, doc=None, progress=None) -> str:
         """Write ``mesh`` (or, with ``doc``, the whole document when a document exporter
@@ -489,31 +591,44 @@ class PluginHost:
         return self._solve("sketchforge_pose", doc=doc, frame=int(frame))
 
     def exporter_for(self, path, doc=None) -> "object":
-        """The exporter for ``path``'s suffix. With ``doc``, a document exporter that handles
-        it (an animation) is preferred, the most recently registered first."""
+        """The exporter for ``path``'s suffix. With ``doc``, the document exporter of that
+        suffix (an animation) if it handles ``doc``, else the suffix's mesh exporter.
+
+        Raises
+        ------
+        ExportError
+            No installed exporter writes that suffix.
+        PluginError
+            Two plugins claim that suffix (the message names both).
+        """
         from pathlib import Path
 
         from sketchforge.errors import ExportError
 
         suffix = Path(path).suffix.lower()
+        table, clashes = self._exporter_suffixes
         if doc is not None:
-            for exp in reversed(list(self.exporters.values())):
-                if suffix in exp.suffixes and exp.write_document is not None and exp.handles is not None:
-                    try:
-                        handles = exp.handles(doc)
-                    except SketchforgeError:
-                        raise
-                    except Exception as exc:  # noqa: BLE001 - foreign code
-                        raise ExportError(
-                            f"exporter {exp.name!r} (plugin {self.provider_of(exp)!r}) failed to inspect the document: "
-                            f"{type(exc).__name__}: {exc}"
-                        ) from exc
-                    if handles:
-                        return exp
-        for exp in self.exporters.values():
-            if suffix in exp.suffixes:
-                return exp
-        known = ", ".join(sorted(s for e in self.exporters.values() for s in e.suffixes))
+            if (suffix, "document") in clashes:
+                raise PluginError(clashes[(suffix, "document")])
+            exp = table.get((suffix, "document"))
+            if exp is not None and exp.handles is not None:
+                try:
+                    handles = exp.handles(doc)
+                except SketchforgeError:
+                    raise
+                except Exception as exc:  # noqa: BLE001 - foreign code
+                    raise ExportError(
+                        f"exporter {exp.name!r} (plugin {self.provider_of(exp)!r}) failed to inspect the document: "
+                        f"{type(exc).__name__}: {exc}"
+                    ) from exc
+                if handles:
+                    return exp
+        if (suffix, "mesh") in clashes:
+            raise PluginError(clashes[(suffix, "mesh")])
+        exp = table.get((suffix, "mesh"))
+        if exp is not None:
+            return exp
+        known = ", ".join(sorted({s for s, _ in table} | {s for s, _ in clashes}))
         raise ExportError(f"cannot export to {suffix or 'a file without suffix'!r}: known formats are {known}")
 
 
@@ -521,10 +636,11 @@ _default: PluginHost | None = None
 
 
 def default_host() -> PluginHost:
-    """The process-wide host with every installed plugin (built on first use). A plugin that
-    cannot be loaded (a missing dependency, a broken hook) is left out with one line in
-    ``problems`` (and the log) naming it, never a traceback: the CLI prints that line, the app
-    shows it in its status bar, ``Document()`` works with the rest."""
+    """The process-wide host with every installed plugin (built on first use): what the CLI
+    and a script hand a document (``Document(default_host())``). A plugin that cannot be loaded
+    (a missing dependency, a broken hook) is left out with one line in ``problems`` naming it,
+    never a traceback: the CLI prints that line once, the app lists it in Help > Plugins, a
+    document works with the rest."""
     global _default
     if _default is None:
         _default = PluginHost.create(skip_broken=True)

@@ -1,5 +1,6 @@
-"""pytest fixtures for plugin authors, shipped with sketchforge (entry point ``pytest11``), as
-napari ships ``make_napari_viewer``: installing sketchforge makes them available in any test.
+"""pytest fixtures and helpers for plugin authors, shipped with sketchforge (entry point
+``pytest11``), as napari ships ``make_napari_viewer``: installing sketchforge makes them
+available in any test.
 
 - ``make_sketchforge_host(*plugins, installed=(), strict=True)``: a host with the core plugin,
   your plugin objects or modules, and the installed entry points named in ``installed``
@@ -9,10 +10,20 @@ napari ships ``make_napari_viewer``: installing sketchforge makes them available
 - ``make_sketchforge_document(host=None, contour=ELLIPSE, layer="a", inflater=None, **params)``:
   a document with one layer inflated from ``contour`` by the inflater named ``inflater``
   (None: the host's default) with ``params`` (checked by that inflater); needs an inflater in
-  the host: ``installed=("inflate",)`` or :class:`~sketchforge.plugins.testing.FanInflater`.
+  the host: ``installed=("inflate",)`` or ``sketchforge_fan_inflater``.
 - ``assert_replays(doc)``: replays the document's journal headlessly, and reloads it from the
   saved file, and asserts both are bit-identical to ``doc`` (layers, meshes, light, plugin
   data); returns the replayed document. The check every command must pass.
+- ``sketchforge_fan_inflater``: a plugin object with the inflater ``"fan"``, a tiny exact
+  stand-in for the inflate plugin when a test is about commands, not geometry.
+- ``sketchforge_layer_at(doc, point)``: the id of the front-most visible layer under a point
+  (:func:`sketchforge.plugin_api.layer_at`, what a tool calls on a press).
+- ``sketchforge_isophote(doc, layer, pick, model=None)``: ``(c, polyline)``, the isophote
+  through a pick under the document's light, as the app shows and picks it
+  (:func:`sketchforge.plugin_api.isophote_through`).
+- ``make_sculpt_edit(doc, layer, pick, offset, half=0.25, band=None, model=None)``: the journal
+  entry of a sculpt edit that redraws the isophote through ``pick`` ``offset`` to its darker
+  side (:func:`sculpt_edit`), to ``doc.execute``; what a sculpt solver's tests need.
 
 Nothing here imports sketchforge until a fixture is used, so the plugin costs pytest nothing.
 """
@@ -29,15 +40,69 @@ def _ellipse(n: int = 48, a: float = 1.0, b: float = 0.7):
     return np.c_[a * np.cos(t), b * np.sin(t)]
 
 
+def sculpt_edit(doc, layer: str, pick, offset: float, half: float = 0.25, band: float | None = None,
+                model: str | None = None, command: str = "sculpt_isophote") -> dict:
+    """A sculpt edit's journal entry: the isophote through ``pick`` redrawn ``offset`` to its
+    side, as a person redraws it in the app (the isophote tool's ``sculpt_isophote``).
+
+    Parameters
+    ----------
+    doc : Document
+    layer : str
+        The layer's id.
+    pick : (2,) float64
+        Where the isophote is picked.
+    offset : float
+        Sideways shift of the stroke, drawing units; > 0 towards the darker side.
+    half : float
+        Half the stroke's length along the isophote, on each side of the pick.
+    band : float, optional
+        The band radius; None: 2·|offset| + 0.05.
+    model : str, optional
+        A reflectance model's name (None: Lambertian); the entry names it.
+    command : str
+        The command the entry is for.
+
+    Returns
+    -------
+    dict
+        ``{"command", "layer", "pick", "band", "stroke"}`` (and ``"model"``), JSON values.
+    """
+    import numpy as np
+    import shapely
+    import shapely.ops
+
+    from sketchforge.errors import SculptError
+    from sketchforge.tools.queries import isophote_through
+
+    mesh = doc.layer(layer).mesh
+    if mesh is None:
+        raise SculptError(f"layer {layer!r} has no surface: draw its outline first")
+    reflectance = None if model is None else doc.host.reflectance_models[model]
+    pick = np.asarray(pick, dtype=np.float64).reshape(2)
+    _, line = isophote_through(mesh, pick, doc.light.direction, reflectance)
+    iso = shapely.LineString(line)
+    s0 = iso.project(shapely.Point(pick))
+    piece = shapely.ops.substring(iso, max(s0 - half, 0.0), min(s0 + half, iso.length))
+    if offset:
+        # The brighter side is on the isophote's left: a positive offset goes right (darker).
+        piece = piece.offset_curve(-float(offset))
+        # GEOS may leave a stray short fragment on the concave side: keep the main curve.
+        piece = max(getattr(piece, "geoms", [piece]), key=lambda g: g.length)
+    entry = {"command": command, "layer": layer, "pick": [float(v) for v in pick],
+             "band": float(band if band is not None else 2.0 * abs(offset) + 0.05),
+             "stroke": np.asarray(piece.coords, dtype=np.float64)[:, :2].tolist()}
+    if model is not None:
+        entry["model"] = model
+    return entry
+
+
 @pytest.fixture
 def make_sketchforge_host():
     def make(*plugins, installed=(), strict: bool = True):
-        from sketchforge.plugins.manager import PluginHost
+        from sketchforge.plugins.testing import make_host
 
-        host = PluginHost.create(plugins, load_entry_points=bool(installed), allowlist=list(installed))
-        missing = [name for name in installed if name not in host.plugin_names()]
-        if missing:
-            pytest.fail(f"entry points {missing} are not installed (pip install the plugins that provide them)")
+        host = make_host(*plugins, installed=installed)  # PluginError: a plugin given is broken or missing
         problems = host.validate()
         if strict and problems:
             pytest.fail("the host refused plugin contributions:\n" + "\n".join(problems))
@@ -80,3 +145,33 @@ def assert_replays():
         return replayed
 
     return check
+
+
+@pytest.fixture
+def sketchforge_fan_inflater():
+    from sketchforge.plugins.testing import FanInflater
+
+    return FanInflater()
+
+
+@pytest.fixture
+def sketchforge_layer_at():
+    from sketchforge.tools.queries import layer_at
+
+    return layer_at
+
+
+@pytest.fixture
+def sketchforge_isophote():
+    def isophote(doc, layer: str, pick, model: str | None = None):
+        from sketchforge.tools.queries import isophote_through
+
+        reflectance = None if model is None else doc.host.reflectance_models[model]
+        return isophote_through(doc.layer(layer).mesh, pick, doc.light.direction, reflectance)
+
+    return isophote
+
+
+@pytest.fixture
+def make_sculpt_edit():
+    return sculpt_edit

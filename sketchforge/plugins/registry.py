@@ -9,7 +9,7 @@ from typing import Callable
 # historical path.
 from sketchforge.geometry.reflectance_model import ReflectanceModel, Shader
 
-__all__ = ["Exporter", "Panel", "ReflectanceModel", "Shader"]
+__all__ = ["DatasetGenerator", "Exporter", "Panel", "ReflectanceModel", "Shader"]
 
 
 @dataclass(frozen=True)
@@ -52,3 +52,25 @@ class Panel:
     label: str = ""
     order: int = 100
     available: Callable | None = None
+
+
+#: What a dataset generator makes: a sample's shape, or an edit of one of its layers.
+DATASET_KINDS = ("shape", "edit")
+
+
+@dataclass(frozen=True)
+class DatasetGenerator:
+    """Random material for ``sketchforge dataset`` (``sketchforge_dataset_generators``).
+
+    ``kind`` "shape": ``make(rng) -> list[dict]``, the journal entries that build a sample's
+    layers. ``kind`` "edit": ``make(doc, layer, model, rng) -> dict | None``, one journal
+    entry editing the layer with id ``layer`` under the document's light and the reflectance
+    model named ``model`` (None: nothing to edit there). ``rng`` is a
+    ``numpy.random.Generator``; the sample is reproducible only if every choice comes from it.
+    The ``name`` of a shape generator is the sample's ``kind`` in the dataset."""
+
+    name: str
+    kind: str
+    make: Callable
+    description: str = ""
+

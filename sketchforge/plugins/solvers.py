@@ -23,6 +23,14 @@ with JSON values only (they are saved in the journal); it raises
 :class:`~sketchforge.errors.ParameterError` (one line, naming the key) for an unknown key or a
 bad value. :func:`validate_params` does the usual work for a solver with a flat set of
 parameters. The host puts the solver's name in front of the message.
+
+What :func:`number`, :func:`choice` and :func:`flag` check, they also declare (``check.field``:
+a range, options, a switch; what each parameter means, :func:`~sketchforge.plugins.param_forms.declare_params`
+says), and
+:func:`validate_params` ties them to the defaults: the app builds each solver's parameter form
+from that (:mod:`sketchforge.plugins.param_forms`; a hand-written ``check_params`` declares
+its form with :func:`~sketchforge.plugins.param_forms.declare_params`), so a plugin writes no
+Qt for its parameters.
 """
 
 from __future__ import annotations
@@ -32,28 +40,11 @@ import numbers
 from dataclasses import dataclass, field
 from typing import Any, Callable, Mapping
 
+import numpy as np
+
 from sketchforge.errors import ParameterError, quote
-
-
-@dataclass(frozen=True)
-class SolverKind:
-    """What the host needs to know about one kind of solver."""
-
-    kind: str
-    hook: str
-    #: "inflater", "sculpt solver", "assembler": how messages name one.
-    what: str
-    #: The built-in solver's name (the default).
-    default: str
-    #: The name of the function field on the value type.
-    call: str
-
-
-SOLVER_KINDS: dict[str, SolverKind] = {
-    "inflate": SolverKind("inflate", "sketchforge_inflaters", "inflater", "poisson", "inflate"),
-    "sculpt": SolverKind("sculpt", "sketchforge_sculpt_solvers", "sculpt solver", "gauss_newton", "solve"),
-    "assemble": SolverKind("assemble", "sketchforge_assemblers", "assembler", "depth_qp", "assemble"),
-}
+from sketchforge.plugins.param_forms import ParamField, number_field, record_declaration
+from sketchforge.solver_kinds import SOLVER_KINDS, SolverChoice, SolverKind, json_value  # noqa: F401 (re-exported)
 
 
 def no_params(params: Mapping) -> dict:
@@ -154,6 +145,7 @@ def validate_params(params: Mapping | None, defaults: Mapping, checks: Mapping[s
     ParameterError
         "unknown parameter 'x' (known: a, b)", or the check's message.
     """
+    record_declaration(defaults, checks)  # the form the app shows (sketchforge.plugins.param_forms)
     if params is None:
         params = {}
     if not isinstance(params, Mapping):
@@ -170,36 +162,61 @@ def validate_params(params: Mapping | None, defaults: Mapping, checks: Mapping[s
     return out
 
 
+#: The range of a numeric parameter whose solver gives no bound of its own: the drawing's
+#: coordinate range (±1e9 drawing units), beyond which lengths, areas and weights overflow or
+#: lose every digit (issue 38: 1e308 passed and failed deep inside a solver).
+MAX_PARAMETER = 1e9
+
+
+def _shown(x) -> str:
+    """A number for a message: ``:g`` for a float, an integer's digits up to 20 (its length
+    beyond: formatting a 400-digit integer with ``:g`` raised OverflowError)."""
+    if isinstance(x, int):
+        if abs(x) >= 10**1000:
+            return "an integer of over 1000 digits"
+        text = str(x)
+        return text if len(text.lstrip("-")) <= 20 else f"an integer of {len(text.lstrip('-'))} digits"
+    return f"{x:g}"
+
+
 def number(key: str, lo: float | None = None, hi: float | None = None, *, lo_open: bool = False,
            hi_open: bool = False, integer: bool = False, optional: bool = False) -> Callable:
-    """A ``checks`` entry: the value must be a (finite) number in the range, an integer if
-    ``integer``, or None if ``optional``. Returns float (int for an integer parameter)."""
+    """A ``checks`` entry: the value must be a finite real number (not a bool, a string or
+    NaN, whatever its type: numpy's included) in the range, a whole number if ``integer``
+    (returned as int, else as float), or None if ``optional``. Every parameter has a finite
+    range: a bound left out, or beyond ±:data:`MAX_PARAMETER`, is ±:data:`MAX_PARAMETER`. ``lo_open`` / ``hi_open`` exclude the
+    bound itself. Messages are one line naming the key."""
+    # Never wider than the drawing's range, whatever the caller asks (an infinite bound too).
+    lo = -MAX_PARAMETER if lo is None else max(lo, -MAX_PARAMETER)
+    hi = MAX_PARAMETER if hi is None else min(hi, MAX_PARAMETER)
 
     def check(v):
         if v is None and optional:
             return None
-        if isinstance(v, bool) or not isinstance(v, numbers.Real):
+        if isinstance(v, (bool, np.bool_)) or not isinstance(v, numbers.Real):
             raise ParameterError(f"{key!r} must be a number{' or null' if optional else ''}, got {quote(v)}")
-        if integer:
-            if isinstance(v, float) and not v.is_integer():
-                raise ParameterError(f"{key!r} must be a whole number, got {v!r}")
-            try:
-                x = int(v)
-            except (OverflowError, ValueError):
-                raise ParameterError(f"{key!r} must be a whole number, got {quote(v)}") from None
+        if isinstance(v, numbers.Integral):
+            x = seen = int(v)  # exact at any size: compared with the bounds before any float is made
         else:
             try:
                 x = float(v)
-            except OverflowError:
+            except OverflowError:  # a Fraction beyond float range
                 raise ParameterError(f"{key!r} is too large for a number") from None
             if not math.isfinite(x):
                 raise ParameterError(f"{key!r} must be a finite number, got {x}")
-        if lo is not None and (x < lo or (lo_open and x == lo)):
-            raise ParameterError(f"{key!r} must be {'>' if lo_open else '>='} {lo:g}, got {x:g}")
-        if hi is not None and (x > hi or (hi_open and x == hi)):
-            raise ParameterError(f"{key!r} must be {'<' if hi_open else '<='} {hi:g}, got {x:g}")
-        return x
+            seen = x
+            if integer:
+                if not x.is_integer():
+                    raise ParameterError(f"{key!r} must be a whole number, got {x!r}")
+                x = int(x)
+        if x < lo or (lo_open and x == lo):
+            raise ParameterError(f"{key!r} must be {'>' if lo_open else '>='} {_shown(lo)}, got {_shown(seen)}")
+        if x > hi or (hi_open and x == hi):
+            raise ParameterError(f"{key!r} must be {'<' if hi_open else '<='} {_shown(hi)}, got {_shown(seen)}")
+        return x if integer else float(x)
 
+    # What the app's form shows: this range (its words: declare_params' help; see param_forms).
+    check.field = number_field(key, lo, hi, lo_open, hi_open, integer, optional)
     return check
 
 
@@ -212,6 +229,7 @@ def choice(key: str, options) -> Callable:
             raise ParameterError(f"{key!r} must be one of {', '.join(map(repr, options))}, got {quote(v)}")
         return v
 
+    check.field = ParamField(key, "choice", options=options)
     return check
 
 
@@ -223,37 +241,5 @@ def flag(key: str) -> Callable:
             raise ParameterError(f"{key!r} must be true or false, got {quote(v)}")
         return v
 
+    check.field = ParamField(key, "flag")
     return check
-
-
-def json_value(v: Any, depth: int = 0) -> bool:
-    """Whether ``v`` is a value a journal can hold: None, bool, finite number, string, or a
-    list / string-keyed object of those (at most 8 levels)."""
-    if v is None or isinstance(v, (bool, str)):
-        return True
-    if isinstance(v, numbers.Real):
-        return isinstance(v, int) or math.isfinite(float(v))
-    if depth >= 8:
-        return False
-    if isinstance(v, (list, tuple)):
-        return all(json_value(x, depth + 1) for x in v)
-    if isinstance(v, Mapping):
-        return all(isinstance(k, str) and json_value(x, depth + 1) for k, x in v.items())
-    return False
-
-
-@dataclass(frozen=True)
-class SolverChoice:
-    """A document's choice of solver for one job: a name (None: the default) and its own
-    parameters, as the document stores them (read-only)."""
-
-    solver: str | None = None
-    params: Mapping = field(default_factory=dict)
-
-    def to_dict(self) -> dict:
-        d: dict = {}
-        if self.solver is not None:
-            d["solver"] = self.solver
-        if self.params:
-            d["params"] = dict(self.params)
-        return d

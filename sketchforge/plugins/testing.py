@@ -22,6 +22,30 @@ def make_test_host(*plugins, entry_points: bool = False, allowlist=None) -> Plug
     return PluginHost.create(plugins, load_entry_points=entry_points, allowlist=allowlist)
 
 
+def make_host(*plugins, installed=()) -> PluginHost:
+    """A plugin host with the core plugin, ``plugins`` (objects or modules, in order) and the
+    installed entry points named in ``installed`` (e.g. ``("inflate",)`` for real meshes),
+    nothing else that happens to be installed: what a plugin's tests and scripts build a
+    document on (``Document(make_host(my_plugin, installed=("inflate",)))``).
+
+    Raises
+    ------
+    PluginError
+        A plugin in ``plugins`` whose hooks cannot be used (a typo in a hook name, a wrapper),
+        or an entry point of ``installed`` that is not installed.
+    """
+    from sketchforge.errors import PluginError
+
+    installed = list(installed)
+    host = PluginHost.create(plugins, load_entry_points=bool(installed), allowlist=installed, skip_broken=True)
+    missing = [name for name in installed if name not in host.plugin_names()]
+    if missing:
+        why = "; ".join(host.problems_of(name)[0] if host.problems_of(name) else f"{name!r} is not installed"
+                        for name in missing)
+        raise PluginError(f"entry points {', '.join(map(repr, missing))} are not available: {why}")
+    return host
+
+
 #: The fan's parameters: the built-in's names, so a document written for it replays with the
 #: fan (``resolution`` is accepted and unused).
 FAN_DEFAULTS = {"resolution": 0.03, "inflation": 1.0, "smoothing": 0.5}

@@ -24,10 +24,10 @@ def plugin_host():
     from sketchforge.plugins.manager import PluginHost
 
     host = PluginHost.create(skip_broken=True)
-    for name, reason in host.skipped.items():
-        print(f"sketchforge: plugin {name!r} not loaded ({reason})", file=sys.stderr)
-    for text in host.validate():  # every registry now: a hook that raises disables its plugin
-        print(f"sketchforge: {text}", file=sys.stderr)
+    # Every registry now: a hook that raises disables its plugin. Each problem once (a plugin
+    # that could not be loaded is one of them); the window lists them in Help > Plugins.
+    for text in host.validate():
+        print(f"sketchforge: warning: {text}", file=sys.stderr)
     return host
 
 

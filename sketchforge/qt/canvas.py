@@ -219,7 +219,8 @@ class Canvas(pg.GraphicsView):
 
     # --- document -> items -------------------------------------------------------------------
     def _shader(self):
-        shaders = self.host.shaders
+        """The display shading chosen: a shader, or a reflectance model (``"model:NAME"``)."""
+        shaders = self.host.display_shadings() if hasattr(self.host, "display_shadings") else self.host.shaders
         return shaders.get(self.shader_name) or next(iter(shaders.values()), None) or _FallbackShader
 
     def rebuild(self) -> None:
@@ -384,6 +385,7 @@ class Canvas(pg.GraphicsView):
             bgrx=True,
             outline_alpha=OUTLINE_ALPHA if self.layer_outlines else 0.0,
             out=reuse,
+            intensity=getattr(shader, "intensity", None),  # a reflectance model's own isophote lines
         )
 
     def show_preview(self, layer_id: str, mesh) -> None:

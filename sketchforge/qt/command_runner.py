@@ -24,7 +24,7 @@ from __future__ import annotations
 import functools
 from typing import Callable
 
-from PySide6.QtCore import QObject, Signal
+from PySide6.QtCore import QObject, QThreadPool, Signal
 
 from sketchforge.qt.workers import JobRunner
 
@@ -47,12 +47,20 @@ class CommandRunner(QObject):
     pushed = Signal(object)
     #: (guard token) emitted on the worker when ``prepare`` returns; queued to the GUI thread
     _prepare_returned = Signal(object)
+    #: the running preparation was cancelled (the window stops the solver process's job)
+    cancelled = Signal()
 
     def __init__(self, doc, jobs: JobRunner, parent: QObject | None = None, guard=None) -> None:
         super().__init__(parent)
         self.doc = doc
         self.jobs = jobs
         self.guard = guard
+        # Commands prepare on threads of their own, not on the shared pool (the warm-up, the
+        # assembly, thumbnails): a preparation that waits on the solver process, or a cancelled
+        # one whose native code runs on, never takes a thread the rest of the app needs
+        # (issue 38: two hung inflations stopped every computation). Idle threads expire.
+        self.pool = QThreadPool(self)
+        self.pool.setMaxThreadCount(max(4, QThreadPool.globalInstance().maxThreadCount()))
         self._job = None
         self._macro_open = False
         self._on_cancel: Callable | None = None
@@ -128,7 +136,7 @@ class CommandRunner(QObject):
             finally:
                 self._prepare_returned.emit(token)  # before the result: the record goes first
 
-        self._job = self.jobs.start(work, done, error, label=label)
+        self._job = self.jobs.start(work, done, error, label=label, pool=self.pool)
         self.busy_changed.emit(True)
         return True
 
@@ -143,6 +151,7 @@ class CommandRunner(QObject):
         self.jobs.cancel_all()
         self._job = None
         self._close_macro(abort=True)
+        self.cancelled.emit()
         self.busy_changed.emit(False)
         if self._on_cancel is not None:
             self._on_cancel()

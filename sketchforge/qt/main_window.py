@@ -17,7 +17,7 @@ import logging
 from pathlib import Path
 
 import numpy as np
-from PySide6.QtCore import QSettings, Qt, QTimer
+from PySide6.QtCore import QSettings, Qt, QTimer, Signal
 from PySide6.QtGui import QAction, QActionGroup, QIcon, QKeySequence
 from PySide6.QtWidgets import (
     QFileDialog,
@@ -34,17 +34,20 @@ from PySide6.QtWidgets import (
     QWidget,
 )
 
-from sketchforge.atomic import refuse_input_as_output
+from sketchforge.atomic import refuse_input_as_output, same_file
 from sketchforge.document import commands as C
 from sketchforge.document import fileformat as ff
 from sketchforge.document.autosave import Autosaver, autosave_interval, describe_stop, find_recoverable, forget, recover
+from sketchforge.document.autosave import set_aside
 from sketchforge.document.autosave import poll_interval_ms
 from sketchforge.document.layer import Light
-from sketchforge.errors import EditsDoNotApplyError, SketchforgeError
+from sketchforge.errors import ContourError, EditsDoNotApplyError, SketchforgeError
 from sketchforge.geometry.parts import part_at
 from sketchforge.qt.canvas import Canvas
 from sketchforge.qt.command_runner import CommandRunner, GuardedJobs
+from sketchforge.qt import errors_ui
 from sketchforge.qt.errors_ui import ask_yes_no, error_text, show_error
+from sketchforge.qt.panels.assembly_panel import AssemblyPanel
 from sketchforge.qt.panels.creation_panel import CreationPanel
 from sketchforge.qt.panels.history_panel import HistoryPanel
 from sketchforge.qt.panels.layers_panel import LayersPanel
@@ -52,6 +55,7 @@ from sketchforge.qt.panels.light_panel import LightPanel
 from sketchforge.qt.panels.mode_panel import ModePanel
 from sketchforge.qt.panels.sculpt_panel import SculptPanel
 from sketchforge.qt.panel_api import AppContext
+from sketchforge.qt.plugins_dialog import PluginsDialog, ProblemsButton
 from sketchforge.qt.sculpt import SculptController
 from sketchforge.qt.shortcuts import HelpOverlay
 from sketchforge.qt.view3d import View3D
@@ -101,6 +105,9 @@ class _AutosaveGuard:
 
 
 class MainWindow(QMainWindow):
+    #: one line from the solver process's watchdog (any thread): shown in the status bar
+    solver_process_note = Signal(str)
+
     def __init__(self, doc, host=None, settings: QSettings | None = None, parent=None,
                  offload_inflation: bool = False) -> None:
         super().__init__(parent)
@@ -108,15 +115,18 @@ class MainWindow(QMainWindow):
         self.host = host or doc.host
         #: With ``offload_inflation`` (the app), inflations run in a child process: their
         #: native factorisation holds the GIL, which froze this window for up to 1.5 s even
-        #: though the solve runs on a worker thread (see sketchforge.offload).
+        #: though the solve runs on a worker thread (see sketchforge.offload). Its watchdog's
+        #: notes (a restart after a crash, a timeout, a cancel) come through a queued signal.
         self.offload = None
         if offload_inflation:
             from sketchforge.offload import OffloadedInflation
 
-            self.offload = OffloadedInflation(doc.host)
+            self.offload = OffloadedInflation(doc.host, notify=self.solver_process_note.emit)
             doc.host = self.offload
         self.settings = settings or QSettings()
         self.path: Path | None = None
+        #: what ``path`` held when this window last opened or saved it (ff.stamp_of)
+        self.disk_stamp: tuple | None = None
         self.mode = "editing"
         self.state = "creation"
         self.current_layer: str | None = None
@@ -128,6 +138,8 @@ class MainWindow(QMainWindow):
         #: [(points, kind)] strokes drawn while a solve ran: drawn in order when it ends
         self._pending_strokes: list[tuple] = []
 
+        if hasattr(self.host, "validate"):
+            self.host.validate()  # every registry now: each plugin problem is known from the start
         self._build_widgets()
         self._build_plugin_panels()
         self._build_menus()
@@ -148,17 +160,30 @@ class MainWindow(QMainWindow):
         self.autosave_error: str | None = None
 
     def _report_plugin_problems(self) -> None:
-        """Plugins left out at start-up (import failed, a hook raised, a contract broken): one
-        status-bar line naming them; the details went to the log and stderr."""
+        """Plugins left out at start-up (import failed, a hook raised, a contract broken), and
+        panels that failed: one status-bar line naming them, and a status-bar button that stays
+        while there are any and opens Help > Plugins, where each problem is listed once under
+        its plugin."""
         skipped = dict(getattr(self.host, "skipped", {}) or {})
         problems = list(getattr(self.host, "problems", []) or [])
-        lines = []
-        if skipped or problems:
+        for text in self.panel_problems:  # the window's own findings join the host's list
+            if text not in problems and hasattr(self.host, "report_problem"):
+                self.host.report_problem(text, *self._panel_owner.get(text, ()))
+                problems.append(text)
+        self.problems_button.show_count(problems)
+        if problems:
             names = ", ".join(sorted(skipped)) or "none disabled"
-            lines.append(f"plugin problems ({names}): {problems[0] if problems else next(iter(skipped.values()))}")
-        lines += self.panel_problems
-        if lines:
-            self.show_message("; ".join(lines))
+            n = len(problems)
+            self.show_message(f"plugin problems ({names}): {problems[0]}"
+                              + (f" (and {n - 1} more: Help > Plugins)" if n > 1 else ""))
+
+    def show_plugins(self) -> PluginsDialog:
+        """Help > Plugins: every plugin, its version, what it registers and its problems."""
+        dialog = PluginsDialog(self.host, self)
+        dialog.setAttribute(Qt.WidgetAttribute.WA_DeleteOnClose)
+        self.plugins_dialog = dialog
+        dialog.show()
+        return dialog
 
     def _autosave(self) -> None:
         """Timer tick. A failure (full disk, a file where the data folder should be) is shown
@@ -182,7 +207,10 @@ class MainWindow(QMainWindow):
         autosave, so it is not replayed). Returns True when one was recovered (it opens as
         unsaved changes). Declining keeps the autosave: it is offered again next time. The files
         of another sketchforge still running are never offered, reported or removed."""
-        items = find_recoverable()
+        set_aside_notes: list[str] = []
+        items = find_recoverable(set_aside_notes=set_aside_notes)  # also removes killed autosaves' temps
+        if set_aside_notes:
+            QMessageBox.information(self, "An autosave was set aside", "\n\n".join(n[:1].upper() + n[1:] for n in set_aside_notes))
         reports = [i for i in items if not i.has_document]
         if reports:
             # A crash during a solve on a document without unsaved changes: nothing to
@@ -210,14 +238,19 @@ class MainWindow(QMainWindow):
         else:
             question = f"sketchforge found unsaved work on {where} from a session that did not close normally. Recover it?"
         question += f"\n\nNo keeps the autosave ({item.path}); it is offered again at the next start."
-        if not ask_yes_no(self, "Recover unsaved work?", question):
+        if not ask_yes_no(self, "Recover unsaved work?", question, default_yes=True):
             return False  # the autosave stays where it is: this session never writes or removes it
         try:
             loaded = recover(item, host=self.host)
-        except SketchforgeError as exc:
-            show_error(self, "Cannot recover the autosave", exc)
+        except Exception as exc:  # noqa: BLE001 - a bad autosave must never end the app
+            # Kept for the user, but out of the way: it would fail the same way at every start.
+            note = set_aside(item.path, error_text(exc))
+            QMessageBox.critical(self, "Cannot recover the autosave", note)
             return False
-        self.adopt(loaded, Path(item.original) if item.original else None)
+        # The file's digest when the crashed session last read or saved it: a save over it
+        # asks first if it changed since.
+        stamp = (None, None, None, None, item.original_sha256) if item.original and item.original_sha256 else None
+        self.adopt(loaded, Path(item.original) if item.original else None, stamp)
         self.doc.undo_stack.reset_clean()  # recovered work is not saved anywhere yet
         self._sync_title()
         try:
@@ -241,8 +274,10 @@ class MainWindow(QMainWindow):
         self.center.addWidget(self.view3d)
 
         self.modes = ModePanel()
-        self.creation_panel = CreationPanel()
-        self.creation_panel.set_shaders(self.host.shaders.keys(), self.canvas.shader_name)
+        self.creation_panel = CreationPanel(self.host)
+        shadings = self.host.display_shadings()
+        self.creation_panel.set_shaders(shadings.keys(), self.canvas.shader_name,
+                                        {k: f"{s.name} (reflectance model)" for k, s in shadings.items() if k.startswith("model:")})
         self.sculpt_panel = SculptPanel()
         self.light_panel = LightPanel()
         self.creation_page = QWidget()
@@ -259,6 +294,8 @@ class MainWindow(QMainWindow):
         observe_lay = QVBoxLayout(self.observe_page)
         observe_lay.setContentsMargins(0, 0, 0, 0)
         observe_lay.addWidget(self.observe_note)
+        self.assembly_panel = AssemblyPanel(self.host)
+        observe_lay.addWidget(self.assembly_panel)
         observe_lay.addStretch(1)  # plugin panels go above it (_build_plugin_panels)
         self.controls.addWidget(self.observe_page)
         top = QWidget()
@@ -315,6 +352,7 @@ class MainWindow(QMainWindow):
         self.plugin_panels: dict[str, QWidget] = {}
         #: one line per panel left out because it failed
         self.panel_problems: list[str] = []
+        self._panel_owner: dict[str, tuple] = {}
         observe = self.observe_page.layout()
         places = {
             "creation": self.creation_page.layout().addWidget,
@@ -333,6 +371,7 @@ class MainWindow(QMainWindow):
                 text = f"panel {panel.name!r} (plugin {who!r}) left out: {type(exc).__name__}: {exc}"
                 log.warning("%s", text, exc_info=True)
                 self.panel_problems.append(text)
+                self._panel_owner[text] = (who,) if who else ()
                 continue
             places[panel.place](widget)
             self.plugin_panels[panel.name] = widget
@@ -411,6 +450,7 @@ class MainWindow(QMainWindow):
             group.addAction(act)
         h = mb.addMenu("&Help")
         self._action(h, "&Gestures and keys", self.toggle_help, ["F1", "?"])
+        self.act_plugins = self._action(h, "&Plugins…", self.show_plugins)
         self.update_recent_menu()
 
     def _build_tool_palette(self) -> None:
@@ -463,6 +503,8 @@ class MainWindow(QMainWindow):
         for w in (self.progress_label, self.progress, self.cancel_button):
             sb.addPermanentWidget(w)
             w.setVisible(False)
+        self.problems_button = ProblemsButton(self.show_plugins)
+        sb.addPermanentWidget(self.problems_button)
 
     def _connect(self) -> None:
         doc = self.doc
@@ -501,6 +543,9 @@ class MainWindow(QMainWindow):
         self.creation_panel.outlines_changed.connect(self.canvas.set_layer_outlines)
 
         self.creation_panel.params_edited.connect(self.set_params)
+        self.creation_panel.inflater_changed.connect(self.set_inflater)
+        self.assembly_panel.assembly_edited.connect(self.set_assembly)
+        doc.assembly_changed.connect(lambda: self.assembly_panel.show_assembly(self.doc.assembly))
         self.creation_panel.shader_changed.connect(self._shader_changed)
         self.creation_panel.isolines_changed.connect(self.canvas.set_isoline_count)
         # the 3D view's isophote style follows the same count, live (0 lines: keep its last count)
@@ -525,11 +570,15 @@ class MainWindow(QMainWindow):
         lp.current_changed.connect(self._current_layer_changed)
 
         self.runner.busy_changed.connect(self._busy)
+        self.solver_process_note.connect(self.show_message)
+        if self.offload is not None:
+            self.runner.cancelled.connect(self.offload.cancel)  # Cancel stops the child's job too
         self.runner.failed.connect(lambda exc, tb, cmd: show_error(self, f"{cmd.text()} failed", exc, tb))
         self.jobs.busy_changed.connect(self._progress)
 
     # --- synchronising widgets with the document ------------------------------------------------
     def _sync_all(self) -> None:
+        self.assembly_panel.show_assembly(self.doc.assembly)
         self._sync_undo()
         self._sync_title()
         self.light_panel.show_light(self.doc.light)
@@ -723,6 +772,37 @@ class MainWindow(QMainWindow):
             return
         self._run_params(self.current_layer, params)
 
+    def set_inflater(self, name: str) -> None:
+        """The Creation panel's inflater: the selected part is inflated by it (from its
+        defaults; one undo step, its sculpt edits re-applied or the switch refused), and new
+        parts are too."""
+        layer = self.doc.layer(self.current_layer) if self.current_layer in self.doc.layer_ids() else None
+        if layer is None or layer.solver == name or (layer.solver is None and name == self.host.default_solver_name("inflate")):
+            self.show_message(f"new parts are inflated by “{name}”")
+            return
+        if self._refuse_if_busy():
+            self._sync_current_layer()
+            return
+        self.runner.run(
+            C.SetInflateParams(layer=layer.id, solver=name),
+            label=f"Inflating with {name}",
+            on_done=lambda *_: self.show_message(f"“{layer.name}” is inflated by “{name}”; new parts are too"),
+            on_error=lambda exc: self._sync_current_layer() or False,
+        )
+
+    def set_assembly(self, solver, params: dict) -> None:
+        """The Assembly panel: choose the assembler (``solver``, from its defaults) or change
+        its parameters; one ``set_assembly`` (one undo step). A value the assembler refuses is
+        one status line, and the panel shows the document's values again."""
+        if self._refuse_if_busy():
+            self.assembly_panel.show_assembly(self.doc.assembly)
+            return
+        try:
+            self.doc.push(C.SetAssembly(solver=solver, params=dict(params)))
+        except SketchforgeError as exc:
+            self.show_message(error_text(exc))
+            self.assembly_panel.show_assembly(self.doc.assembly)
+
     def _run_params(self, layer_id: str, params: dict) -> None:
         edits = len(self.doc.layer(layer_id).edits)
         # With sculpt edits the layer is re-inflated and its edits re-applied in order (or the
@@ -822,16 +902,29 @@ class MainWindow(QMainWindow):
 
     def _new_part(self, plan) -> None:
         """A new part (or the contour of the empty layer ``plan.target``)."""
-        tool = DrawContourTool(self.doc, target_layer=plan.target, closed=plan.closed, index=plan.index)
+        inflater = self.creation_panel.new_part_inflater
+        if plan.target is not None and self.doc.layer(plan.target).solver is not None:
+            inflater = None  # an empty layer keeps the inflater it was given
+        tool = DrawContourTool(self.doc, target_layer=plan.target, closed=plan.closed, index=plan.index, inflater=inflater)
         before, cmd = tool.commands_for(plan.points)
         kind = "closed" if plan.closed else "open"
 
         def done(c):
             self.layers_panel.select(c.layer)
-            notes = "".join("; " + n for n in plan.notes)
-            self.show_message(f"new {kind} part “{self.doc.layer(c.layer).name}”{notes}")
+            notes = list(plan.notes) + self._attachment_notes(self.doc.layer(c.layer))
+            self.show_message(f"new {kind} part “{self.doc.layer(c.layer).name}”" + "".join("; " + n for n in notes))
 
-        self.runner.run(cmd, label="Inflating", macro="Draw layer" if before else None, before=before, on_done=done)
+        self.runner.run(cmd, label="Inflating", macro="Draw layer" if before else None, before=before, on_done=done,
+                        on_error=self._drawing_slip)
+
+    def _drawing_slip(self, exc) -> bool:
+        """A stroke that cannot become an outline (it crosses itself, encloses no area): a slip
+        of the hand, said in the status bar; nothing changed and nothing to dismiss (a
+        blocking dialog for each slip was too much, issue 38). Other errors: a dialog."""
+        if not isinstance(exc, ContourError):
+            return False
+        self.show_message(f"the stroke was not drawn: {error_text(exc)}")
+        return True
 
     def _redraw(self, layer, pts, closed: bool, what: str, keep_edits: bool = True, holes=(), notes=()) -> None:
         """Replace ``layer``'s outline and holes (one undo step); its sculpt edits are kept when
@@ -841,6 +934,8 @@ class MainWindow(QMainWindow):
         _, cmd = tool.commands_for(pts)
 
         def error(exc) -> bool:
+            if self._drawing_slip(exc):
+                return True
             if not isinstance(exc, EditsDoNotApplyError):
                 return False
             if ask_yes_no(
@@ -848,6 +943,7 @@ class MainWindow(QMainWindow):
                 "Redraw the contour?",
                 f"Layer “{layer.name}” has {len(layer.edits)} sculpt edit(s) that do not apply to the new "
                 f"outline ({exc}). Redraw it without them? (Undo brings them back.)",
+                default_yes=True,  # Yes loses nothing (Undo brings the edits back); No drops the stroke
             ):
                 QTimer.singleShot(0, lambda: self._redraw(self.doc.layer(layer.id), pts, closed, what, keep_edits=False,
                                                           holes=holes, notes=notes))
@@ -864,6 +960,21 @@ class MainWindow(QMainWindow):
             self._check_parts_still_glued(layer.id, glued, what, c)
 
         self.runner.run(cmd, label="Inflating", on_done=done, on_error=error)
+
+    def _attachment_notes(self, layer) -> list[str]:
+        """What the person should hear when a part is drawn (issue 34): its junction runs off
+        the part it lies on, spans two parts (glued to the one holding most of it) or cannot
+        be glued at all (it will be assembled free, and why) — said now, not first in
+        OBSERVATION."""
+        if layer.closed or layer.mesh is None or len(layer.mesh.junction) < 2:
+            return []
+        host, problem = C.attachment(self.doc, layer)
+        if problem:
+            return [problem]
+        note = C.attachment_note(self.doc, layer)
+        if note:
+            return [note]
+        return [f"glued to “{host.name}”"] if host is not None else []
 
     def _parts_glued_to(self, host) -> list[str]:
         """Ids of the parts the assembly glues to ``host`` now (their junction lies on it)."""
@@ -883,7 +994,7 @@ class MainWindow(QMainWindow):
             part = self.doc.layer(pid)
             if now is None or now.id != host_id:
                 where = (f"it is now glued to “{now.name}”" if now is not None else
-                         "it would not assemble: " + problem if problem else "it is now a free part")
+                         problem if problem else "it is now a free part")
                 left.append((part, where))
         if not left:
             return
@@ -895,6 +1006,7 @@ class MainWindow(QMainWindow):
             "Parts left their host",
             f"After this change ({what}), the junction of {names} no longer lies on “{host.name}” ({details}). "
             "Undo the change? (No keeps it: redraw or move those parts to attach them again.)",
+            default_yes=False,  # keep what the person just did; Ctrl+Z still undoes it
         ):
             # Only if the change is still the last thing done (a queued stroke may have run
             # while the question was open).
@@ -1026,16 +1138,19 @@ class MainWindow(QMainWindow):
             return self.save()
         return answer == QMessageBox.StandardButton.Discard
 
-    def adopt(self, loaded, path: Path | None) -> None:
-        """Take over the state of a freshly loaded document (history starts here)."""
+    def adopt(self, loaded, path: Path | None, stamp: tuple | None = None) -> None:
+        """Take over the state of a freshly loaded document (history starts here). ``stamp``:
+        what ``path`` held when ``loaded`` was read from it (:func:`ff.stamp_of`), so that a
+        save can tell whether someone else changed the file since."""
         self._pending_strokes.clear()
         self._pending_params.clear()
         self.runner.cancel()
         self.doc.adopt(loaded)
         self.path = path
+        self.disk_stamp = stamp if path is not None else None
         # A new autosave file; the records of solves still running (a cancelled one, the
         # assembly) go on until those solves end.
-        self.autosaver = self.autosaver.hand_over(path)
+        self.autosaver = self.autosaver.hand_over(path, original_sha256=self.disk_stamp[4] if self.disk_stamp else None)
         self.current_layer = None
         self.canvas.rebuild()
         self._sync_all()
@@ -1061,15 +1176,16 @@ class MainWindow(QMainWindow):
         """Open a file; on error show it and keep the open document untouched."""
         if ask and (self._refuse_if_busy() or not self.maybe_save()):
             return False
+        info: dict = {}
         try:
-            loaded = ff.load(path, host=self.host)
+            loaded = ff.load(path, host=self.host, info=info)
         except SketchforgeError as exc:
             show_error(self, "Cannot open the document", exc)
             return False
         except Exception as exc:  # noqa: BLE001 - a bug, but the open document must survive
             show_error(self, "Cannot open the document", exc)
             return False
-        self.adopt(loaded, Path(path))
+        self.adopt(loaded, Path(path), ff.stamp_of(info["stat"], info["sha256"]))
         self._add_recent(path)
         self.show_message(f"opened {path}")
         return True
@@ -1088,18 +1204,50 @@ class MainWindow(QMainWindow):
     def save_to(self, path: Path) -> bool:
         if self._refuse_if_busy():
             return False
+        if self.path is not None and same_file(path, self.path):
+            changed, self.disk_stamp = ff.changed_on_disk(path, self.disk_stamp)
+            if changed:
+                return self._save_over_a_changed_file(Path(path))
         try:
-            ff.save(self.doc, path)
+            stamp = ff.save(self.doc, path)
         except SketchforgeError as exc:
             show_error(self, "Cannot save the document", exc)
             return False
         self.path = Path(path)
-        self.autosaver = self.autosaver.hand_over(self.path)  # running solves keep their record
+        self.disk_stamp = stamp
+        # running solves keep their record
+        self.autosaver = self.autosaver.hand_over(self.path, original_sha256=stamp[4])
         self._add_recent(path)
         self._sync_title()
         self.history_panel.rebuild()
         self.show_message(f"saved {path}")
         return True
+
+    def _save_over_a_changed_file(self, path: Path) -> bool:
+        """The window's file was changed on disk since it was opened or saved here (another
+        window or program saved over it): saving now would destroy that work without a word
+        (issue 38). Ask; Enter chooses Save As, which loses nobody's work."""
+        choice = errors_ui.ask_choice(
+            self,
+            "The file changed on disk",
+            f"{path} was changed on disk since this window opened or saved it (by another window or program).\n\n"
+            "Overwrite: replace it with this window's document (the other changes are lost).\n"
+            "Save As: save this window's document as another file (nothing is lost).\n"
+            "Reload: open the file as it is on disk (this window's unsaved changes are lost).",
+            ["Overwrite", "Save As…", "Reload", "Cancel"],
+            default=1,
+            cancel=3,
+        )
+        if choice == 0:
+            self.disk_stamp = None  # the person chose: write over it
+            return self.save_to(path)
+        if choice == 1:
+            return self.save_as()
+        if choice == 2:
+            self.open_path(path, ask=False)
+            return False
+        self.show_message(f"not saved: {path} changed on disk")
+        return False
 
     def export_dialog(self) -> None:
         filters = ";;".join(

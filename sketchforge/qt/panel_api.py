@@ -29,8 +29,11 @@ from PySide6.QtCore import QObject, Signal
 from sketchforge.qt.sculpt import MAX_RADIUS, MIN_RADIUS
 # An exception as one status-bar line: a SketchforgeError's message, anything else with its type.
 from sketchforge.qt.errors_ui import error_text
+# The parameter form of a solver, generated from what it declares: a panel that lets the person
+# choose a solver shows its parameters with it (the isophote tool's sculpt solver choice).
+from sketchforge.qt.param_form import SolverForm
 
-__all__ = ["AppContext", "MAX_RADIUS", "MIN_RADIUS", "error_text"]
+__all__ = ["AppContext", "MAX_RADIUS", "MIN_RADIUS", "SolverForm", "error_text"]
 
 BUSY = "a solve is running: wait for it or cancel it (Esc)"
 
@@ -50,7 +53,8 @@ class AppContext(QObject):
         The 2D drawing view (``canvas.set_overlay(name, polylines)`` draws (k, 2) document
         polylines over the shapes).
     view3d : View3D
-        The OBSERVATION view: ``gl`` (the pyqtgraph GLViewWidget, None without OpenGL),
+        The OBSERVATION view: ``gl`` (pyqtgraph's 3D view with GLViewWidget's API, rendered
+        offscreen: :class:`sketchforge.qt.glview.GLView`; None without OpenGL),
         ``model_item`` (the shown mesh item) and the signal ``assembled_shown(mesh or None)``
         each time an assembled model is put on screen.
     sculpt : SculptController

@@ -8,6 +8,13 @@ raised 40°), ``sculpt-overhead.png`` (an edit under a light straight overhead),
 ``QT_QPA_PLATFORM=xcb``), ``observation.png``. ``sketchforge --screenshot`` is the same path for
 one mode; the sculpt screenshot stages an isophote edit on the document's largest layer like a
 person would: pick, band, redrawn stroke (applied when the isophote plugin is installed).
+
+Issue 37's (:func:`plugin_screenshots`, also ``python -m sketchforge.qt.screenshots --plugins
+DOC OUTDIR``): ``plugins-dialog.png`` (Help > Plugins, with two demonstration plugins that break
+the rules: both claim the suffix ``.xyz``, and one's tool hook raises), ``params-creation.png``,
+``params-sculpt.png`` (the ``strips`` solver's form unfolded) and ``params-assembly.png`` (the
+generated parameter forms), and ``model-shading.png`` (the canvas shaded by the soft Lambert
+reflectance model, when its example plugin is installed).
 """
 
 from __future__ import annotations
@@ -137,6 +144,92 @@ def stage_two_isophotes(window, app) -> None:
     settle(window, app, timeout_s=300)
 
 
+class _DemoFormats:
+    """A demonstration plugin for the Plugins screenshot: an exporter of ``.xyz``."""
+
+    def __init__(self, name: str) -> None:
+        self.__name__ = name
+
+    def sketchforge_exporters(self):
+        from sketchforge.plugin_api import Exporter
+
+        return [Exporter(f"{self.__name__}_xyz", (".xyz",), lambda path, mesh: None)]
+
+
+class _DemoBrokenTools:
+    """A demonstration plugin whose tool hook raises (a half-installed package)."""
+
+    __name__ = "demo_broken_tools"
+
+    def sketchforge_tools(self):
+        raise ImportError("No module named 'demo_backend'")
+
+
+def _demo_plugins() -> list:
+    from sketchforge.plugin_api import hookimpl
+
+    out = []
+    for obj in (_DemoFormats("demo_points"), _DemoFormats("demo_scans"), _DemoBrokenTools()):
+        for name in ("sketchforge_exporters", "sketchforge_tools"):
+            fn = getattr(type(obj), name, None)
+            if fn is not None:
+                setattr(type(obj), name, hookimpl(fn))
+        out.append(obj)
+    return out
+
+
+def plugin_screenshots(doc_path: Path, out: Path) -> None:
+    """The Plugins dialog, the generated parameter forms and a reflectance model's shading."""
+    from sketchforge.document import fileformat as ff
+    from sketchforge.document.document import Document
+    from sketchforge.plugins.manager import PluginHost
+    from sketchforge.qt.app import WINDOW_SIZE, ensure_qapp, settle
+    from sketchforge.qt.main_window import MainWindow
+
+    app = ensure_qapp()
+    host = PluginHost.create(_demo_plugins(), skip_broken=True)
+    w = MainWindow(Document(host=host), host=host)
+    w.resize(*WINDOW_SIZE)
+    w.adopt(ff.load(doc_path, host=host), doc_path)
+    w.show()
+    w.canvas.fit()
+    settle(w, app)
+    dialog = w.show_plugins()
+    dialog.resize(820, 700)
+    settle(w, app)
+    dialog.grab().save(str(out / "plugins-dialog.png"))
+    dialog.close()
+    biggest = max((l for l in w.doc.layers if l.mesh is not None), key=lambda l: l.mesh.n_vertices)
+    w.layers_panel.select(biggest.id)
+    settle(w, app)
+    panel = w.plugin_panels.get("isophote_sculpt")
+    if panel is not None and panel.solver.findData("strips") >= 0:
+        w.set_mode("sculpture")
+        panel.solver.setCurrentIndex(panel.solver.findData("strips"))
+        panel.params.toggle.setChecked(True)
+        settle(w, app)
+        w.sculpt_panel.grab().save(str(out / "params-sculpt.png"))
+    w.set_mode("observation")
+    settle(w, app)
+    w.assembly_panel.grab().save(str(out / "params-assembly.png"))
+    w.set_mode("editing")
+    shadings = w.creation_panel.shader
+    if shadings.findData("model:soft_lambert") >= 0:
+        from sketchforge.document.layer import Light
+
+        light = Light.from_angle(135.0, 40.0)
+        w.set_light_elevation(light.elevation)
+        w.set_light_angle(light.angle)
+        shadings.setCurrentIndex(shadings.findData("model:soft_lambert"))
+        w.creation_panel.isolines.setValue(6)
+        settle(w, app)
+        w.canvas.render_now()
+        w.center.grab().save(str(out / "model-shading.png"))
+    w.creation_panel.grab().save(str(out / "params-creation.png"))
+    w.close_now()
+    print(f"wrote the plugin screenshots in {out}", file=sys.stderr)
+
+
 def main(argv=None) -> int:
     from PySide6.QtGui import QGuiApplication
 
@@ -147,11 +240,16 @@ def main(argv=None) -> int:
     from sketchforge.qt.view3d import gl_unavailable_reason
 
     argv = list(sys.argv[1:] if argv is None else argv)
+    only_plugins = argv[:1] == ["--plugins"]
+    argv = argv[1:] if only_plugins else argv
     if len(argv) != 2:
         print("usage: python -m sketchforge.qt.screenshots DOC OUTDIR", file=sys.stderr)
         return 2
     doc_path, out = Path(argv[0]), Path(argv[1])
     out.mkdir(parents=True, exist_ok=True)
+    plugin_screenshots(doc_path, out)
+    if only_plugins:
+        return 0
     app = ensure_qapp()
     host = plugin_host()
 

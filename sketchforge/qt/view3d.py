@@ -8,7 +8,8 @@ plane or raised above it) and
 "isophotes" (shaded, with lines n·l = j/(K+1) of the document's light), computed per pixel in
 the fragment shader from the interpolated model-space normal, as on the canvas.
 
-The OpenGL widget is created the first time observation mode is shown, so the editing view
+The OpenGL widget (:class:`sketchforge.qt.glview.GLView`: pyqtgraph's 3D view rendered
+offscreen) is created the first time observation mode is shown, so the editing view
 never needs OpenGL (it runs with ``QT_QPA_PLATFORM=offscreen``; OpenGL needs a display, e.g.
 Xvfb with the xcb platform). Shows the assembled model (computed by the assemble plugin on a
 pool thread) or each visible layer's own mesh.
@@ -36,8 +37,12 @@ FAILED_COLOUR = (0.88, 0.30, 0.24, 1.0)
 #: Smooth shading with a light at the viewer's upper right (eye coordinates), so the faces that
 #: face the camera are lit (pyqtgraph's own "shaded" program lights from behind the scene), and
 #: the document light's cel tones or isophote lines (model coordinates = document coordinates).
+#: One program per style (``shader_name(style)``): llvmpipe, the software OpenGL of a machine
+#: without a GPU, runs every branch of a shader for every pixel, so one program choosing the
+#: style per pixel cost its rasteriser threads ~13 ms more per frame of the 16k-vertex model
+#: than the shaded style's own program (issue 34: a played frame cost 52 ms in all).
 SHADER_NAME = "sketchforge_observe"
-#: Display styles and their shader code.
+#: Display styles (the program of each is ``shader_name(style)``).
 STYLES = {"shaded": 0.0, "cel": 1.0, "isophotes": 2.0}
 #: Field of view (degrees, horizontal) and the share of the smaller view side the model fills.
 FOV = 45.0
@@ -62,33 +67,48 @@ void main() {
 }
 """
 
-_FRAGMENT = """
+_HEADER = """
 #ifdef GL_ES
-#extension GL_OES_standard_derivatives : enable
+%(extension)s
 precision mediump float;
 #endif
 varying vec4 v_color;
 varying vec3 v_normal;
 varying vec3 v_model_normal;
-uniform float u_light[3];
-uniform float u_style[2];
-void main() {
+"""
+#: The head light's shading of the clay colour (shaded and isophotes styles).
+_LIT = """
     float p = dot(normalize(v_normal), normalize(vec3(0.4, 0.5, 1.0)));
     p = p < 0. ? 0.15 * -p : p;
     vec3 rgb = v_color.rgb * (0.25 + 0.75 * p);
+"""
+#: n·l of the document's light (cel and isophotes styles).
+_LIGHT = """
     float e = dot(normalize(v_model_normal), vec3(u_light[0], u_light[1], u_light[2]));
-    if (u_style[0] > 0.5 && u_style[0] < 1.5) {
-        rgb = e <= 0.0 ? vec3(%(t0)s) : (e <= 0.5 ? vec3(%(t1)s) : vec3(%(t2)s));
-    } else if (u_style[0] > 1.5) {
-        float k = u_style[1];
-        float t = e * (k + 1.0);
-        float d = abs(t - clamp(floor(t + 0.5), 1.0, k));
-        float line = 1.0 - clamp(d / max(fwidth(t), 1e-6) - 0.1, 0.0, 1.0);
-        rgb = mix(rgb, vec3(0.12, 0.10, 0.10), 0.85 * line);
-    }
+"""
+#: style -> (fragment shader body, its uniforms and their initial values)
+_FRAGMENTS = {
+    "shaded": ("void main() {" + _LIT + "    gl_FragColor = vec4(rgb, v_color.a);\n}\n", {}),
+    "cel": ("uniform float u_light[3];\nvoid main() {" + _LIGHT + """
+    vec3 rgb = e <= 0.0 ? vec3(%(t0)s) : (e <= 0.5 ? vec3(%(t1)s) : vec3(%(t2)s));
     gl_FragColor = vec4(rgb, v_color.a);
 }
-"""
+""", {"u_light": [1.0, 0.0, 0.0]}),
+    "isophotes": ("uniform float u_light[3];\nuniform float u_lines;\nvoid main() {" + _LIT + _LIGHT + """
+    float k = u_lines;
+    float t = e * (k + 1.0);
+    float d = abs(t - clamp(floor(t + 0.5), 1.0, k));
+    float line = 1.0 - clamp(d / max(fwidth(t), 1e-6) - 0.1, 0.0, 1.0);
+    rgb = mix(rgb, vec3(0.12, 0.10, 0.10), 0.85 * line);
+    gl_FragColor = vec4(rgb, v_color.a);
+}
+""", {"u_light": [1.0, 0.0, 0.0], "u_lines": [8.0]}),
+}
+
+
+def shader_name(style: str) -> str:
+    """The name of the shader program drawing ``style`` (registered by ``_register_shader``)."""
+    return f"{SHADER_NAME}_{style}"
 
 
 def _register_shader() -> None:
@@ -96,45 +116,67 @@ def _register_shader() -> None:
 
     from sketchforge.geometry.shaders import CEL_TONES
 
-    if SHADER_NAME in shaders.ShaderProgram.names:
-        return
     tones = {f"t{i}": ", ".join(f"{c:.4f}" for c in CEL_TONES[i]) for i in range(3)}
-    shaders.ShaderProgram(
-        SHADER_NAME,
-        [shaders.VertexShader(_VERTEX), shaders.FragmentShader(_FRAGMENT % tones)],
-        uniforms={"u_light": [1.0, 0.0, 0.0], "u_style": [0.0, 8.0]},
-    )
+    for style, (body, uniforms) in _FRAGMENTS.items():
+        if shader_name(style) in shaders.ShaderProgram.names:
+            continue
+        extension = "#extension GL_OES_standard_derivatives : enable" if "fwidth" in body else ""
+        source = _HEADER % {"extension": extension} + body % tones
+        shaders.ShaderProgram(shader_name(style), [shaders.VertexShader(_VERTEX), shaders.FragmentShader(source)],
+                              uniforms=dict(uniforms))
 
 
 @functools.cache
 def _mesh_item_class():
     """GLMeshItem drawing given per-corner normals (pyqtgraph would average face normals)."""
     import pyqtgraph.opengl as gl
+    from OpenGL import GL
     from pyqtgraph.opengl.items.GLMeshItem import DirtyFlag
 
-    from sketchforge.geometry.normals import corner_normals_grouped, crease_groups
+    from sketchforge.geometry.normals import crease_groups, faces_outward, group_normals, shading_vertices
 
     class CornerNormalMeshItem(gl.GLMeshItem):
+        """The model with smooth normals that keep its creases, drawn as an indexed mesh: the
+        corners that shade alike share one vertex (about one per mesh vertex, a few more along
+        creases), so a posed frame (``set_positions``) computes, converts and uploads ~16k
+        positions and normals at 16k vertices instead of 96k corners, and the renderer
+        transforms as few. The creases are found once, at rest.
+
+        A closed model whose triangles face out (the assembled model, not a layer's open
+        sheet) is drawn without the triangles that face away: they are hidden anyway, and
+        software OpenGL shades many before the ones in front cover them (~30% of the model's
+        drawing cost). Where a pose folds the surface over itself, the surface behind the
+        fold shows instead of the fold's dark back."""
+
         def __init__(self, V, F, **kwds):
             V = np.asarray(V, dtype=np.float64)
             self._F = np.asarray(F, dtype=np.int64)
-            self._groups = crease_groups(V, self._F, CREASE_DEG)
-            self._corner_normals = np.ascontiguousarray(corner_normals_grouped(V, self._F, self._groups), dtype=np.float32)
-            md = gl.MeshData(vertexes=np.ascontiguousarray(V[self._F], dtype=np.float32))
-            super().__init__(meshdata=md, smooth=False, computeNormals=False, **kwds)
+            self._src, tris, self._rows = shading_vertices(self._F, crease_groups(V, self._F, CREASE_DEG))
+            super().__init__(smooth=True, computeNormals=False, **kwds)
+            if faces_outward(V, self._F):
+                self.updateGLOptions({GL.GL_CULL_FACE: True, "glCullFace": (GL.GL_BACK,), "glFrontFace": (GL.GL_CCW,)})
+            # pyqtgraph's MeshData is not used: the arrays below are what is drawn
+            self.faces = np.ascontiguousarray(tris, dtype=np.uint32)
+            self._dirty = DirtyFlag.FACES
+            self.set_positions(V)
 
         def set_positions(self, V) -> None:
-            """New vertex positions for the same triangles (a posed frame), with their own
-            normals: the creases found at rest are kept, the shading follows the pose."""
+            """New vertex positions (n, 3) for the same triangles (a posed frame), with their
+            own normals: the creases found at rest are kept, the shading follows the pose.
+            Only the positions and normals are uploaded at the next paint."""
             V = np.asarray(V, dtype=np.float64)
-            self._corner_normals = np.ascontiguousarray(corner_normals_grouped(V, self._F, self._groups), dtype=np.float32)
-            self.setMeshData(vertexes=np.ascontiguousarray(V[self._F], dtype=np.float32))
+            self.vertexes = np.ascontiguousarray(V[self._src], dtype=np.float32)
+            self.normals = np.ascontiguousarray(group_normals(V, self._F, self._rows), dtype=np.float32)
+            self._dirty |= DirtyFlag.POSITION | DirtyFlag.NORMAL
+            self.update()
 
-        def parseMeshData(self):
-            dirty = super().parseMeshData()
-            if DirtyFlag.POSITION in dirty:
-                self.normals = self._corner_normals
-                dirty |= DirtyFlag.NORMAL
+        def setMeshData(self, **kwds):  # noqa: N802 - pyqtgraph's name
+            if getattr(self, "_dirty", None) is not None:
+                raise TypeError("the model's mesh item takes new positions through set_positions(V)")
+            super().setMeshData(**kwds)  # pyqtgraph's own constructor: an empty MeshData
+
+        def parseMeshData(self):  # noqa: N802 - pyqtgraph's name
+            dirty, self._dirty = self._dirty, DirtyFlag(0)
             return dirty
 
     return CornerNormalMeshItem
@@ -186,6 +228,9 @@ class View3D(QWidget):
         self._layout.addWidget(self.info)
         #: The last assembly failure (a sentence naming the part), or None.
         self.failure: str | None = None
+        #: What the assembler said about the model on show although it assembled: the parts it
+        #: had to leave free, each with why (issue 34); shown in a softer banner.
+        self.notice: list[str] = []
         self._active = False
         self.shown: list = []
         doc.assembly_invalidated.connect(self._invalidated)
@@ -201,8 +246,16 @@ class View3D(QWidget):
             return False
         import pyqtgraph.opengl as gl  # lazily: importing it needs no context, using it does
 
+        from sketchforge.qt.glview import GLView
+
+        view = GLView()
+        problem = view.create_context()
+        if problem is not None:
+            view.deleteLater()
+            self.info.setText(f"The 3D view needs OpenGL: {problem}.")
+            return False
         _register_shader()
-        self.gl = gl.GLViewWidget()
+        self.gl = view
         self.gl.setBackgroundColor((236, 234, 230, 255))
         grid = gl.GLGridItem()
         grid.setColor((0, 0, 0, 40))
@@ -229,10 +282,13 @@ class View3D(QWidget):
             return
         from pyqtgraph.opengl import shaders
 
-        prog = shaders.getShaderProgram(SHADER_NAME)
         l = np.asarray(self.doc.light.direction, dtype=np.float64)
-        prog["u_light"] = [float(x) for x in l / max(np.linalg.norm(l), 1e-12)]
-        prog["u_style"] = [STYLES[self.style], float(self.isophote_count)]
+        light = [float(x) for x in l / max(np.linalg.norm(l), 1e-12)]
+        for style in ("cel", "isophotes"):
+            shaders.getShaderProgram(shader_name(style))["u_light"] = light
+        shaders.getShaderProgram(shader_name("isophotes"))["u_lines"] = [float(self.isophote_count)]
+        for item in self._items:
+            item.setShader(shader_name(self.style))
         self.gl.update()
 
     def reframe(self) -> None:
@@ -281,6 +337,7 @@ class View3D(QWidget):
         parts = [l for l in self.doc.layers if l.visible and l.mesh is not None]
         if not parts:
             self._set_failure(None)
+            self._set_notice([])
             self._show([], "nothing to show: draw a contour in EDITING mode")
             return
         if self.source == "layers":
@@ -305,9 +362,11 @@ class View3D(QWidget):
         # A junction that runs off its host fails the assembly: said at once, from the
         # document's own attachment rule, instead of after the assembly job (which can wait
         # behind other work), and the assembly is still run to confirm it.
+        # A part whose junction the document's rule cannot glue will be assembled free: said
+        # at once, before the assembly job (which can wait behind other work) confirms it.
         problems = self._junction_problems()
         if problems:
-            self._fail(problems[0][1], layers, [problems[0][0]])
+            self._set_notice([text for _, text in problems])
 
         def done(mesh):
             self._job = None
@@ -351,13 +410,29 @@ class View3D(QWidget):
         self.failure = text
         self._update_banner()
 
+    def _set_notice(self, warnings) -> None:
+        self.notice = [str(w) for w in warnings]
+        self._update_banner()
+
+    #: How many of the assembler's warnings the banner lists (the rest are counted).
+    NOTICE_LINES = 3
+
     def _update_banner(self) -> None:
-        if self.failure is None:
+        if self.failure is None and (not self.notice or self.source != "assembled"):
             self.banner.setVisible(False)
             return
-        where = ("each layer is shown on its own (the part named in red); fix it in EDITING, or pick "
-                 "“Per layer”" if self.source == "assembled" else "the layers are shown each on its own")
-        self.banner.setText(f"The assembly failed: {self.failure}\n{where[0].upper() + where[1:]}.")
+        if self.failure is not None:
+            where = ("each layer is shown on its own (the part named in red); fix it in EDITING, or pick "
+                     "“Per layer”" if self.source == "assembled" else "the layers are shown each on its own")
+            self.banner.setStyleSheet("QLabel { background: #f6d8d2; color: #5a1408; padding: 6px; }")
+            self.banner.setText(f"The assembly failed: {self.failure}\n{where[0].upper() + where[1:]}.")
+        else:
+            shown = [w[0].upper() + w[1:] + "." for w in self.notice[: self.NOTICE_LINES]]
+            more = len(self.notice) - len(shown)
+            if more:
+                shown.append(f"… and {more} more (Per layer shows each part on its own).")
+            self.banner.setStyleSheet("QLabel { background: #f7ebc8; color: #4d3800; padding: 6px; }")
+            self.banner.setText("Assembled, with parts left free — fix them in EDITING:\n" + "\n".join(shown))
         self._place_banner()
         self.banner.setVisible(True)
         self.banner.raise_()
@@ -374,6 +449,10 @@ class View3D(QWidget):
             self._place_banner()
 
     def _show_assembled(self, mesh, layers) -> None:
+        self._set_notice(getattr(mesh, "warnings", ()))
+        notes = getattr(mesh, "notes", ())
+        if notes:
+            self.message.emit(notes[0][0].upper() + notes[0][1:] + (f" (and {len(notes) - 1} more)" if len(notes) > 1 else ""))
         if mesh is None:
             self._show([(l.mesh, CLAY) for l in layers], "the assembler returned nothing; showing the layers")
         else:
@@ -397,7 +476,7 @@ class View3D(QWidget):
         allv = []
         item_class = _mesh_item_class()
         for mesh, colour in meshes:
-            item = item_class(mesh.V, mesh.F, shader=SHADER_NAME, color=colour, glOptions="opaque")
+            item = item_class(mesh.V, mesh.F, shader=shader_name(self.style), color=colour, glOptions="opaque")
             # The drawing stands upright: document (x, y, z) -> world (x, -z, y), so the grid is
             # the ground, y is up and the viewer of the drawing looks along world +y.
             item.rotate(90, 1, 0, 0)

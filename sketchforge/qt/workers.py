@@ -73,6 +73,7 @@ class JobRunner(QObject):
         super().__init__(parent)
         self.pool = pool or QThreadPool.globalInstance()
         self._jobs: list[Job] = []
+        self._pools = {id(self.pool): self.pool}  # every pool a job was started on
 
     def start(
         self,
@@ -81,9 +82,11 @@ class JobRunner(QObject):
         on_error: Callable[[BaseException, str], None],
         label: str = "Working",
         background: bool = False,
+        pool: QThreadPool | None = None,
     ) -> Job:
-        """Run ``fn`` on the pool; ``on_done(result)`` or ``on_error(exc, tb)`` on the GUI thread,
-        unless the job was cancelled. ``background`` jobs (the warm-up) show no progress."""
+        """Run ``fn`` on the pool (or on ``pool``: the command runner's own); ``on_done(result)``
+        or ``on_error(exc, tb)`` on the GUI thread, unless the job was cancelled.
+        ``background`` jobs (the warm-up) show no progress."""
         job = Job(fn, label)
         job.background = background
 
@@ -99,7 +102,9 @@ class JobRunner(QObject):
         job.signals.failed.connect(lambda exc, tb: finish(on_error, exc, tb))
         self._jobs.append(job)
         self._report()
-        self.pool.start(job)
+        pool = pool or self.pool
+        self._pools[id(pool)] = pool
+        pool.start(job)
         return job
 
     def running(self, include_background: bool = False) -> list[Job]:
@@ -116,6 +121,6 @@ class JobRunner(QObject):
         self.busy_changed.emit(jobs[-1].label if jobs else "")
 
     def wait(self, msecs: int = 60_000) -> bool:
-        """Block until the pool is idle (tests and screenshots); the queued results are then
-        delivered by the next event processing."""
-        return self.pool.waitForDone(msecs)
+        """Block until the pools of the jobs started here are idle (tests and screenshots); the
+        queued results are then delivered by the next event processing."""
+        return all(p.waitForDone(msecs) for p in list(self._pools.values()))

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sketchforge.document.commands import AddLayer, Command, SetContour
+from sketchforge.document.commands import AddLayer, Command, SetContour, SetInflateParams
 from sketchforge.errors import ContourError, SketchforgeError
 from sketchforge.geometry import guard
 from sketchforge.geometry.inflate_params import DEFAULT_INFLATE_PARAMS
@@ -29,7 +29,7 @@ class DrawContourTool(Tool):
     label = "Draw contour"
 
     def __init__(self, doc, target_layer: str | None = None, closed: bool = False, index: int | None = None,
-                 keep_edits: bool = False, holes=()) -> None:
+                 keep_edits: bool = False, holes=(), inflater: str | None = None) -> None:
         super().__init__(doc)
         self.target_layer = target_layer
         self.closed = closed
@@ -40,6 +40,8 @@ class DrawContourTool(Tool):
         #: the target layer's holes after the stroke (a redraw keeps those that still fit; a
         #: cut adds one), each (n_i, 2) float64
         self.holes = tuple(holes)
+        #: the inflater a new layer gets (None: the default; a redraw keeps the layer's own)
+        self.inflater = inflater
         self._points: list[np.ndarray] = []
 
     def press(self, pos) -> None:
@@ -53,14 +55,18 @@ class DrawContourTool(Tool):
 
     def commands_for(self, points) -> tuple[list[Command], Command]:
         """(commands to push first, the inflating command) for a finished stroke: nothing and
-        a SetContour for a redraw; an AddLayer (with its id fixed now) and a SetContour for a
-        new layer, meant to be one macro "Draw layer"."""
+        a SetContour for a redraw; an AddLayer (with its id fixed now), the choice of
+        ``inflater`` if one is set (on the layer, before it has an outline: nothing to
+        inflate yet) and a SetContour for a new layer, meant to be one macro "Draw layer"."""
         pts = np.asarray(points, dtype=np.float64)
         if self.target_layer is not None:
             return [], SetContour(layer=self.target_layer, points=pts, closed=self.closed, keep_edits=self.keep_edits,
                                   holes=self.holes)
         add = AddLayer(id=self.doc.new_layer_id(), index=self.index)
-        return [add], SetContour(layer=add.id, points=pts, closed=self.closed)
+        before: list[Command] = [add]
+        if self.inflater is not None:
+            before.append(SetInflateParams(layer=add.id, solver=self.inflater))
+        return before, SetContour(layer=add.id, points=pts, closed=self.closed)
 
     def release(self, pos):
         if not self._points:

@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from attack_helpers import assert_one_line_error, run_cli, write_doc
+from sketchforge.plugins import default_host
 
 
 def _mesh(doc):
@@ -102,5 +103,5 @@ def test_the_library_s_own_snapshots_still_load(examples_dir, tmp_path):
     for example in sorted(examples_dir.glob("*.json")):
         res = run_cli("replay", example, "--save", tmp_path / example.name)
         assert res.rc == 0, res.err
-        doc = ff.load(tmp_path / example.name)
+        doc = ff.load(tmp_path / example.name, default_host())
         assert doc.layers and all(l.mesh is not None for l in doc.layers if l.points is not None)

@@ -40,15 +40,25 @@ def dialogs(monkeypatch):
         def __init__(self):
             self.calls: list[tuple[str, str, str]] = []
             self.answers: list = []
+            #: the default button of each question (what Enter answers), in order
+            self.defaults: list = []
+            #: labels answering ``errors_ui.ask_choice`` (none left: its default, as Enter)
+            self.choices: list[str] = []
 
         def _record(self, kind):
             def fn(parent, title, text, *args, **kwargs):
                 self.calls.append((kind, title, text))
                 if kind == "question":
+                    self.defaults.append(args[1] if len(args) > 1 else kwargs.get("defaultButton"))
                     return self.answers.pop(0) if self.answers else QMessageBox.StandardButton.Discard
                 return QMessageBox.StandardButton.Ok
 
             return fn
+
+        def _choice(self, parent, title, text, choices, default, cancel):
+            self.calls.append(("choice", title, text))
+            self.defaults.append(choices[default])
+            return choices.index(self.choices.pop(0)) if self.choices else default
 
         def of(self, kind):
             return [c for c in self.calls if c[0] == kind]
@@ -56,6 +66,9 @@ def dialogs(monkeypatch):
     rec = Recorder()
     for kind in ("critical", "warning", "information", "question"):
         monkeypatch.setattr(QMessageBox, kind, staticmethod(rec._record(kind)))
+    from sketchforge.qt import errors_ui
+
+    monkeypatch.setattr(errors_ui, "ask_choice", rec._choice)
     return rec
 
 

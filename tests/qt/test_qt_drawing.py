@@ -332,3 +332,19 @@ def test_a_double_click_copy_is_moved_with_the_arrow_keys(w, mouse, qtbot):
         replayed.execute(entry)
     for a, b in zip(replayed.layers, w.doc.layers):
         assert np.array_equal(a.mesh.V, b.mesh.V)
+
+
+def test_a_junction_partly_off_its_part_is_said_when_the_stroke_is_released(w, mouse, qtbot):
+    # issue 34, point 3: an open stroke whose junction runs off the part it lies on (or spans
+    # two parts) attaches by the stretch on it, and says so at once, not first in OBSERVATION
+    draw(w, mouse, qtbot, loop(0.5, (0, 0)))  # body
+    body = w.doc.layers[0]
+    draw(w, mouse, qtbot, u_shape((0.0, -0.3), 0.3, 0.6))  # a leg, its junction well inside
+    assert "glued to “" in status(w) and body.name in status(w)
+    # a head whose junction pokes out of the body's outline on one side
+    t = np.linspace(np.radians(200), np.radians(-20), 40)
+    head = np.c_[0.35 + 0.32 * np.cos(t), 0.45 + 0.32 * np.sin(t)]
+    draw(w, mouse, qtbot, head)
+    part = w.doc.layers[-1]
+    assert not part.closed and len(part.mesh.junction) > 0
+    assert "runs off" in status(w) and "is glued" in status(w) and part.name in status(w)

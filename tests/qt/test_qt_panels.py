@@ -111,9 +111,15 @@ def test_a_panel_whose_create_fails_is_named_and_the_window_starts(qtbot, tmp_pa
     host = make_test_host(FanInflater(), ProbePanels())
     w = window_on(host, qtbot, tmp_path)
     text = w.statusBar().currentMessage()
-    assert "panel 'broken' (plugin 'plugin-1-ProbePanels') left out: RuntimeError: no gizmo attached" in text
-    assert "panel 'nothing' (plugin 'plugin-1-ProbePanels') left out: TypeError: create must return a QWidget, got NoneType" in text
-    assert w.panel_problems == [t.strip() for t in text.split(";")]
+    broken = "panel 'broken' (plugin 'plugin-1-ProbePanels') left out: RuntimeError: no gizmo attached"
+    nothing = "panel 'nothing' (plugin 'plugin-1-ProbePanels') left out: TypeError: create must return a QWidget, got NoneType"
+    assert text == f"plugin problems (none disabled): {broken} (and 1 more: Help > Plugins)"
+    assert w.panel_problems == [broken, nothing]
+    # Each is listed once, under its plugin, in Help > Plugins and the status-bar button stays.
+    assert w.problems_button.isVisible() and w.problems_button.text() == "⚠ 2 plugin problems"
+    assert w.show_plugins().problem_lines() == [broken, nothing]
+    assert w.plugins_dialog.problem_refs("plugin-1-ProbePanels") == "problems 1, 2 (below)"
+    assert host.problems_of("plugin-1-ProbePanels") == [broken, nothing]
     assert "broken" not in w.plugin_panels and "nothing" not in w.plugin_panels and "probe_late" in w.plugin_panels
     assert not dialogs.calls
     w.set_mode("sculpture")  # the window works

@@ -17,7 +17,7 @@ import scipy.sparse.linalg as sla
 from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
-from sketchforge.errors import ParameterError
+from sketchforge.plugin_api import ParameterError
 
 #: Polar iterations per local step (warm-started from the previous rotations).
 POLAR_ITERATIONS = 1

@@ -16,10 +16,10 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from sketchforge.document.commands import Command, parse_field
-from sketchforge.errors import DocumentFormatError, ParameterError
+from sketchforge.plugin_api import Command, parse_field
+from sketchforge.plugin_api import DocumentFormatError, ParameterError
 
-from .state import KEY, MAX_LOOP_FRAMES, Animation, Pin, _vec, fit_recording
+from .state import KEY, MAX_LOOP_FRAMES, Animation, Pin, _triples, _vec, check_range, fit_recording
 
 
 def _parse_vec(d: dict, key: str, cmd: str) -> tuple:
@@ -45,6 +45,10 @@ class AnimationCommand(Command):
         old = doc.plugin_data(KEY)
         if not self._computed or old is not self._old:
             new = self.compute(doc, Animation.from_json(old))  # may raise: nothing changed yet
+            for pin in new.pins:  # never a value that the file could not hold (see state._vec)
+                check_range(np.array([pin.rest, pin.target]), f"{self.text()} on pin {pin.id!r}")
+                if pin.motion is not None:
+                    check_range(pin.motion, f"{self.text()} on pin {pin.id!r}")
             self._old, self._new, self._computed = old, new.to_json(), True
 
     def do(self, doc) -> None:
@@ -184,8 +188,7 @@ class RecordMotion(AnimationCommand):
 
     def compute(self, doc, anim):
         p = anim.pin(self.pin)
-        if not np.all(np.isfinite(self.samples)):
-            raise ParameterError("a recorded motion must have finite positions")
+        check_range(self.samples, "a recorded motion")
         if self.start < 0:
             raise ParameterError(f"a recording's start frame must be 0 or more, got {self.start}")
         # re-recording the only moving pin redefines the loop
@@ -205,11 +208,9 @@ class RecordMotion(AnimationCommand):
         if len(raw) > 4 * MAX_LOOP_FRAMES:
             raise DocumentFormatError(f"command {cls.name!r}: at most {4 * MAX_LOOP_FRAMES} samples")
         try:
-            samples = np.array(raw, dtype=np.float64)
-        except (TypeError, ValueError):
-            raise DocumentFormatError(f"command {cls.name!r}: 'samples' must be [x, y, z] triples") from None
-        if samples.ndim != 2 or samples.shape[1] != 3:
-            raise DocumentFormatError(f"command {cls.name!r}: 'samples' must be [x, y, z] triples")
+            samples = _triples(raw, f"command {cls.name!r}: 'samples'")
+        except ParameterError as exc:
+            raise DocumentFormatError(str(exc)) from None
         return cls(pin=parse_field(d, "pin", str, cls.name), start=parse_field(d, "start", int, cls.name, 0), samples=samples)
 
 

@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
-from sketchforge.atomic import write_bytes_atomic
-from sketchforge.errors import ParameterError
-from sketchforge.exporters import write_gltf
+from sketchforge.plugin_api import write_bytes_atomic
+from sketchforge.plugin_api import ParameterError
+from sketchforge.plugin_api import write_gltf
 
 from .gltf import animated_glb_bytes
 from .pose import animator_for, posed_mesh
@@ -50,7 +50,7 @@ def write_animation(path, doc, progress=None) -> str:
 
 
 def exporter():
-    from sketchforge.plugins.registry import Exporter
+    from sketchforge.plugin_api import Exporter
 
     return Exporter(
         "gltf-animation",

@@ -14,7 +14,7 @@ import struct
 
 import numpy as np
 
-from sketchforge.geometry.normals import vertex_normals
+from sketchforge.plugin_api import vertex_normals
 
 from .state import FPS
 

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from sketchforge.plugins.hookspecs import hookimpl
+from sketchforge.plugin_api import hookimpl
 
 
 @hookimpl
@@ -28,7 +28,7 @@ def sketchforge_pose(doc, frame):
 
 @hookimpl
 def sketchforge_qt_panels():
-    from sketchforge.plugins.registry import Panel
+    from sketchforge.plugin_api import Panel
 
     return [Panel("animation", "observation", _create_panel, label="Animation")]
 

@@ -15,8 +15,8 @@ import atexit
 import numpy as np
 from scipy.spatial import cKDTree
 
-from sketchforge.errors import ParameterError
-from sketchforge.geometry.mesh import Mesh
+from sketchforge.plugin_api import ParameterError
+from sketchforge.plugin_api import Mesh
 
 from .arap import ArapSolver
 from .state import Animation

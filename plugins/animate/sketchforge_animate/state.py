@@ -14,11 +14,12 @@ Stored in the document as plain JSON under ``doc.plugin_data("animate")``::
 
 from __future__ import annotations
 
+import numbers
 from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from sketchforge.errors import DocumentFormatError, ParameterError, quote
+from sketchforge.plugin_api import MAX_PARAMETER, DocumentFormatError, ParameterError, number, quote
 
 KEY = "animate"
 FPS = 24
@@ -34,14 +35,48 @@ def validate_json(value) -> None:
     Animation.from_json(value)
 
 
+#: A coordinate, by the core's rule for numeric parameters: a real number (not a bool, not a
+#: string such as "1"), finite, within the drawing's range (issue 38: ``add_pin`` took "1" and
+#: 1e308, and a snapshot target [[0], [0], [0]] was flattened into a point).
+_COORDINATE = number("coordinate", -MAX_PARAMETER, MAX_PARAMETER)
+
+
 def _vec(v, what: str) -> tuple[float, float, float]:
+    """A point [x, y, z]: a list, tuple or (3,) array of 3 coordinates (see _COORDINATE)."""
+    if isinstance(v, np.ndarray) and v.shape == (3,):
+        v = v.tolist()
+    if not isinstance(v, (list, tuple)) or len(v) != 3:
+        raise ParameterError(f"{what} must be 3 numbers [x, y, z], got {quote(v, 60)}")
     try:
-        a = np.asarray(v, dtype=np.float64).reshape(-1)
-    except (TypeError, ValueError):
-        raise ParameterError(f"{what} must be 3 numbers [x, y, z]") from None
-    if a.shape != (3,) or not np.all(np.isfinite(a)):
-        raise ParameterError(f"{what} must be 3 finite numbers [x, y, z]")
-    return (float(a[0]), float(a[1]), float(a[2]))
+        return tuple(_COORDINATE(x) for x in v)
+    except ParameterError:
+        raise ParameterError(
+            f"{what} must be 3 finite numbers [x, y, z] within ±{MAX_PARAMETER:g}, got {quote(v, 60)}"
+        ) from None
+
+
+def _triples(raw, what: str) -> np.ndarray:
+    """(k, 3) float64 from a list of [x, y, z] (a journal's samples, a stored motion), each
+    coordinate checked as in :func:`_vec`; one line naming ``what`` otherwise."""
+    bad = ParameterError(f"{what} must be [x, y, z] triples of finite numbers within ±{MAX_PARAMETER:g}")
+    if not isinstance(raw, (list, tuple)) or not all(isinstance(p, (list, tuple)) and len(p) == 3 for p in raw):
+        raise bad
+    if not all(isinstance(x, numbers.Real) and not isinstance(x, (bool, np.bool_)) for p in raw for x in p):
+        raise bad
+    try:
+        a = np.array(raw, dtype=np.float64).reshape(-1, 3)
+    except (OverflowError, TypeError, ValueError):
+        raise bad from None
+    if not np.all(np.isfinite(a)) or (a.size and np.abs(a).max() > MAX_PARAMETER):
+        raise bad
+    return a
+
+
+def check_range(a: np.ndarray, what: str) -> None:
+    """Refuse positions a file could not hold: non-finite or beyond the drawing's range (a
+    motion moved again and again by ``move_pin``)."""
+    if not np.all(np.isfinite(a)) or (a.size and np.abs(a).max() > MAX_PARAMETER):
+        raise ParameterError(f"{what} would leave the drawing's range (±{MAX_PARAMETER:g}); it was not changed")
 
 
 @dataclass(frozen=True)
@@ -105,9 +140,7 @@ class Animation:
                         raise ParameterError(f"pin {quote(pid)} has a motion but the loop has {loop} frames")
                     if not isinstance(motion, list) or len(motion) != loop:
                         raise ParameterError(f"pin {quote(pid)}: its motion must have one [x, y, z] per loop frame ({loop})")
-                    motion = np.array(motion, dtype=np.float64)
-                    if motion.shape != (loop, 3) or not np.all(np.isfinite(motion)):
-                        raise ParameterError(f"pin {quote(pid)}: its motion must have one [x, y, z] per loop frame ({loop})")
+                    motion = _triples(motion, f"pin {quote(pid)}: its motion (one [x, y, z] per loop frame ({loop}))")
                     motion.setflags(write=False)
                 pins.append(Pin(pid, _vec(p["rest"], f"the rest of pin {quote(pid)}"), _vec(p["target"], f"the target of pin {quote(pid)}"), motion))
         except KeyError as exc:

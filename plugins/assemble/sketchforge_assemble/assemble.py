@@ -9,23 +9,29 @@ each group's solve and the fairing are reused when their inputs are bit-identica
 
 from __future__ import annotations
 
+import math
+import numbers
 import time
 from dataclasses import dataclass, field
 from typing import Mapping, Sequence
 
 import numpy as np
 
-from sketchforge.errors import LimitError, ParameterError
-from sketchforge.geometry.mesh import Mesh
+from sketchforge.plugin_api import GeometryError, LimitError, ParameterError, quote
+from sketchforge.plugin_api import number
+from sketchforge.plugin_api import laplacian_and_mass
+from sketchforge.plugin_api import Mesh
 
 from .attach import Attachment, find_attachments
 from .blend import blend_junctions
 from .cache import AssemblyCache, memo
+from .errors import AttachmentError, DepthOrderError
 from .depth import build_problem, settle_free_parts, solve_without_free_parts
-from .fair import fair_seams, fairing_is_fit, hold_weights, seam_zone, supports, wide_zone
+from .fair import fair_clear, hold_weights, interior_edges, ring_region, seam_zone, supports, wide_zone
 from .remesh import insert_chains
-from .sheet import sheet_from_mesh, taper
+from .sheet import THIN_HEIGHT_EDGES, refine_thin, sheet_from_mesh, taper
 from .stitch import build_mesh
+from .thickness import full_thickness
 
 #: Assembly options. ``margin``: front/back separation at the rim, in edge lengths of the
 #: layer (thesis 4.7's "small margin"); ``gap``: clearance between overlapping layers, in
@@ -43,6 +49,8 @@ from .stitch import build_mesh
 #: The narrow fairing may leave a bend of at most this many degrees over one edge (issue 12: a
 #: bend over 90 degrees is a fold); more, and the wide zone is faired instead (see above).
 MAX_BEND = 90.0
+#: Rings around a fold that the held fairing leaves which are faired unheld (see :func:`_fair`).
+FOLD_RINGS = 6
 
 DEFAULT_PARAMS: Mapping[str, object] = {
     "margin": 0.1,
@@ -50,10 +58,18 @@ DEFAULT_PARAMS: Mapping[str, object] = {
     "reg": 1.0,
     "stiffness": 20.0,
     "qp_solver": "osqp",
-    "on_bad_junction": "raise",
+    "on_bad_junction": "free",
     "fillet": 4.0,
     "fair": 12,
 }
+
+#: Ranges of the numeric options. Lengths are in edge lengths: a fillet or margin wider than a
+#: part has nothing left to shape, one below a millionth of an edge nothing to keep apart; the
+#: weights are relative to 1. At each end a 5k-vertex body with two legs assembles in about a
+#: second (benchmarks/bench_param_extremes.py); beyond them the QP crawled (``reg`` 1e-16:
+#: 52 s, ``stiffness`` 1e6: 16 s) or failed without naming the option (1e308).
+MAX_PARAMS: Mapping[str, float] = {"fillet": 100.0, "margin": 100.0, "gap": 100.0, "reg": 1e6, "stiffness": 1e4}
+MIN_PARAMS: Mapping[str, float] = {"fillet": 0.0, "margin": 1e-6, "gap": 1e-6, "reg": 1e-6, "stiffness": 1e-6}
 
 
 @dataclass(frozen=True, eq=False)
@@ -80,7 +96,17 @@ class AssemblyResult:
     glue_error : float
         Largest residual of a glue row (the glued vertices are shared, so this only measures
         the solver's accuracy, never a crack).
+    free : list of int
+        Input indices of the parts with a junction that are assembled free (each named in
+        ``warnings``).
+    left_out : list of int
+        Input indices of the free parts left out of the model because there is no room for
+        them where they are drawn (each named in ``warnings``).
     warnings : list of str
+        One per part that could not be glued (it is free) or other degradation.
+    notes : list of str
+        One per part glued by a stretch of its junction only (see
+        :mod:`sketchforge.geometry.attachment`).
     timings : dict of str -> float
         Seconds per stage.
     """
@@ -95,7 +121,10 @@ class AssemblyResult:
     n_active: int
     max_violation: float
     glue_error: float = 0.0
+    free: list = field(default_factory=list)
+    left_out: list = field(default_factory=list)
     warnings: list = field(default_factory=list)
+    notes: list = field(default_factory=list)
     timings: dict = field(default_factory=dict)
     solver: dict = field(default_factory=dict)
 
@@ -135,9 +164,16 @@ def _check_overlap_work(meshes: Sequence[Mesh]) -> None:
 
 def _sheet(cache: AssemblyCache | None, k: int, name: str, mesh: Mesh, free: bool):
     """:func:`.sheet.sheet_from_mesh` through the cache (keyed by the mesh's arrays)."""
-    sheet = memo(cache, "sheet", (mesh.V, mesh.F, mesh.boundary, mesh.junction, tuple(mesh.holes), free),
-                 lambda: sheet_from_mesh(k, name, mesh, free))
+    sheet = memo(cache, "sheet", (mesh.V, mesh.F, mesh.boundary, mesh.junction, tuple(mesh.holes), free, THIN_HEIGHT_EDGES),
+                 lambda: refine_thin(sheet_from_mesh(k, name, mesh, free)))
     return sheet.evolve(layer=k, name=name)
+
+
+def _finite(v) -> bool:
+    try:
+        return math.isfinite(v)
+    except OverflowError:  # an integer or fraction beyond float range: finite, and huge
+        return True
 
 
 def _params(params) -> dict:
@@ -149,13 +185,23 @@ def _params(params) -> dict:
         raise ParameterError(f"unknown assembly parameter {unknown[0][:60]!r} (known: {', '.join(sorted(known))})")
     p = dict(DEFAULT_PARAMS)
     p.update(params or {})
-    if not (isinstance(p["fillet"], (int, float)) and np.isfinite(p["fillet"]) and p["fillet"] >= 0):
-        raise ParameterError(f"assembly parameter 'fillet' must be a number >= 0, got {p['fillet']!r}")
+    # The core's rule for a number (sketchforge.plugin_api.number: no bool, no string, no NaN, a
+    # 300-digit integer refused in one line), each within a finite range (issue 38: 1e308
+    # passed and failed inside the QP without naming the parameter).
+    for key, positive in (("fillet", False), ("margin", True), ("gap", True), ("reg", True), ("stiffness", True)):
+        v = p[key]
+        try:
+            p[key] = number(key, MIN_PARAMS[key], MAX_PARAMS[key])(v)
+        except ParameterError:
+            real = isinstance(v, numbers.Real) and not isinstance(v, (bool, np.bool_)) and _finite(v)
+            if real and v > MAX_PARAMS[key]:
+                raise ParameterError(f"assembly parameter {key!r} must be at most {MAX_PARAMS[key]:g}, got {quote(v)}") from None
+            if real and v > 0:
+                raise ParameterError(f"assembly parameter {key!r} must be at least {MIN_PARAMS[key]:g}, got {quote(v)}") from None
+            what = "a positive number" if positive else "a number >= 0"
+            raise ParameterError(f"assembly parameter {key!r} must be {what}, got {quote(v)}") from None
     if not (isinstance(p["fair"], (int, np.integer)) and not isinstance(p["fair"], bool) and 0 <= p["fair"] <= 50):
-        raise ParameterError(f"assembly parameter 'fair' must be a whole number of rings from 0 to 50, got {p['fair']!r}")
-    for key in ("margin", "gap", "reg", "stiffness"):
-        if not (isinstance(p[key], (int, float)) and np.isfinite(p[key]) and p[key] > 0):
-            raise ParameterError(f"assembly parameter '{key}' must be a positive number, got {p[key]!r}")
+        raise ParameterError(f"assembly parameter 'fair' must be a whole number of rings from 0 to 50, got {quote(p['fair'])}")
     if p["qp_solver"] not in ("osqp", "active_set"):
         raise ParameterError(f"assembly parameter 'qp_solver' must be 'osqp' or 'active_set', got {p['qp_solver']!r}")
     if p["on_bad_junction"] not in ("raise", "free"):
@@ -167,6 +213,12 @@ def assemble_detailed(meshes: Sequence[Mesh | None], closed: Sequence[bool] | No
                       params=None, names: Sequence[str] | None = None,
                       cache: AssemblyCache | None = None) -> AssemblyResult:
     """Assemble layer meshes, back to front, and report diagnostics.
+
+    One part never refuses the model (issue 34): a part whose junction cannot be glued (see
+    :mod:`.attach`), or whose glued junction makes the re-triangulation of its host or the
+    depth order impossible, is assembled as a free part and named in ``warnings``; the rest
+    is assembled as usual. With ``on_bad_junction: "raise"`` the first such problem raises
+    instead.
 
     Parameters
     ----------
@@ -190,43 +242,148 @@ def assemble_detailed(meshes: Sequence[Mesh | None], closed: Sequence[bool] | No
     """
     p = _params(params)
     t0 = time.perf_counter()
-    timings = {}
     n_in = len(meshes)
     closed = [False] * n_in if closed is None else list(closed)
     names = [f"layer {i}" for i in range(n_in)] if names is None else list(names)
-    keep = [i for i, m in enumerate(meshes) if m is not None and m.n_faces > 0]
-    if not keep:
+    present = [i for i, m in enumerate(meshes) if m is not None and m.n_faces > 0]
+    if not present:
         raise ParameterError("there is no layer with a mesh to assemble")
-    knames = [names[i] for i in keep]
-    _check_overlap_work([meshes[i] for i in keep])  # before any work, so a refusal is quick
-    sheets = [_sheet(cache, k, knames[k], meshes[i], bool(closed[i])) for k, i in enumerate(keep)]
+    _check_overlap_work([meshes[i] for i in present])  # before any work, so a refusal is quick
+    freed: dict[int, str] = {}  # input index -> why it is assembled free
+    left_out: dict[int, str] = {}  # input index -> why it is not in the model (a free part with no room)
+    fell_back = []
+    while True:
+        keep = [i for i in present if i not in left_out]
+        knames = [names[i] for i in keep]
+        sheets = [_sheet(cache, k, knames[k], meshes[i], bool(closed[i])) for k, i in enumerate(keep)]
+        try:
+            res = _assemble(list(sheets), knames, p, cache, {keep.index(i): why for i, why in freed.items()})
+        except _PartsFailed as failure:
+            if p["on_bad_junction"] == "raise":
+                raise failure.error from None
+            blamed = [keep[k] for k in failure.parts]
+            if failure.leave_out:
+                for i in blamed:
+                    left_out[i] = failure.reason(names[i], left_out=True)
+                continue
+            fresh = [i for i in blamed if i not in freed]
+            if not fresh:  # nothing left to blame: every part free, which always assembles
+                fresh = [keep[k] for k in range(len(sheets)) if len(sheets[k].junction) and keep[k] not in freed]
+                if not fresh:
+                    raise failure.error from None
+            for i in fresh:
+                freed[i] = failure.reason(names[i])
+            continue
+        if res.faired is False:
+            # The blended junction would cross itself (or flatten a triangle): the plain
+            # sleeve never does, so the model is still handed out, with its folds, and why.
+            p = {**p, "fillet": 0.0}
+            fell_back.append("a junction could not be blended without the surface crossing itself; "
+                             "its parts are glued with a plain fold (assembly parameter 'fillet')")
+            continue
+        break
+    warnings = [left_out[i] for i in sorted(left_out)] + res.warnings + fell_back
+    timings = res.timings
+    timings["total"] = time.perf_counter() - t0
+    keep_arr = np.array(keep)
+    res.solver["free_shift"] = {keep[i]: v for i, v in res.solver.get("free_shift", {}).items()}
+    glued = {a.upper for a in res.attachments}
+    return AssemblyResult(
+        mesh=Mesh(res.V, res.F),
+        face_layer=keep_arr[res.face_layer],
+        face_kind=res.face_kind,
+        attachments=[Attachment(keep[a.upper], keep[a.lower], a.side, a.keep) for a in res.attachments],
+        components=res.components,
+        n_equalities=res.n_equalities,
+        n_inequalities=res.n_inequalities,
+        n_active=int(res.solver.get("active", 0)),
+        max_violation=res.max_violation,
+        glue_error=res.glue_error,
+        free=[keep[u] for u in range(len(sheets)) if len(sheets[u].junction) and u not in glued],
+        left_out=sorted(left_out),
+        warnings=warnings,
+        notes=res.notes,
+        timings=timings,
+        solver=res.solver,
+    )
 
-    attachments, warnings = find_attachments(sheets, knames, p["on_bad_junction"])
+
+class _PartsFailed(Exception):
+    """A failure the assembly can get round by assembling ``parts`` (sheet indices) free, or,
+    with ``leave_out``, without them (free parts with no room where they are drawn)."""
+
+    def __init__(self, error: Exception, parts, leave_out: bool = False):
+        super().__init__(str(error))
+        self.error = error
+        self.parts = list(parts)
+        self.leave_out = leave_out
+
+    def reason(self, name: str, left_out: bool = False) -> str:
+        text = str(self.error).rstrip(".")
+        what = "is left out of the assembled model" if left_out else "is assembled as a free part"
+        return f"layer '{name}' {what}: {text[0].lower() + text[1:]}"
+
+
+@dataclass
+class _Stages:
+    """What one pass of :func:`_assemble` made (sheet indices)."""
+
+    V: np.ndarray
+    F: np.ndarray
+    face_layer: np.ndarray
+    face_kind: np.ndarray
+    attachments: list
+    components: int
+    n_equalities: int
+    n_inequalities: int
+    max_violation: float
+    glue_error: float
+    warnings: list
+    notes: list
+    timings: dict
+    solver: dict
+    faired: bool | None  # None: no fairing asked for
+
+
+def _assemble(sheets: list, knames: list[str], p: dict, cache, freed: dict[int, str]) -> _Stages:
+    """One pass of the assembly with the parts in ``freed`` left free; raises
+    :class:`_PartsFailed` naming the parts to free when it cannot finish with them glued."""
+    timings: dict = {}
+    t = time.perf_counter()
+    attachments, warnings, notes = find_attachments(sheets, knames, p["on_bad_junction"], exclude=set(freed))
+    warnings = [freed[k] for k in sorted(freed)] + warnings
     attached = {a.upper for a in attachments}
     for u in range(len(sheets)):
         if u not in attached and len(sheets[u].junction):
-            # junction over empty space, or a bad one with on_bad_junction="free": a free part
-            # whose whole outline is a rim
-            sheets[u] = sheets[u].evolve(junction=np.zeros(0, np.int64))
-    timings["attach"] = time.perf_counter() - t0
+            # junction over empty space, or a bad one: a free part whose whole outline is a rim
+            sheets[u] = sheets[u].evolve(junction=np.zeros(0, np.int64), marks=None)
+    for a in attachments:
+        if a.keep is not None:
+            # only this stretch of the junction is glued; the rest is outline like any other
+            sheets[a.upper] = sheets[a.upper].evolve(junction=sheets[a.upper].glue_stretch(*a.keep), marks=None)
+    for a in attachments:
+        # a part meets its host at its own thickness (thickness.full_thickness)
+        s = sheets[a.upper]
+        host = sheets[a.lower]
+
+        def thick(s=s, host=host):
+            ops = memo(cache, "laplacian", (s.xy, s.F, s.Fb), lambda: laplacian_and_mass(s.xy, s.F, checked=True))
+            return full_thickness(s, host.polygon(), ops)
+
+        z = memo(cache, "thickness", (s.xy, s.F, s.z, s.boundary, s.holes, s.junction, host.xy, host.boundary,
+                                      host.holes), thick)
+        sheets[a.upper] = s.evolve(z=z)
+    timings["attach"] = time.perf_counter() - t
 
     t = time.perf_counter()
-    for lo in sorted({a.lower for a in attachments}):
-        mine = [a for a in attachments if a.lower == lo]
-        chains = [sheets[a.upper].xy[sheets[a.upper].junction] for a in mine]
-        s = sheets[lo]
-        cut = memo(cache, "remesh", (s.xy, s.z, s.F, s.boundary, s.junction, s.holes, s.h, chains),
-                   lambda: insert_chains(s, chains, knames, [a.upper for a in mine]))
-        sheets[lo] = cut.evolve(layer=lo, name=knames[lo])
+    _cut_junctions(sheets, attachments, knames, cache)
     timings["remesh"] = time.perf_counter() - t
 
     t = time.perf_counter()
-    offs = []
-    for s in sheets:
-        offs.append(s.z + p["margin"] * s.h * taper(s))
-    front_off, back_off = list(offs), list(offs)
+    front_off = [s.z + p["margin"] * s.h * taper(s) for s in sheets]
+    back_off = list(front_off)
     lips = glue = springs = None
-    locators: dict = {}  # per sheet, for the fillets' springs and the depth rows alike
+    locators: dict = {}  # per sheet face, for the fillets' springs and the depth rows alike
     if p["fillet"] > 0 and attachments:
         lips, glue, springs = blend_junctions(sheets, attachments, front_off, back_off, p["fillet"],
                                               locators=locators)
@@ -238,86 +395,127 @@ def assemble_detailed(meshes: Sequence[Mesh | None], closed: Sequence[bool] | No
     timings["constraints"] = time.perf_counter() - t
 
     t = time.perf_counter()
-    pad = 0.5 * gap
-    # Free parts (no attachment either way) are left out of the QP and sit on what lies below
-    # them instead of floating at their rest depth; glued layers do not move (see
-    # depth.solve_without_free_parts and depth.settle_free_parts).
-    in_att = {a.upper for a in attachments} | {a.lower for a in attachments}
+    in_att = attached | {a.lower for a in attachments}
     free = [i for i in range(len(sheets)) if i not in in_att]
-    x, sinfo = solve_without_free_parts(P, q, Aeq, beq, Ain, bin_, offsets, free, pinfo["rest_depth"],
-                                        method=p["qp_solver"], pad=pad, cache=cache)
-    sinfo = dict(sinfo)  # the cached solve's info is shared
-    sinfo.update(pinfo)
-    sinfo["gap"] = gap
-    x, shift = settle_free_parts(x, Ain, bin_, offsets, free, pad)
-    sinfo["free_shift"] = {keep[i]: v for i, v in shift.items()}
-    # Counted at the settled answer, the same way for both solvers: the active set's own count
-    # (its working set) knows nothing of the rows a free part came to rest on.
-    sinfo["active"] = int(np.sum(Ain @ x - bin_ <= pad + 1e-6)) if len(bin_) else 0
+    x, sinfo = _solve_depth_order(P, q, Aeq, beq, Ain, bin_, offsets, free, pinfo, gap, p, cache, attachments)
     timings["solve"] = time.perf_counter() - t
-    viol = 0.0
-    if len(bin_):
-        viol = max(viol, float(np.max(bin_ - Ain @ x, initial=0.0)))
+    viol = float(np.max(bin_ - Ain @ x, initial=0.0)) if len(bin_) else 0.0
     glue_error = float(np.max(np.abs(Aeq @ x - beq), initial=0.0))
 
     t = time.perf_counter()
     delta = [x[offsets[k]:offsets[k + 1]] for k in range(len(sheets))]
     V, F, face_layer, face_kind, seam, ends = build_mesh(sheets, attachments, delta, front_off, back_off, lips)
     timings["stitch"] = time.perf_counter() - t
-    fair_zone = None
+    faired = None
+    sinfo["fair_zone"] = None
     if lips is not None and p["fair"] > 0:
-        t = time.perf_counter()
-        rings = int(p["fair"])
-        A, reach = seam_zone(F, len(V), seam, ends, rings)
-        wide = wide_zone(A, seam, rings)
-        # A free part resting on a face near a junction keeps the face under it as it was
-        # solved (fairing it away would leave the part floating, or sunk into it).
-        held = np.zeros(len(V), bool)
-        for k in sorted(set(range(len(sheets))) - in_att):
-            held |= supports(V, F, face_layer, face_kind, k, sheets[k].polygon().buffer(sheets[k].h), wide)
-        h_med = float(np.median([s.h for s in sheets]))
+        V, faired, sinfo["fair_zone"] = _fair(V, F, face_layer, face_kind, seam, ends, sheets, in_att, p, cache,
+                                              timings)
+    return _Stages(V, F, face_layer, face_kind, attachments, _components(len(sheets), attachments), int(len(beq)),
+                   int(len(bin_)), viol, glue_error, warnings, notes, timings, sinfo, faired)
 
-        def faired(V=V, A=A, reach=reach, wide=wide, held=held):
-            spent = {"fair": 0.0, "fair_check": 0.0}
 
-            def attempt(moved, hold, bend_limit):
-                t1 = time.perf_counter()
-                V2 = fair_seams(V, F, moved, A, hold=hold)
-                t2 = time.perf_counter()
-                ok = fairing_is_fit(V2, F, moved, A, h_med, bend_limit)
-                spent["fair"] += t2 - t1
-                spent["fair_check"] += time.perf_counter() - t2
-                return V2, ok
+def _cut_junctions(sheets: list, attachments: list, knames: list[str], cache) -> None:
+    """Cut every glued junction into its host's face (:func:`.remesh.insert_chains`), in place;
+    a junction the host cannot take fails the pass naming its part."""
+    for lo in sorted({a.lower for a in attachments}):
+        mine = [a for a in attachments if a.lower == lo]
+        chains = [sheets[a.upper].xy[sheets[a.upper].junction] for a in mine]
+        sides = [a.side for a in mine]
+        s = sheets[lo]
+        try:
+            cut = memo(cache, "remesh", (s.xy, s.z, s.F, s.boundary, s.junction, s.holes, s.h, chains, sides),
+                       lambda: insert_chains(s, chains, knames, [a.upper for a in mine], sides))
+        except AttachmentError as exc:
+            raise _PartsFailed(exc, exc.parts or [a.upper for a in mine]) from None
+        except GeometryError as exc:  # a degenerate re-triangulation: every part glued here
+            raise _PartsFailed(exc, [a.upper for a in mine]) from None
+        sheets[lo] = cut.evolve(layer=lo, name=knames[lo])
 
-            # The narrow zone, held softly; where it leaves a fold or a crossing, the wide one
-            # (a bend it leaves is still far below the plain sleeve's, so only a crossing or a
-            # flat triangle there falls back to the plain sleeve).
-            V2, ok = attempt((reach < 1.0) & ~held, hold_weights(reach), MAX_BEND)
-            zone = "narrow"
-            if not ok:
-                V2, ok = attempt(wide & ~held, None, 180.0)
-                zone = "wide"
-            timings.update(spent)
-            return V2, ok, zone
 
-        # Through the cache by the stitched mesh itself: an undo, or an edit that leaves every
-        # junction's rings as they were, skips the fairing's solves and checks.
-        V, safe, fair_zone = memo(cache, "fair", (V, F, seam, ends, held, rings, h_med), faired)
-        V = V.copy()  # the cached array stays as it was, whatever the caller does to the mesh
-        timings.setdefault("fair", time.perf_counter() - t)
-        timings.setdefault("fair_check", 0.0)
-        if not safe:
-            # The blended junction would cross itself (or flatten a triangle): the plain
-            # sleeve never does, so the model is still handed out, with its folds, and why.
-            plain = assemble_detailed(meshes, closed, {**p, "fillet": 0.0}, names, cache=cache)
-            plain.warnings.append("a junction could not be blended without the surface crossing itself; "
-                                  "its parts are glued with a plain fold (assembly parameter 'fillet')")
-            return plain
-    sinfo["fair_zone"] = fair_zone
-    timings["total"] = time.perf_counter() - t0
+def _solve_depth_order(P, q, Aeq, beq, Ain, bin_, offsets, free, pinfo, gap, p, cache, attachments):
+    """(δ, solver info): the depth QP with the free parts left out and settled afterwards
+    (:func:`.depth.solve_without_free_parts`, :func:`.depth.settle_free_parts`); a depth order
+    that cannot hold fails the pass, naming the glued parts of the layers it involves."""
+    pad = 0.5 * gap
+    try:
+        x, sinfo = solve_without_free_parts(P, q, Aeq, beq, Ain, bin_, offsets, free, pinfo["rest_depth"],
+                                            method=p["qp_solver"], pad=pad, cache=cache)
+    except DepthOrderError as exc:
+        if exc.free:  # free parts squeezed where there is no room: they are left out
+            raise _PartsFailed(exc, exc.layers, leave_out=True) from None
+        involved = set(exc.layers)
+        parts = [a.upper for a in attachments if not involved or a.upper in involved or a.lower in involved]
+        raise _PartsFailed(exc, parts) from None
+    sinfo = dict(sinfo)  # the cached solve's info is shared
+    sinfo.update(pinfo)
+    sinfo["gap"] = gap
+    x, shift = settle_free_parts(x, Ain, bin_, offsets, free, pad)
+    sinfo["free_shift"] = shift
+    # Counted at the settled answer, the same way for both solvers: the active set's own count
+    # (its working set) knows nothing of the rows a free part came to rest on.
+    sinfo["active"] = int(np.sum(Ain @ x - bin_ <= pad + 1e-6)) if len(bin_) else 0
+    return x, sinfo
 
-    # components: one per group of attached parts
-    parent = list(range(len(sheets)))
+
+def _fair(V, F, face_layer, face_kind, seam, ends, sheets, in_att, p, cache, timings):
+    """(V, safe, zone): the junctions faired (:mod:`.fair`) in the narrow zone, or the wide one
+    where the narrow leaves a fold; ``safe`` False when even the wide one crosses itself."""
+    t = time.perf_counter()
+    rings = int(p["fair"])
+    A, reach = seam_zone(F, len(V), seam, ends, rings)
+    wide = wide_zone(A, seam, rings)
+    # A free part resting on a face near a junction keeps the face under it as it was solved
+    # (fairing it away would leave the part floating, or sunk into it).
+    held = np.zeros(len(V), bool)
+    for k in sorted(set(range(len(sheets))) - in_att):
+        held |= supports(V, F, face_layer, face_kind, k, sheets[k].polygon().buffer(sheets[k].h), wide)
+    h_med = float(np.median([s.h for s in sheets]))
+
+    def faired(V=V, A=A, reach=reach, wide=wide, held=held):
+        t1 = time.perf_counter()
+        # The narrow zone, held softly. Where it leaves a fold, the junctions near the fold get
+        # the wide zone (unheld), the others keep the narrow one: widening every junction for
+        # one fold reshaped thin parts elsewhere (a tail faired into a membrane). Where
+        # either crosses another part, the rings there are kept as solved (fair.fair_clear);
+        # only a crossing that cannot be cleared falls back to the plain sleeve.
+        narrow = (reach < 1.0) & ~held
+        hold = hold_weights(reach)
+        edges = interior_edges(F)
+        V2, clear, bent, _ = fair_clear(V, F, narrow, A, h_med, hold, MAX_BEND, edges)
+        zone = "narrow"
+        if clear and len(bent):
+            near_seam = seam[ring_region(A, bent, 2 * rings)[seam]]
+            local = wide_zone(A, near_seam, rings) & ~held if len(near_seam) else np.zeros(len(V), bool)
+            if local.any():
+                V3, clear3, bent3, _ = fair_clear(V, F, narrow | local, A, h_med, hold, MAX_BEND, edges)
+                if clear3:
+                    V2, zone = V3, "narrow+wide"
+                if clear3 and len(bent3):
+                    # a fold still left: unheld in the rings around it only, so the rest of
+                    # the limb keeps its thickness (the toucan's head over the body's rim)
+                    loose = ring_region(A, bent3, FOLD_RINGS) & local
+                    V4, clear4, bent4, _ = fair_clear(V, F, narrow | local, A, h_med, np.where(loose, 0.0, hold),
+                                                      MAX_BEND, edges)
+                    if clear4 and len(bent4) < len(bent3):
+                        V2 = V4
+        if not clear:
+            V2, clear, _, _ = fair_clear(V, F, wide & ~held, A, h_med)
+            zone = "wide"
+        timings["fair"] = time.perf_counter() - t1
+        return V2, clear, zone
+
+    # Through the cache by the stitched mesh itself: an undo, or an edit that leaves every
+    # junction's rings as they were, skips the fairing's solves and checks.
+    V, safe, zone = memo(cache, "fair", (V, F, seam, ends, held, rings, h_med), faired)
+    timings.setdefault("fair", time.perf_counter() - t)
+    timings.setdefault("fair_check", 0.0)
+    return V.copy(), bool(safe), zone  # the cached array stays as it was, whatever the caller does
+
+
+def _components(n: int, attachments: list) -> int:
+    """Connected components: one per group of attached parts, one per free part."""
+    parent = list(range(n))
 
     def root(a):
         while parent[a] != a:
@@ -327,23 +525,7 @@ def assemble_detailed(meshes: Sequence[Mesh | None], closed: Sequence[bool] | No
 
     for a in attachments:
         parent[root(a.upper)] = root(a.lower)
-    n_comp = len({root(i) for i in range(len(sheets))})
-    keep_arr = np.array(keep)
-    return AssemblyResult(
-        mesh=Mesh(V, F),
-        face_layer=keep_arr[face_layer],
-        face_kind=face_kind,
-        attachments=[Attachment(keep[a.upper], keep[a.lower], a.side) for a in attachments],
-        components=n_comp,
-        n_equalities=int(len(beq)),
-        n_inequalities=int(len(bin_)),
-        n_active=int(sinfo.get("active", 0)),
-        max_violation=viol,
-        glue_error=glue_error,
-        warnings=warnings,
-        timings=timings,
-        solver=sinfo,
-    )
+    return len({root(i) for i in range(n)})
 
 
 def assemble_meshes(meshes: list[Mesh], closed: list[bool] | None = None, params=None) -> Mesh:

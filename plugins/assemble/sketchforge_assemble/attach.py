@@ -1,22 +1,22 @@
-"""Which part attaches to which face (thesis 4.7, first paragraph).
+"""Which part attaches to which face, and which stretch of its junction is glued (thesis 4.7,
+first paragraph; issue 34).
 
-A part drawn as an open stroke has a junction Γ_conn. Walking from the front, its junction
-attaches to the nearest layer *behind* it whose region it lies over (the part is glued to that
-layer's front face); failing that, to the nearest layer *in front* whose region holds the
-junction, on that layer's back face (the same rule seen from behind, e.g. legs moved behind
-the body). The nearest layer over the junction on a side must hold all of it; if it holds only
-part (the junction spans two layers, or runs off the layer's outline) and the other side does
-not attach either, the junction is an error (or, on request, a free part). A junction over
-empty space makes a free part.
+The rule is the document's own (:mod:`sketchforge.geometry.attachment`, shared with the app's
+notes and the mirror about a host): a junction over layers attaches to the one that can take
+the longest stretch of it, on that layer's front face if the layer is behind the part and on
+its back face if it is in front; only that stretch is glued (the rest of the junction becomes
+outline); junctions glued to one face of one host keep apart. A junction that cannot be glued
+anywhere makes a free part, with a warning naming it (or an error, on request); a junction
+over empty space makes a free part.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-from sketchforge.errors import GeometryError
-from sketchforge.geometry import guard
-from sketchforge.geometry.attachment import BACK, FRONT, find_host
+from sketchforge.plugin_api import GeometryError
+from sketchforge.plugin_api import guard
+from sketchforge.plugin_api import BACK, FRONT, plan_attachments
 
 from .errors import AttachmentError
 from .sheet import Sheet
@@ -30,12 +30,14 @@ class Attachment:
 
     ``upper``/``lower`` are indices in the back-to-front list ("upper" is the part that owns
     the junction, whatever its depth); ``side`` is :data:`FRONT` (``upper`` is in front of
-    ``lower``) or :data:`BACK`.
+    ``lower``) or :data:`BACK`. ``keep``: the first and last vertex (inclusive, positions in
+    the part's junction as drawn) of the glued stretch; None for the whole junction.
     """
 
     upper: int
     lower: int
     side: int
+    keep: tuple | None = None
 
 
 def lo_chain_index(attachments: list[Attachment], a_i: int) -> int:
@@ -45,7 +47,7 @@ def lo_chain_index(attachments: list[Attachment], a_i: int) -> int:
     return sum(1 for at in attachments[:a_i] if at.lower == lower)
 
 
-def find_attachments(sheets: list[Sheet], names: list[str], on_bad_junction: str = "raise"):
+def find_attachments(sheets: list[Sheet], names: list[str], on_bad_junction: str = "free", exclude=()):
     """Decide every attachment.
 
     Parameters
@@ -54,49 +56,67 @@ def find_attachments(sheets: list[Sheet], names: list[str], on_bad_junction: str
         Back to front; a sheet with an empty ``junction`` is free.
     names : list of str
         Layer names for messages.
-    on_bad_junction : {"raise", "free"}
-        What to do with a junction that spans two layers, runs partly outside the layer below
-        or has fewer than 2 distinct points: raise :class:`AttachmentError` (default: the
-        person sees why the part did not attach and can fix the stroke), or make the part
-        free and report it.
+    on_bad_junction : {"free", "raise"}
+        What to do with a junction that cannot be glued (no stretch of it long enough lies
+        inside one layer, clear of the layers between and of the junctions already glued to
+        that face), that closes a loop of attachments, or has fewer than 2 distinct points:
+        make the part free and report it (default: the rest of the model assembles), or raise
+        :class:`AttachmentError`.
+    exclude : set of int
+        Parts assembled free whatever their junction (the assembly frees a part whose glued
+        junction its host cannot take); the caller reports them.
 
     Returns
     -------
     attachments : list of Attachment
     warnings : list of str
-        One per junction made free (``on_bad_junction="free"``); a part not in
-        ``attachments`` is free.
+        One per junction made free; a part not in ``attachments`` is free.
+    notes : list of str
+        One per part glued by a stretch of its junction only (it runs off its host, spans two
+        layers or touches another junction on the same face).
     """
     polys = [s.polygon() for s in sheets]
-    attachments: list[Attachment] = []
     warnings: list[str] = []
 
     def bad_junction(problem: str) -> None:
         if on_bad_junction == "raise":
             raise AttachmentError(problem[0].upper() + problem[1:] + ".")
-        warnings.append(problem + " (assembled as a free part)")
+        warnings.append(problem if "free part" in problem else problem + " (assembled as a free part)")
 
+    junctions = []
     for u, s in enumerate(sheets):
-        if len(s.junction) == 0:
+        if len(s.junction) == 0 or u in exclude:
+            junctions.append(None)
             continue
         try:
             # The sheet's coordinates are checked (sheet_from_mesh), so this refuses only a
             # junction whose points all coincide (a hand-edited snapshot): a junction problem
             # like the others, not a reason to stop the whole assembly.
-            line = guard.linestring(s.xy[s.junction], f"the junction of layer '{names[u]}'")
+            guard.linestring(s.xy[s.drawn_junction()], f"the junction of layer '{names[u]}'")
         except GeometryError as exc:
             bad_junction(f"{exc}, so it cannot be glued to a layer; redraw the part")
+            junctions.append(None)
             continue
-        # The document's rule (sketchforge.geometry.attachment), shared with its commands and
-        # the app's warnings: the junction is cut into the host as a slit, so it must lie
-        # inside its outline with a little clearance.
-        ends = [t.xy[t.junction[[0, -1]]] if len(t.junction) >= 2 else None for t in sheets]
-        found = find_host(line, u, polys, [t.h for t in sheets], [f"'{n}'" for n in names], s.h, ends)
+        junctions.append(s.xy[s.drawn_junction()])
+    ends = [t.xy[t.junction[[0, -1]]] if len(t.junction) >= 2 else None for t in sheets]
+    plans = plan_attachments(junctions, polys, [t.h for t in sheets], [f"'{n}'" for n in names], ends)
+    attachments: list[Attachment] = []
+    notes: list[str] = []
+    for u, found in enumerate(plans):
+        if found is None:
+            continue
         if found.host is not None:
-            attachments.append(Attachment(u, found.host, found.side))
+            whole = found.keep == (0, len(sheets[u].drawn_junction()) - 1)
+            attachments.append(Attachment(u, found.host, found.side, None if whole else tuple(found.keep)))
+            if found.note:
+                notes.append(found.note)
         elif found.problem is not None:
             bad_junction(found.problem)
-    return _break_loops(attachments, names, bad_junction), warnings
+        else:
+            # over empty space: a free part, as drawn; never an error, but said (a part that was
+            # glued and lost its host when a layer moved must not go free without a word)
+            warnings.append(f"the junction of layer '{names[u]}' lies on no part, so it is assembled as a free part")
+    return _break_loops(attachments, names, bad_junction), warnings, notes
 
 
 def _break_loops(attachments: list[Attachment], names: list[str], bad_junction) -> list[Attachment]:

@@ -78,6 +78,19 @@ def distance_to(xy: np.ndarray, line_xy: np.ndarray, reach: float = np.inf) -> n
     return best
 
 
+def _distance_and_nearest(xy: np.ndarray, line_xy: np.ndarray, reach: float):
+    """((n,) distance of xy (n, 2) to the polyline line_xy (c, 2), inf beyond ``reach`` of its
+    bounding box; (n,) int64 the polyline vertex nearest to each point (0 where inf))."""
+    from scipy.spatial import cKDTree
+
+    d = distance_to(xy, line_xy, reach=reach)
+    nearest = np.zeros(len(xy), np.int64)
+    fin = np.flatnonzero(np.isfinite(d))
+    if len(fin):
+        nearest[fin] = cKDTree(line_xy).query(xy[fin])[1]
+    return d, nearest
+
+
 def blend_junctions(sheets: list[Sheet], attachments: list[Attachment], front_off: list[np.ndarray],
                     back_off: list[np.ndarray], width: float = 4.0, pull: float = 50.0, locators=None):
     """Shape the faces near every junction into a fillet (module docstring); in place.
@@ -95,9 +108,10 @@ def blend_junctions(sheets: list[Sheet], attachments: list[Attachment], front_of
     pull : float
         Weight of the springs that hold the part near its junction on the host (see
         ``springs``), relative to the part's Dirichlet energy.
-    locators : dict of int -> TriangleLocator, optional
-        Point location per sheet index, shared with :func:`.depth.build_problem` (a host
-        with several parts, the body, is located in once); filled as needed.
+    locators : dict, optional
+        Point location per sheet face (:func:`.depth.face_locator`), shared with
+        :func:`.depth.build_problem` (a host with several parts, the body, is located in
+        once); filled as needed.
 
     Returns
     -------
@@ -114,7 +128,7 @@ def blend_junctions(sheets: list[Sheet], attachments: list[Attachment], front_of
         weight that fades to 0 over the fillet, so the part's slope continues the host's,
         whatever the depth solve does to the host.
     """
-    from sketchforge.geometry.locate import TriangleLocator
+    from .depth import face_locator
 
     locators = {} if locators is None else locators
     lips, glues, springs = [], [], []
@@ -137,24 +151,15 @@ def blend_junctions(sheets: list[Sheet], attachments: list[Attachment], front_of
         theta = 1.0 - phi
         e = end_taper(up.xy, ends, taper_r)
         margin = base_front[at.upper] - up.z
-        # A thick part fades its thickness in over a longer run, about its own height, so
-        # its faces leave the fillet no steeper than about 60 degrees.
-        thick = float(np.max(up.z[d <= 2.0 * W], initial=0.0))
-        grow = 1.0 - profile(d / max(W, 1.2 * thick))
-        # Added onto what is there: a part that also hosts another (a hand on an arm) may have
-        # had its host fillet added already, earlier in this loop.
-        faded = margin + up.z * grow
-        front_off[at.upper] = front_off[at.upper] - base_front[at.upper] + faded
-        back_off[at.upper] = back_off[at.upper] - base_back[at.upper] + faded
+        # The part keeps its full thickness up to the junction (thickness.full_thickness):
+        # the host rises to meet its front chain instead.
 
         # springs: mid-depth = host face under the vertex + the part's back clearance
         # (rising from the strip's top) + its half thickness
         zone = np.flatnonzero(phi > 0)
-        if at.lower not in locators:
-            locators[at.lower] = TriangleLocator(lo.xy, lo.F)
-        face, bary = locators[at.lower].locate(up.xy[zone])
+        face, bary = face_locator(locators, None, sheets, at.lower, at.side).locate(up.xy[zone])
         ok = face >= 0
-        zone, tri, bary = zone[ok], lo.F[face[ok]], np.clip(bary[ok], 0.0, 1.0)
+        zone, tri, bary = zone[ok], lo.face(at.side)[face[ok]], np.clip(bary[ok], 0.0, 1.0)
         bary /= bary.sum(axis=1, keepdims=True)
         facing = base_front[at.lower] if at.side == FRONT else base_back[at.lower]
         under = np.sum(bary * facing[tri], axis=1)
@@ -163,23 +168,31 @@ def blend_junctions(sheets: list[Sheet], attachments: list[Attachment], front_of
         # the pocket between them opens, instead of diving down the host's flank with it
         near_c = c[np.argmin(np.linalg.norm(up.xy[zone][:, None, :] - lo.xy[c][None], axis=2), axis=1)]
         host = np.maximum(under, facing[near_c])
-        clear = (rise + plus * theta[zone]) * e[zone] + margin[zone] + up.z[zone] * grow[zone]
+        clear = (rise + plus * theta[zone]) * e[zone] + margin[zone] + up.z[zone]
         sgn = 1.0 if at.side == FRONT else -1.0
         springs.append((zone, near_c[:, None], np.ones((len(zone), 1)), pull * phi[zone], sgn * (host + clear)))
 
-        # the host: a fillet on each side of the slit, rising to the lips
-        dl = distance_to(lo.xy, lo.xy[c], reach=W)  # the fillet ends at W
+        # the host: a fillet on each side of the slit, rising to the lips. The "-" side rises to
+        # the part's front chain: the lip plus the part's thickness there, over a width that
+        # grows with that height (slopes of at most about 1 in the fillet's parabola).
+        ec = end_taper(lo.xy[c], ends, taper_r)
+        thick_j = 2.0 * (up.z[up.junction] + margin[up.junction])
+        rise_minus = rise * ec + thick_j
+        W_minus = np.maximum(W, 2.0 * rise_minus)
+        reach = float(W_minus.max())
+        dl, nearest = _distance_and_nearest(lo.xy, lo.xy[c], reach)
         el = end_taper(lo.xy, ends, taper_r)
         inside = np.zeros(lo.n, bool)
-        fil = np.flatnonzero(dl < W)  # only these get a fillet
+        fil = np.flatnonzero(dl < reach)  # only these get a fillet
         inside[fil] = shapely.contains_xy(up.polygon(), lo.xy[fil, 0], lo.xy[fil, 1])
-        amount = np.where(inside, plus, rise) * profile(dl / W) * el
+        Wv = np.where(inside, W, W_minus[nearest])
+        amount = np.where(inside, plus * el, rise_minus[nearest] * np.maximum(el, thick_j[nearest] / np.maximum(
+            rise_minus[nearest], 1e-300))) * profile(dl / Wv)
         amount[c] = 0.0  # the chain's own vertices are replaced by the lips (see stitch)
         if at.side == FRONT:
             front_off[at.lower] = front_off[at.lower] + amount
         else:
             back_off[at.lower] = back_off[at.lower] + amount
-        ec = end_taper(lo.xy[c], ends, taper_r)
         lips.append(plus * ec)
         glues.append(rise * ec)
     return lips, glues, springs

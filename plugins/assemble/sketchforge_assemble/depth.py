@@ -56,9 +56,9 @@ import scipy.sparse.linalg as sla
 from scipy.sparse.csgraph import connected_components
 from scipy.linalg import cho_solve, cholesky, solve_triangular
 
-from sketchforge.geometry import guard
-from sketchforge.geometry.laplacian import laplacian_and_mass
-from sketchforge.geometry.locate import TriangleLocator
+from sketchforge.plugin_api import guard
+from sketchforge.plugin_api import laplacian_and_mass
+from sketchforge.plugin_api import TriangleLocator
 
 from .attach import FRONT, Attachment, lo_chain_index
 from .cache import AssemblyCache, memo
@@ -163,11 +163,11 @@ def build_problem(sheets, offsets, front_off, back_off, attachments: list[Attach
     diag = float(np.linalg.norm(allxy.max(0) - allxy.min(0))) or 1.0
     w = reg / diag**2
     blocks, blocks_m = [], []
-    mesh_keys = [(s.xy, s.F) for s in sheets]
+    mesh_keys = [(s.xy, s.F, s.Fb) for s in sheets]
     for s, mk in zip(sheets, mesh_keys):
         # Every sheet's xy and F passed guard.mesh in the plane once, where they were made
         # (sheet_from_mesh, or insert_chains for a sheet with junctions cut in): not again.
-        L, M = memo(cache, "laplacian", mk, lambda s=s: laplacian_and_mass(s.xy, s.F, checked=True))
+        L, M = memo(cache, "laplacian", mk, lambda s=s: _sheet_operators(s))
         k = 1.0 + (stiffness if s.chains else 0.0)
         blocks.append((k * (-L) + w * M).tocsc())
         blocks_m.append(M)
@@ -211,15 +211,19 @@ def build_problem(sheets, offsets, front_off, back_off, attachments: list[Attach
         glued[key].append(("l", at.lower, c))
 
     polys = [memo(cache, "polygon", (s.xy, s.boundary, s.holes), s.polygon) for s in sheets]
-    # once per sheet, not once per overlapping pair
-    edges = [memo(cache, "edges", (s.F,), lambda s=s: _unique_edges(s.F)) for s in sheets]
-    # point location, once per sheet that overlaps another (shared with the fillets' springs)
-    locators: dict[int, TriangleLocator] = {} if locators is None else locators
+    # once per sheet and face, not once per overlapping pair
+    front_edges = [memo(cache, "edges", (s.F,), lambda s=s: _unique_edges(s.F)) for s in sheets]
+    back_edges = [e if s.Fb is None else memo(cache, "edges", (s.Fb,), lambda s=s: _unique_edges(s.Fb))
+                  for s, e in zip(sheets, front_edges)]
+    # point location, once per sheet face that overlaps another (shared with the fillets' springs)
+    locators: dict = {} if locators is None else locators
 
-    def loc(i):
-        if i not in locators:
-            locators[i] = memo(cache, "locator", mesh_keys[i], lambda: TriangleLocator(sheets[i].xy, sheets[i].F))
-        return locators[i]
+    def loc(i, side):
+        return face_locator(locators, cache, sheets, i, side)
+
+    def off_face(i, side):
+        """1 for the vertices the face does not use: no depth row is written for them."""
+        return (~sheets[i].on_face(side)).astype(np.float64)
 
     n_pairs = 0
     for i in range(len(sheets)):
@@ -236,15 +240,19 @@ def build_problem(sheets, offsets, front_off, back_off, attachments: list[Attach
 
             def rows(i=i, k=k, overlap=overlap, skip=skip):
                 # Columns numbered within the pair (sheet i first, then k), so that the rows of
-                # an unchanged pair are the same wherever the two sheets sit in δ.
+                # an unchanged pair are the same wherever the two sheets sit in δ. Layer i's
+                # front face meets layer k's back face: each side's own triangulation.
                 local = {i: 0, k: sheets[i].n}
                 out = _Rows()
+                fk, fi = sheets[k].face(-1), sheets[i].face(1)
                 # C>=: vertices of the nearer layer k over layer i: back_k(v) - front_i(p) >= gap.
-                _pair_rows(out, sheets, local, k, i, loc(i), skip[k], skip[i], back_off[k], front_off[i], gap, +1)
+                _pair_rows(out, sheets, local, k, i, loc(i, 1), fi, np.maximum(skip[k], off_face(k, -1)), skip[i],
+                           back_off[k], front_off[i], gap, +1)
                 # C<=: vertices of layer i under layer k: back_k(p) - front_i(v) >= gap.
-                _pair_rows(out, sheets, local, i, k, loc(k), skip[i], skip[k], front_off[i], back_off[k], gap, -1)
+                _pair_rows(out, sheets, local, i, k, loc(k, -1), fk, np.maximum(skip[i], off_face(i, 1)), skip[k],
+                           front_off[i], back_off[k], gap, -1)
                 # and where their edges cross
-                _crossing_rows(out, sheets, local, k, i, edges[k], edges[i], overlap, skip[k], skip[i],
+                _crossing_rows(out, sheets, local, k, i, back_edges[k], front_edges[i], overlap, skip[k], skip[i],
                                back_off[k], front_off[i], gap)
                 out.pair = [np.where(pr == i, 0, 1) for pr in out.pair]  # 0: sheet i, 1: sheet k
                 return out
@@ -277,7 +285,29 @@ def build_problem(sheets, offsets, front_off, back_off, attachments: list[Attach
     return P, q, Aeq, beq, Ain, bin_, {"overlapping_pairs": n_pairs, "reg_weight": w, "rest_depth": rest.tolist()}
 
 
-def _pair_rows(rows, sheets, offsets, q, o, loc_o, skip_q, skip_o, off_q, off_o, gap, sign):
+def _sheet_operators(s):
+    """(L, M) of a sheet: its cotangent Laplacian and mass; with one triangulation per face
+    (``Fb``), the mean of the two faces' operators, so every vertex of either face is in the
+    energy and a sheet cut on one face only keeps the operators it always had."""
+    L, M = laplacian_and_mass(s.xy, s.F, checked=True)
+    if s.Fb is None:
+        return L, M
+    Lb, Mb = laplacian_and_mass(s.xy, s.Fb, checked=True)
+    return ((L + Lb) * 0.5).tocsc(), ((M + Mb) * 0.5).tocsc()
+
+
+def face_locator(locators: dict, cache, sheets, i: int, side: int) -> TriangleLocator:
+    """The point locator of face ``side`` of sheet ``i``, made once (keyed by the face's
+    triangulation: a sheet with one triangulation shares it between its faces)."""
+    s = sheets[i]
+    F = s.face(side)
+    key = (i, 1 if F is s.F else -1)
+    if key not in locators:
+        locators[key] = memo(cache, "locator", (s.xy, F), lambda: TriangleLocator(s.xy, F))
+    return locators[key]
+
+
+def _pair_rows(rows, sheets, offsets, q, o, loc_o, F_o, skip_q, skip_o, off_q, off_o, gap, sign):
     """Rows for the vertices of sheet q lying over sheet o.
 
     sign=+1: q is in front (its back face, δ_q - off_q, must clear o's front face δ_o + off_o).
@@ -287,11 +317,11 @@ def _pair_rows(rows, sheets, offsets, q, o, loc_o, skip_q, skip_o, off_q, off_o,
     ``loc_o``: the :class:`~sketchforge.geometry.locate.TriangleLocator` of sheet o (a point on
     its outline, up to round-off, counts as inside).
     """
-    sq, so = sheets[q], sheets[o]
+    sq = sheets[q]
     cand = np.flatnonzero(skip_q == 0)
     face, bary = loc_o.locate(sq.xy[cand])
     inside = face >= 0
-    cand, tri, bary = cand[inside], so.F[face[inside]], bary[inside]
+    cand, tri, bary = cand[inside], F_o[face[inside]], bary[inside]
     if len(cand) == 0:
         return
     bary = np.clip(bary, 0.0, 1.0)  # a point of the triangle (barycentrics may be -1e-10 on edges)
@@ -920,12 +950,21 @@ def solve_without_free_parts(P, q, Aeq, beq, Ain, bin_, offsets, free, rest, met
             er = np.flatnonzero(np.isin(eq_lo, members))
             ir = np.flatnonzero(~touch & np.isin(in_lo, members))
             sub = (P[cols][:, cols], q[cols], Aeq[er][:, cols], beq[er], Ain[ir][:, cols], bin_[ir])
-            if cache is None:
-                if tuple(members) not in local:
-                    local[tuple(members)] = solve_depth(*sub, method=method, pad=pad)
-                xg, gi = local[tuple(members)]
-            else:
-                xg, gi = _memo_solve(cache, sub, method, pad)
+            try:
+                if cache is None:
+                    if tuple(members) not in local:
+                        local[tuple(members)] = solve_depth(*sub, method=method, pad=pad)
+                    xg, gi = local[tuple(members)]
+                else:
+                    xg, gi = _memo_solve(cache, sub, method, pad)
+            except DepthOrderError as exc:
+                squeezed = [int(f) for f in free if not out[f] and f in members]
+                if not squeezed:
+                    raise
+                # a free part drawn where there is no room for it (between two layers glued
+                # together, or onto a twin): it, not the glued model, is what cannot be placed
+                raise DepthOrderError("there is no room for it between the layers it is drawn between; move it "
+                                      "in depth (Page Up / Page Down) or aside", layers=squeezed, free=True) from None
             x[cols] = xg
             info["groups"] += 1
             for key in ("osqp_iterations", "iterations", "osqp_rounds", "osqp_rows", "active"):

@@ -316,3 +316,91 @@ def fairing_is_safe(V: np.ndarray, F: np.ndarray, moved: np.ndarray, h: float) -
     if not np.all(np.isfinite(T)) or np.any(area < 1e-6 * h * h):
         return False
     return len(intersecting_pairs(V, F, among=touched)) == 0
+
+
+def fairing_faults(V: np.ndarray, F: np.ndarray, moved: np.ndarray, h: float) -> np.ndarray:
+    """(k,) int64: the vertices of the triangles that make the faired mesh V (n, 3), F (m, 3)
+    unfit to hand out (:func:`fairing_is_safe`): those with a moved vertex (``moved`` (n,)
+    bool) and an area below 1e-6 h², and both triangles of every crossing pair among the
+    triangles with a moved vertex. Empty when it is fit."""
+    touched = np.flatnonzero(moved[F].any(axis=1))
+    T = V[F[touched]]
+    area = 0.5 * np.linalg.norm(np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0]), axis=1)
+    bad = touched[~np.isfinite(area) | (area < 1e-6 * h * h)]
+    pairs = intersecting_pairs(V, F, among=touched)
+    return np.unique(F[np.r_[bad, pairs.ravel()]].ravel())
+
+
+#: Rounds of :func:`fair_clear`: each keeps back the rings around what the previous one left
+#: crossing.
+CLEAR_ROUNDS = 4
+#: Rings kept back around a crossing per round.
+CLEAR_RINGS = 2
+
+
+def interior_edges(F: np.ndarray):
+    """(edges (e, 2) int64, face a (e,), face b (e,)): every edge of F (m, 3) shared by exactly
+    two triangles, with both (made once per assembled mesh: the fairing moves vertices, never
+    the triangles, so :func:`bent_vertices` reuses it)."""
+    D = F[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
+    key = np.sort(D, axis=1)
+    n = int(F.max(initial=0)) + 1
+    code = key[:, 0] * n + key[:, 1]
+    order = np.argsort(code, kind="stable")
+    c = code[order]
+    start = np.flatnonzero(np.r_[True, c[1:] != c[:-1]])
+    count = np.diff(np.r_[start, len(c)])
+    two = start[count == 2]
+    tri = np.repeat(np.arange(len(F)), 3)
+    return key[order[two]], tri[order[two]], tri[order[two + 1]]
+
+
+def bent_vertices(V: np.ndarray, F: np.ndarray, moved: np.ndarray, A: sp.csr_matrix, limit: float,
+                  edges=None) -> np.ndarray:
+    """(k,) int64: the vertices of the edges, within one ring of the moved vertices (``moved``
+    (n,) bool), that bend by more than ``limit`` degrees in V (n, 3), F (m, 3). ``edges``:
+    :func:`interior_edges` of F, if already made."""
+    E, fa, fb = interior_edges(F) if edges is None else edges
+    near = ring_region(A, np.flatnonzero(moved), 1)
+    sel = near[E[:, 0]] | near[E[:, 1]]
+    if not sel.any():
+        return np.zeros(0, np.int64)
+    E, fa, fb = E[sel], fa[sel], fb[sel]
+    faces = np.unique(np.r_[fa, fb])
+    T = V[F[faces]]
+    nrm = np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0])
+    nrm /= np.maximum(np.linalg.norm(nrm, axis=1, keepdims=True), 1e-300)
+    where = np.searchsorted(faces, fa), np.searchsorted(faces, fb)
+    cos = np.clip(np.einsum("ij,ij->i", nrm[where[0]], nrm[where[1]]), -1.0, 1.0)
+    return np.unique(E[np.degrees(np.arccos(cos)) > limit].ravel())
+
+
+def fair_clear(V: np.ndarray, F: np.ndarray, moved: np.ndarray, A: sp.csr_matrix, h: float,
+               hold: np.ndarray | None = None, bend_limit: float = 180.0, edges=None):
+    """(V2, clear, bent, kept back): :func:`fair_seams` of ``moved``, where it crosses itself
+    again with the crossing's rings kept where they were, up to :data:`CLEAR_ROUNDS` times.
+
+    Why. Where two parts lie close (a far wing pressed against the body's back a gap apart,
+    twin ears side by side), the fairing of one junction moves vertices by more than the gap
+    and the faired surface crosses the other part. Those few rings are better left as the
+    depth solve placed them (which keeps every part clear of the others) than the whole model
+    handed out with plain folds; the rest of the junction is still faired. ``edges``:
+    :func:`interior_edges` of F, if made. ``clear``: no
+    crossing or flat triangle left; ``bent``: (k,) int64 the vertices of the edges the moved
+    vertices reach that bend by more than ``bend_limit`` degrees; ``kept back``: (n,) bool,
+    the vertices held back.
+    """
+    kept = np.zeros(len(V), bool)
+    for _ in range(CLEAR_ROUNDS):
+        now = moved & ~kept
+        V2 = fair_seams(V, F, now, A, hold=hold)
+        faults = fairing_faults(V2, F, now, h)
+        if len(faults) == 0:
+            bent = bent_vertices(V2, F, now, A, bend_limit, edges) if bend_limit < 180.0 else np.zeros(0, np.int64)
+            return V2, True, bent, kept
+        grow = ring_region(A, faults, CLEAR_RINGS) & moved
+        if not (grow & ~kept).any():
+            break
+        kept |= grow
+    return V2, False, np.zeros(0, np.int64), kept
+

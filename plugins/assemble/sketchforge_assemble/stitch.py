@@ -22,7 +22,7 @@ from .attach import FRONT, Attachment, lo_chain_index
 from .sheet import Sheet, has_directed_edge, interior_on_left
 
 
-def chain_sides(sheet: Sheet, chain: np.ndarray):
+def chain_sides(sheet: Sheet, chain: np.ndarray, F: np.ndarray | None = None):
     """Which side of an inserted polyline each incident triangle corner lies on.
 
     Parameters
@@ -30,6 +30,8 @@ def chain_sides(sheet: Sheet, chain: np.ndarray):
     sheet : Sheet
     chain : (c,) int64
         The polyline's vertices in order.
+    F : (m, 3) int64, optional
+        The face's triangulation the chain is cut into (default ``sheet.F``).
 
     Returns
     -------
@@ -40,7 +42,7 @@ def chain_sides(sheet: Sheet, chain: np.ndarray):
     left : (t,) bool
         True if the triangle lies to the left of the chain walked in order.
     """
-    F = sheet.F
+    F = sheet.F if F is None else F
     pos = np.full(sheet.n, -1, np.int64)
     pos[chain[1:-1]] = np.arange(1, len(chain) - 1)
     tri, corner = np.nonzero(pos[F] >= 0)
@@ -114,7 +116,7 @@ def build_mesh(sheets: list[Sheet], attachments: list[Attachment], delta: list[n
     n_v = len(V)
 
     faces_front = [front[i][s.F] for i, s in enumerate(sheets)]
-    faces_back = [back[i][s.F[:, ::-1]] for i, s in enumerate(sheets)]
+    faces_back = [back[i][s.face(-1)[:, ::-1]] for i, s in enumerate(sheets)]
 
     # Slits: re-point the lower face's triangles at the part's junction chains.
     for a_i, at in enumerate(attachments):
@@ -127,7 +129,7 @@ def build_mesh(sheets: list[Sheet], attachments: list[Attachment], delta: list[n
         for e in (0, len(chain) - 1):
             lo_v = (front if at.side == FRONT else back)[at.lower][chain[e]]
             faces[faces == lo_v] = front[at.upper][j[e]]
-        corners, pos, left = chain_sides(lo, chain)
+        corners, pos, left = chain_sides(lo, chain, lo.face(at.side))
         plus = left == interior_on_left(up)  # same side as the part's interior
         # On a front face the "+" lip joins the part's back chain, on a back face its front chain.
         plus_chain = back[at.upper] if at.side == FRONT else front[at.upper]

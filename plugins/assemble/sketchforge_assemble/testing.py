@@ -9,13 +9,12 @@ from pathlib import Path
 
 def document_from(doc):
     """Replay a document's journal headlessly (inflate plugin only) and return the Document."""
-    from sketchforge.document import fileformat as ff
-    from sketchforge.plugins.testing import make_test_host
+    from sketchforge.plugin_api import document_from_dict, load_document, make_host
 
-    host = make_test_host(entry_points=True, allowlist=["inflate"])
+    host = make_host(installed=("inflate",))
     if isinstance(doc, dict):
-        return ff.document_from_dict(doc, host=host, use_snapshot=False)
-    return ff.load(Path(doc), host=host, use_snapshot=False)
+        return document_from_dict(doc, host=host, use_snapshot=False)
+    return load_document(Path(doc), host=host, use_snapshot=False)
 
 
 def layers_from_journal(doc) -> list:

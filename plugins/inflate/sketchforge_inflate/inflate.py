@@ -27,13 +27,13 @@ from typing import Mapping
 
 import numpy as np
 
-from sketchforge.geometry.contour import prepare_holes, prepare_outline, resample_outline, signed_area
-from sketchforge.geometry.fairing import FairingSolver
-from sketchforge.geometry.inflate_params import DEFAULT_INFLATE_PARAMS, check_inflate_params
-from sketchforge.geometry.inflation import inflate_heights
-from sketchforge.geometry.laplacian import laplacian_and_mass
-from sketchforge.geometry.mesh import Mesh
-from sketchforge.geometry.triangulate import MAX_VERTICES, MIN_ANGLE, check_vertex_budget, triangulate_polygon
+from sketchforge.plugin_api import prepare_holes, prepare_outline, resample_outline, signed_area
+from sketchforge.plugin_api import FairingSolver
+from sketchforge.plugin_api import DEFAULT_INFLATE_PARAMS, check_inflate_params
+from sketchforge.plugin_api import inflate_heights
+from sketchforge.plugin_api import laplacian_and_mass
+from sketchforge.plugin_api import Mesh
+from sketchforge.plugin_api import MAX_VERTICES, MIN_ANGLE, check_vertex_budget, triangulate_polygon
 
 #: Default parameters (the same object as the document's defaults).
 DEFAULT_PARAMS = DEFAULT_INFLATE_PARAMS

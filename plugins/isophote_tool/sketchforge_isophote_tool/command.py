@@ -17,7 +17,7 @@ from typing import ClassVar
 
 import numpy as np
 
-from sketchforge.document.commands import (
+from sketchforge.plugin_api import (
     ReplaceLayerCommand,
     parse_field,
     parse_params,
@@ -25,9 +25,9 @@ from sketchforge.document.commands import (
     parse_vector,
     transform_points,
 )
-from sketchforge.document.layer import Layer
-from sketchforge.errors import DocumentFormatError, NothingToDoError, SculptError
-from sketchforge.geometry.contour import MAX_COORDINATE
+from sketchforge.plugin_api import Layer
+from sketchforge.plugin_api import DocumentFormatError, NothingToDoError, SculptError
+from sketchforge.plugin_api import MAX_COORDINATE
 
 
 def _model(doc, name: str):
@@ -35,7 +35,7 @@ def _model(doc, name: str):
     if name in models:
         return models[name]
     if name == "lambertian":
-        from sketchforge.geometry.reflectance import LAMBERTIAN  # imports jax: only when used
+        from sketchforge.plugin_api import LAMBERTIAN  # imports jax: only when used
 
         return LAMBERTIAN
     raise SculptError(f"no reflectance model named {name!r} is installed")

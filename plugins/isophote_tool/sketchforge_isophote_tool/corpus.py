@@ -159,7 +159,7 @@ def random_edit(shape: str, ld, rng: np.random.Generator, kind: str | None = Non
     pick : (2,) float64 or None
         Where to pick (None: a random lit vertex away from the rim, see below).
     """
-    from sketchforge.errors import SculptError
+    from sketchforge.plugin_api import SculptError
 
     from .isophote import picked_isophote
 
@@ -236,7 +236,7 @@ def random_pair(shape: str, ld, rng: np.random.Generator, kinds=KINDS):  # pragm
 
 def draw_pairs(shape: str, mesh, rng, light, pairs: int, kinds=KINDS) -> list:  # pragma: no mutate block
     """``pairs`` random pairs of edits on one layer (:func:`random_pair`)."""
-    from sketchforge.geometry.reflectance import LAMBERTIAN
+    from sketchforge.plugin_api import LAMBERTIAN
 
     from .layerdata import layer_data
 
@@ -284,6 +284,11 @@ class Outcome:
     reach : float
         Distance from the stroke to the farthest vertex whose height changed, in edge lengths
         (nan unless ok): how local the edit stayed.
+    bounded : float
+        0, or the largest height change of the solver's full answer (fraction of the peak) when
+        it was over the host's bound and the edit was scaled down (nan unless ok).
+    cpu : float
+        CPU time of the edit (this process, all threads), seconds.
     """
 
     shape: str
@@ -300,6 +305,8 @@ class Outcome:
     beside: float = np.nan
     changed: float = np.nan
     reach: float = np.nan
+    bounded: float = np.nan
+    cpu: float = np.nan
 
     @property
     def lands(self) -> bool:
@@ -329,7 +336,7 @@ def corpus_layers(shapes=SHAPES, per_shape: int = 4, seed: int = 0, resolution: 
 def draw_edits(shape: str, mesh, rng, light, edits: int, kinds=KINDS) -> list[Edit]:  # pragma: no mutate block
     """``edits`` random edits on one layer (kinds in turn), drawn before any runs: so two
     solvers can be given the very same edits."""
-    from sketchforge.geometry.reflectance import LAMBERTIAN
+    from sketchforge.plugin_api import LAMBERTIAN
 
     from .layerdata import layer_data
 
@@ -350,29 +357,30 @@ def run_edit(mesh, light, e: Edit, solver=None, params=None) -> Outcome:
 
     import shapely
 
-    from sketchforge.errors import SketchforgeError
-    from sketchforge.geometry.reflectance import LAMBERTIAN
+    from sketchforge.plugin_api import SketchforgeError
+    from sketchforge.plugin_api import LAMBERTIAN
 
     from .fidelity import beside_distance, isophote_lines
     from .layerdata import layer_data, vertex_shading
     from .pipeline import sculpt
 
     ld = layer_data(mesh, light, LAMBERTIAN)
-    t = time.perf_counter()
+    t, c = time.perf_counter(), time.process_time()
     try:
         r = sculpt(mesh, light, e.pick, e.band, e.stroke, solver=solver, params=params)
     except SketchforgeError as exc:
-        return Outcome(e.shape, e.kind, e.move, "refused", str(exc), np.nan, np.nan, np.nan, time.perf_counter() - t, mesh.n_vertices)
+        return Outcome(e.shape, e.kind, e.move, "refused", str(exc), np.nan, np.nan, np.nan, time.perf_counter() - t,
+                       mesh.n_vertices, cpu=time.process_time() - c)
     except Exception as exc:  # noqa: BLE001  (what the corpus is for: finding these)
         return Outcome(e.shape, e.kind, e.move, "crash", repr(exc), np.nan, np.nan, np.nan, time.perf_counter() - t, mesh.n_vertices)
-    seconds = time.perf_counter() - t
+    seconds, cpu = time.perf_counter() - t, time.process_time() - c
     max_dz = float(np.abs(r.mesh.V[:, 2] - mesh.V[:, 2]).max() / mesh.V[:, 2].max())
     E_new, _, _ = vertex_shading(ld.planar, r.mesh.V[:, 2], light, LAMBERTIAN)
     beside = beside_distance(isophote_lines(ld.planar, E_new, r.c), r.stroke, 0.5 * e.band, ld.h) / ld.h
     moved = np.nonzero(r.changed)[0]
     reach = float(shapely.distance(shapely.points(ld.V2[moved]), r.stroke).max()) / ld.h if len(moved) else 0.0
     return Outcome(e.shape, e.kind, e.move, "ok", "", r.before / ld.h, r.after / ld.h, r.fraction, seconds,
-                   mesh.n_vertices, max_dz, beside, float(r.changed.mean()), reach)
+                   mesh.n_vertices, max_dz, beside, float(r.changed.mean()), reach, r.bounded_from, cpu)
 
 
 def run_edits(shape: str, mesh, rng, light, edits: int, kinds=KINDS, solver=None, params=None) -> list[Outcome]:
@@ -392,6 +400,87 @@ def refusal_reason(message: str) -> str:
         if key in message:
             return label
     return message.split(":")[0][:60]
+
+
+# --- chains of edits ----------------------------------------------------------------------------
+
+#: Edges this many edge lengths or more from the outline are "interior" for the crease measures
+#: (issue 36: the rim's own steepness is not a crease).
+INTERIOR_EDGES = 3.0
+
+
+def _interior_edges(pd) -> tuple[np.ndarray, np.ndarray]:
+    """Edges (e, 2) between two triangles, both ends ``INTERIOR_EDGES`` h or more from the
+    outline, and their two triangles (e, 2)."""
+    F = pd.F
+    m = len(F)
+    e = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
+    face = np.tile(np.arange(m), 3)
+    key = np.sort(e, axis=1)
+    order = np.lexsort((key[:, 1], key[:, 0]))
+    key, face = key[order], face[order]
+    twin = np.nonzero((key[1:] == key[:-1]).all(axis=1))[0]
+    edges, faces = key[twin], np.column_stack([face[twin], face[twin + 1]])
+    inner = (pd.d_rim[edges] >= INTERIOR_EDGES * pd.h).all(axis=1)
+    return edges[inner], faces[inner]
+
+
+def _face_normals(V: np.ndarray, F: np.ndarray) -> np.ndarray:
+    n = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
+    return n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
+
+
+def folded_faces(mesh) -> np.ndarray:
+    """Triangles (m,) bool within the rim margin whose surface falls toward the inside: the
+    height decreases along the direction away from the nearest point of the outline (a fold;
+    an inflated layer rises from its rim)."""
+    from .layerdata import planar_data
+
+    pd = planar_data(mesh)
+    F = pd.F
+    C = pd.V2[F].mean(axis=1)
+    d = pd.rim_distance(C)
+    near = d < pd.margin_at(C)
+    # The inward direction: the gradient of the distance to the rim, by central differences.
+    eps = 0.25 * pd.h
+    gx = pd.rim_distance(C + [eps, 0.0]) - pd.rim_distance(C - [eps, 0.0])
+    gy = pd.rim_distance(C + [0.0, eps]) - pd.rim_distance(C - [0.0, eps])
+    n = _face_normals(mesh.V, F)  # (nx, ny, nz): the height gradient is −(nx, ny) / nz
+    rising = -(n[:, 0] * gx + n[:, 1] * gy)
+    # A sure inward direction only: at a medial point (two rims equally near) the gradient of
+    # the distance vanishes and says nothing.
+    sure = np.hypot(gx, gy) > 1.0 * eps
+    return near & sure & (rising < 0.0)
+
+
+def chain_measures(fresh, edited, light) -> dict:
+    """How a chain of edits left a layer, against the fresh layer (issue 36, point 1).
+
+    Returns
+    -------
+    dict
+        ``dihedral`` and ``dihedral_fresh``: the largest angle (degrees) between the normals of
+        two triangles sharing an interior edge (both ends ≥ 3 edge lengths from the outline);
+        ``jump`` and ``jump_fresh``: the largest shading jump across such an edge; ``folds``:
+        triangles near the rim folded after the chain that were not before
+        (:func:`folded_faces`).
+    """
+    from sketchforge.plugin_api import LAMBERTIAN
+
+    from .layerdata import layer_data
+
+    out = {}
+    for name, mesh in (("fresh", fresh), ("edited", edited)):
+        ld = layer_data(mesh, light, LAMBERTIAN)
+        edges, faces = _interior_edges(ld.planar)
+        n = _face_normals(mesh.V, ld.planar.F)
+        cos = np.clip(np.einsum("ij,ij->i", n[faces[:, 0]], n[faces[:, 1]]), -1.0, 1.0)
+        dihedral = float(np.degrees(np.arccos(cos)).max(initial=0.0))
+        jump = float(np.abs(ld.E[edges[:, 0]] - ld.E[edges[:, 1]]).max(initial=0.0))
+        suffix = "_fresh" if name == "fresh" else ""
+        out["dihedral" + suffix], out["jump" + suffix] = dihedral, jump
+    out["folds"] = int((folded_faces(edited) & ~folded_faces(fresh)).sum())
+    return out
 
 
 @dataclass
@@ -444,7 +533,7 @@ def _pair_distances(ld0, first, second, z):
     """Each stroke's distance (edge lengths) to its own isophote E = c_i of heights ``z``, over
     the samples a single edit of it would honour on the layer before the pair (c_i, band and
     samples from that layer), and the distances before."""
-    from sketchforge.geometry.band import band_radius
+    from sketchforge.plugin_api import band_radius
 
     from .fidelity import isophote_lines, mean_distance
     from .layerdata import vertex_shading
@@ -464,8 +553,8 @@ def run_pair(mesh, light, pair, solver=None, params=None) -> tuple[PairOutcome, 
     (``sculpt`` twice, the second on the first's result); measure both the same way."""
     import time
 
-    from sketchforge.errors import SketchforgeError
-    from sketchforge.geometry.reflectance import LAMBERTIAN
+    from sketchforge.plugin_api import SketchforgeError
+    from sketchforge.plugin_api import LAMBERTIAN
 
     from .joint import sculpt_many
     from .layerdata import layer_data

@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 import shapely
 
-from sketchforge.geometry.isophotes import isophotes
+from sketchforge.plugin_api import isophotes
 
 from .layerdata import PlanarData
 

@@ -19,9 +19,9 @@ import time
 
 import numpy as np
 
-from sketchforge.errors import ParameterError
-from sketchforge.plugins.sculpt_problem import SculptProblem, SculptSolution
-from sketchforge.plugins.solvers import SculptSolver, number, validate_params
+from sketchforge.plugin_api import ParameterError, quote
+from sketchforge.plugin_api import SculptProblem, SculptSolution
+from sketchforge.plugin_api import SculptSolver, declare_params, number, validate_params
 
 from .heights import GN_STEPS, solve_heights
 
@@ -41,13 +41,18 @@ DEFAULT_PARAMS = {
     "joint_stroke_weight": 100.0,
 }
 
+#: Every range is finite (issue 38: 1e308 passed, and the height solve printed an overflow
+#: warning before failing). Weights beyond 1e6 of the data term leave the solve nothing to fit
+#: (1e308 made its matrix infinite); ``ring_weight`` blends towards the edit zone's 1; lengths
+#: stop at the drawing's range. The dearest accepted set (50 steps, every weight and length at
+#: its top) edits a 5k-vertex layer in under a second (benchmarks/bench_param_extremes.py).
 _CHECKS = {
-    "smoothness": number("smoothness", 0.0),
-    "ring_weight": number("ring_weight", 0.0),
-    "stroke_weight": number("stroke_weight", 0.0),
-    "joint_stroke_weight": number("joint_stroke_weight", 0.0),
-    "ring": number("ring", 0.0, optional=True),
-    "rim_margin": number("rim_margin", 0.0, optional=True),
+    "smoothness": number("smoothness", 0.0, 1e6),
+    "ring_weight": number("ring_weight", 0.0, 1.0),
+    "stroke_weight": number("stroke_weight", 0.0, 1e6),
+    "joint_stroke_weight": number("joint_stroke_weight", 0.0, 1e6),
+    "ring": number("ring", 0.0, 1e9, optional=True),
+    "rim_margin": number("rim_margin", 0.0, 1e9, optional=True),
 }
 
 #: Bumped when the same edit would give other heights.
@@ -59,7 +64,7 @@ def check_params(params) -> dict:
     out = validate_params(params, DEFAULT_PARAMS, _CHECKS)
     steps = out["steps"]
     if not (isinstance(steps, (int, np.integer)) and not isinstance(steps, bool) and 1 <= steps <= 50):
-        raise ParameterError(f"'steps' must be an integer in 1..50, got {steps!r}")
+        raise ParameterError(f"'steps' must be an integer in 1..50, got {quote(steps)}")
     out["steps"] = int(steps)
     return out
 
@@ -115,10 +120,22 @@ def solve(problem: SculptProblem, params: dict) -> SculptSolution:
     return SculptSolution(dz, dE, info={"reach": r + ring, "timings": T})
 
 
+#: The form the app shows: the checks above, and the steps ``check_params`` checks by hand.
+FORM = {**_CHECKS, "steps": number("steps", 1, 50, integer=True)}
+HELP = {
+    "smoothness": "α: weight of the squared Laplacian of the height change, in units of h² (h: the edge length)",
+    "ring": "Width of the ring where heights return to the old ones, in edge lengths (automatic: rim margin + 2h)",
+    "ring_weight": "Data weight at the outer edge of the ring (1 in the edit zone)",
+    "rim_margin": "Drawing units kept from the outline (automatic: max(3h, 0.12·size), less on thin parts)",
+    "steps": "Gauss–Newton steps",
+    "stroke_weight": "Weight of E = c along the stroke in the height solve",
+    "joint_stroke_weight": "The stroke weight of an edit of several isophotes",
+}
+
 GAUSS_NEWTON = SculptSolver(
     "gauss_newton",
     solve,
-    check_params=check_params,
+    check_params=declare_params(check_params, DEFAULT_PARAMS, FORM, HELP),
     version=VERSION,
     label="Gauss–Newton (local)",
     description="R(p(z), q(z)) = E + δE fitted on the layer's vertices, heights changed only near the stroke",

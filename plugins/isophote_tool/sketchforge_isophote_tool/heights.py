@@ -37,10 +37,10 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from sketchforge.errors import SolverError
-from sketchforge.geometry.dirichlet import DirichletSolver
-from sketchforge.geometry.heightfield import SlopeLinearisation
-from sketchforge.geometry.reflectance import evaluate_pq
+from sketchforge.plugin_api import SolverError
+from sketchforge.plugin_api import DirichletSolver
+from sketchforge.plugin_api import SlopeLinearisation
+from sketchforge.plugin_api import evaluate_pq
 
 from .layerdata import LayerData
 

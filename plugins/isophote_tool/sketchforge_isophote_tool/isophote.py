@@ -13,9 +13,9 @@ from __future__ import annotations
 import numpy as np
 import shapely
 
-from sketchforge.geometry import guard
-from sketchforge.geometry.band import band
-from sketchforge.geometry.isophotes import isophotes, isovalue_at, select_isophote
+from sketchforge.plugin_api import guard
+from sketchforge.plugin_api import band
+from sketchforge.plugin_api import isophotes, isovalue_at, select_isophote
 
 from .layerdata import LayerData
 

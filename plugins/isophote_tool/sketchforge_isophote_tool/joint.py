@@ -6,21 +6,26 @@ edit pulled the first isophote back off its stroke (1.15 edge lengths from it, a
 for a single edit). Here every stroke enters one solve:
 
 1. each stroke as a single edit would take it (:func:`.pipeline._prepare`): its pick, isovalue
-   c_i, isophote, band, the stroke cleaned and clipped to its band, how far it is now;
+   c_i, isophote, band, the stroke cleaned and clipped to its band, how far it is now; a band
+   narrower than one edge length, or a stroke whose moving part lies only in the rim margin,
+   is refused as a single edit would refuse it, naming the stroke;
 2. strokes that contradict each other are refused in one line: two strokes of isophotes of
    different values that cross (no surface has two brightnesses at one point);
 3. one problem for the solver (a :class:`~sketchforge.plugins.sculpt_problem.SculptProblem`
    with ``parts``, one per isophote): the union of the bands, every stroke's samples, each
    asking for its own value (``sample_values``); only solvers with ``several_isophotes`` get
    one, any other is refused in one line naming it;
-4. the host's checks per stroke, as for a single edit: heights >= 0 and 0 on the rim, and
-   never worse, per stroke with today's half-and-quarter rule: when a stroke's isophote would
-   end farther from it than it started, the other strokes are asked for half, then a quarter
-   of their change (their samples ask for E + f·(c_i − E)) and the edit is solved again; then
-   that stroke itself for half, then a quarter; if it is still worse the edit is refused,
-   naming that stroke. (Measured on the corpus: asking the others for less saved half of the
-   pairs the full solve could not take, asking the stroke itself for less none: the others'
-   change is what pulls it off.)
+4. the host's checks per stroke, as for a single edit: heights >= 0 and 0 on the rim; a joint
+   change of more than :data:`.pipeline.MAX_CHANGE` of the peak scaled down to it (each
+   solve's); and never worse, per stroke with today's half-and-quarter rule: when a stroke's
+   isophote would end farther from it than it started (no tolerance: a stroke within the
+   shading's resolution of its isophote may not end farther either), the other strokes are
+   asked for half, then a quarter of their change (their samples ask for E + f·(c_i − E)) and
+   the edit is solved again; then that stroke itself for half, then a quarter; if it is still
+   worse the edit is refused, naming that stroke (and the bound's figure when the change was
+   scaled down). (Measured on the corpus: asking the others for less saved half of the pairs
+   the full solve could not take, asking the stroke itself for less none: the others' change
+   is what pulls it off.)
 
 An edit of one stroke is exactly :func:`.pipeline.sculpt` (bit for bit).
 """
@@ -34,20 +39,23 @@ import numpy as np
 import scipy.sparse as sp
 import shapely
 
-from sketchforge.geometry.band import band_radius
-from sketchforge.geometry.reflectance import LAMBERTIAN
+from sketchforge.plugin_api import band_radius
+from sketchforge.plugin_api import LAMBERTIAN
 from sketchforge.plugin_api import Mesh, NothingToDoError, ReflectanceModel, SculptError, SculptProblem, SolverError
 
 from .layerdata import layer_data
 from .pipeline import (
     FALLBACK_FRACTIONS,
+    MAX_CHANGE,
     RESOLUTION_EDGES,
     HostData,
     SculptResult,
     _default_solver,
     _prepare,
     _run_solver,
+    bound_note,
     build_problem,
+    change_bound,
     sculpt,
     solver_params,
 )
@@ -80,8 +88,11 @@ class JointSculptResult:
     changed : (n,) bool
     parts : list of SculptResult
         One per stroke, in order: its isovalue ``c``, ``isophote``, ``band``, ``stroke``,
-        ``before`` / ``after`` (drawing units) and ``fraction`` (1, or 0.5 / 0.25 when only
-        part of that stroke's change was kept); all share ``mesh``.
+        ``before`` / ``after`` (drawing units), ``fraction`` (1, or 0.5 / 0.25 when only part
+        of that stroke's change was asked for, times the bound's scale when the joint change
+        was scaled down) and ``bounded_from`` (as for a single edit: 0, or the largest height
+        change of the last solve's full answer, a fraction of the peak, when it was over
+        :data:`.pipeline.MAX_CHANGE`); all share ``mesh``.
     timings : dict[str, float]
     solver : str
     rounds : int
@@ -126,6 +137,12 @@ class JointSculptResult:
     def characteristics(self, n: int = 15) -> list:
         return [line for p in self.parts for line in p.characteristics(max(3, n // len(self.parts)))]
 
+    @property
+    def bounded_from(self) -> float:
+        """0, or the largest height change of the full joint answer (fraction of the peak) when
+        it was over :data:`.pipeline.MAX_CHANGE` and the edit was scaled down."""
+        return self.parts[0].bounded_from
+
     def describe(self) -> str:
         """One line: how far each isophote was and is from its stroke."""
         bits = []
@@ -133,6 +150,9 @@ class JointSculptResult:
             part = "" if p.fraction == 1.0 else f" ({p.fraction:.0%} of its change)"
             bits.append(f"{i}: {p.before / p.h:.1f} → {p.after / p.h:.1f}{part}")
         text = f"{len(self.parts)} isophotes, edge lengths from their strokes " + ", ".join(bits)
+        if self.bounded_from:
+            text += (f"; the whole change would have changed heights by {self.bounded_from:.0%} of the peak, "
+                     f"at most {MAX_CHANGE:.0%} is allowed")
         ignored = [(i, p) for i, p in enumerate(self.parts, start=1) if p.ignored_length >= 0.5 * p.h]
         if ignored:
             text += "; outside their bands and ignored: " + ", ".join(
@@ -199,6 +219,30 @@ def joint_problem(ld, parts: list[SculptProblem], fractions: list[float]) -> Scu
     )
 
 
+def _refuse(prepared: list, afters: list[float], worse: list[int], h: float, bound: str) -> None:
+    """Refuse a joint edit whose fallbacks are spent with strokes ``worse`` still ending farther
+    from their isophotes (``afters``, drawing units): as already done when every stroke lies
+    within the shading's resolution of its isophote (a single edit's rule), else naming the
+    stroke that lost most, with ``bound`` (the bound's figure, or "")."""
+    tolerance = RESOLUTION_EDGES * h
+    if all(e.before <= tolerance for e in prepared):
+        raise NothingToDoError("every stroke lies on its isophote already (within what the shading resolves), and "
+                               "this edit would leave one farther from it: nothing to change")
+    i = max(worse, key=lambda k: afters[k] - prepared[k].before)
+    e = prepared[i]
+    if e.before <= tolerance:
+        raise SculptError(
+            f"stroke {i + 1} (isophote n·l = {e.c:.3f}) lies on its isophote already ({e.before / h:.2f} edge lengths "
+            f"from it), and every version of the edit left it farther ({afters[i] / h:.2f}){bound}; draw the other "
+            "strokes further from it, or apply them without it"
+        )
+    raise SculptError(
+        f"stroke {i + 1} (isophote n·l = {e.c:.3f}): every version of the edit left its isophote "
+        f"farther from it ({afters[i] / h:.1f} edge lengths) than it was ({e.before / h:.1f}){bound}; draw it "
+        "closer to the old isophote or further from the rim, or apply it on its own"
+    )
+
+
 def sculpt_many(
     mesh: Mesh,
     light,
@@ -228,7 +272,8 @@ def sculpt_many(
         edit would refuse (named: "stroke 2: ..."); strokes that cross with different values;
         a stroke whose isophote every version of the edit leaves farther from it.
     NothingToDoError
-        Every stroke lies on its isophote already.
+        Every stroke lies on its isophote already (within the shading's resolution, and every
+        version of the edit leaves one farther; or the edit changes nothing).
     """
     solver = _default_solver() if solver is None else solver
     edits = list(edits)
@@ -268,10 +313,13 @@ def sculpt_many(
         problem = joint_problem(ld, parts, fractions)
         solution, dz = _run_solver(solver, problem, full, provider, len(pd.V2))
         T[f"solve.{rounds}"] = time.perf_counter() - t
-        z = np.maximum(ld.z + dz, 0.0)  # heights >= 0 by contract
+        largest, scale = change_bound(ld, dz)
+        z = np.maximum(ld.z + scale * dz, 0.0)  # heights >= 0 by contract
         z[pd.is_contour] = 0.0
         afters = [p.distance_after(z) for p in parts]
-        worse = [i for i, (e, a) in enumerate(zip(prepared, afters)) if a > max(e.before, RESOLUTION_EDGES * h)]
+        # No tolerance (as for a single edit): a stroke within the shading's resolution of its
+        # isophote may not end farther from it either.
+        worse = [i for i, (e, a) in enumerate(zip(prepared, afters)) if a > e.before]
         if not never_worse or not worse:
             break
         # A stroke whose isophote ends farther than it started is mostly pulled off by the
@@ -281,12 +329,7 @@ def sculpt_many(
         others = [i for i in range(len(parts)) if i not in worse and fractions[i] != steps[-1]]
         mine = [i for i in worse if fractions[i] != steps[-1]]
         if rounds >= MAX_ROUNDS or not (others or mine):
-            i = max(worse, key=lambda k: afters[k] - prepared[k].before)
-            raise SculptError(
-                f"stroke {i + 1} (isophote n·l = {prepared[i].c:.3f}): every version of the edit left its isophote "
-                f"farther from it ({afters[i] / h:.1f} edge lengths) than it was ({prepared[i].before / h:.1f}); draw it "
-                "closer to the old isophote or further from the rim, or apply it on its own"
-            )
+            _refuse(prepared, afters, worse, h, bound_note(largest) if scale < 1.0 else "")
         for i in others or mine:
             fractions[i] = steps[steps.index(fractions[i]) + 1]
     if not np.isfinite(z).all():
@@ -298,9 +341,11 @@ def sculpt_many(
     T["total"] = time.perf_counter() - t0
     dE = np.zeros(len(z)) if solution.dE is None else np.asarray(solution.dE, dtype=np.float64)
     reach = float(solution.info.get("reach", max(e.radius for e in prepared)))
+    bounded = largest if scale < 1.0 else 0.0
     results = [
-        SculptResult(new_mesh, changed, e.c, e.iso, e.band, e.stroke_geom, dE, e.before, a, f, T, full, ld, e.radius, reach,
-                     solver.name, solution, e.ignored, e.ignored / e.drawn if e.drawn > 0 else 0.0)
+        SculptResult(new_mesh, changed, e.c, e.iso, e.band, e.stroke_geom, dE, e.before, a, f * scale, T, full, ld,
+                     e.radius, reach, solver.name, solution, e.ignored, e.ignored / e.drawn if e.drawn > 0 else 0.0,
+                     bounded)
         for e, a, f in zip(prepared, afters, fractions)
     ]
     return JointSculptResult(new_mesh, changed, results, T, solver.name, rounds)

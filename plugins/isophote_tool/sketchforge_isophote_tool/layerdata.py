@@ -21,15 +21,15 @@ import scipy.sparse as sp
 import shapely
 from scipy.spatial import cKDTree
 
-from sketchforge.geometry import guard
-from sketchforge.geometry.fairing import squared_laplacian_matrix
-from sketchforge.geometry.heightfield import slopes_from_heights
-from sketchforge.geometry.intensity import gradient_operators
-from sketchforge.geometry.laplacian import laplacian_and_mass
-from sketchforge.geometry.locate import TriangleLocator
-from sketchforge.geometry.mesh import Mesh
-from sketchforge.geometry.reflectance import evaluate_pq
-from sketchforge.plugins.registry import ReflectanceModel
+from sketchforge.plugin_api import guard
+from sketchforge.plugin_api import squared_laplacian_matrix
+from sketchforge.plugin_api import slopes_from_heights
+from sketchforge.plugin_api import gradient_operators
+from sketchforge.plugin_api import laplacian_and_mass
+from sketchforge.plugin_api import TriangleLocator
+from sketchforge.plugin_api import Mesh
+from sketchforge.plugin_api import evaluate_pq
+from sketchforge.plugin_api import ReflectanceModel
 from sketchforge.plugin_api import LRUCache, array_key
 
 #: Default rim margin: max(RIM_EDGES · h, RIM_SIZE · size), size = 2·area/perimeter.

@@ -14,7 +14,11 @@ to the named solver (``sketchforge_sculpt_solvers``; the built-in ``gauss_newton
 4. the host's checks, the same for every solver: heights >= 0 and 0 on the rim, finite, and
    never worse: if the isophote ends farther from the stroke than it started, the best
    partial edit is kept (half, a quarter of the change); if none is closer, the edit is
-   refused with what to draw instead (:mod:`.fidelity`).
+   refused with what to draw instead (:mod:`.fidelity`), or as already done when the stroke
+   lies within the shading's resolution of the isophote; a change of more than
+   :data:`MAX_CHANGE` of the peak is scaled down to it first. A band narrower than one edge
+   length, and a stroke whose moving part lies only in the rim margin, are refused before
+   any solve.
 """
 
 from __future__ import annotations
@@ -26,13 +30,13 @@ import numpy as np
 import shapely
 from scipy.spatial import cKDTree
 
-from sketchforge.errors import NothingToDoError, ParameterError, PluginError, SculptError, SketchforgeError, SolverError
-from sketchforge.geometry.band import band_radius
-from sketchforge.geometry.mesh import Mesh
-from sketchforge.geometry.reflectance import LAMBERTIAN
+from sketchforge.plugin_api import NothingToDoError, ParameterError, PluginError, SculptError, SketchforgeError, SolverError
+from sketchforge.plugin_api import band_radius
+from sketchforge.plugin_api import Mesh
+from sketchforge.plugin_api import LAMBERTIAN
+from sketchforge.plugin_api import ReflectanceModel
+from sketchforge.plugin_api import SculptProblem, SculptSolution
 from sketchforge.plugin_api import LRUCache
-from sketchforge.plugins.registry import ReflectanceModel
-from sketchforge.plugins.sculpt_problem import SculptProblem, SculptSolution
 
 from .fidelity import honoured_samples, isophote_lines, mean_distance
 from .isophote import band_around, picked_isophote
@@ -44,8 +48,13 @@ from .stroke import clip_to_band, prepare_stroke, resample_polyline, stroke_samp
 #: stroke than before.
 FALLBACK_FRACTIONS = (0.5, 0.25)
 #: Distances below this many edge lengths are below what first-order vertex normals resolve:
-#: an edit that ends within it of the stroke is not "farther", whatever it started from.
+#: a stroke within it of the isophote asks for no change where it runs (its "moving part" is
+#: the rest).
 RESOLUTION_EDGES = 0.25
+#: The largest height change an edit may make, as a fraction of the layer's peak: a larger one
+#: is scaled down to it (and then halved, quartered, as any edit that overshoots), and refused
+#: with the figure if no scaled version brings the isophote closer.
+MAX_CHANGE = 0.6
 
 
 @dataclass
@@ -89,6 +98,9 @@ class SculptResult:
         Length (drawing units) and share of the cleaned stroke that was not used: outside the
         band, or in pieces inside it shorter than half an edge length. The person is told
         (:meth:`describe`), since drawing outside the band changes nothing there.
+    bounded_from : float
+        0, or the largest height change of the solver's full answer as a fraction of the peak
+        when it was over :data:`MAX_CHANGE` and the edit was scaled down (the person is told).
     """
 
     mesh: Mesh
@@ -110,6 +122,7 @@ class SculptResult:
     solution: object = field(default=None, repr=False)
     ignored_length: float = 0.0
     ignored_fraction: float = 0.0
+    bounded_from: float = 0.0
 
     @property
     def options(self) -> dict:
@@ -145,7 +158,11 @@ class SculptResult:
     def describe(self) -> str:
         """One line for the person: how far the isophote was and is from the stroke, and what
         of the stroke was ignored."""
-        part = "" if self.fraction == 1.0 else f" ({self.fraction:.0%} of the change: the whole of it overshot)"
+        if self.bounded_from:
+            part = (f" ({self.fraction:.0%} of the change: the whole of it would have changed heights by "
+                    f"{self.bounded_from:.0%} of the peak, at most {MAX_CHANGE:.0%} is allowed)")
+        else:
+            part = "" if self.fraction == 1.0 else f" ({self.fraction:.0%} of the change: the whole of it overshot)"
         text = f"isophote {self.before / self.h:.1f} → {self.after / self.h:.1f} edge lengths from the stroke{part}"
         # Less than half an edge length left out is the clipping's own rounding at the ends.
         if self.ignored_length >= 0.5 * self.h:
@@ -226,8 +243,8 @@ def _slopes(ld: LayerData):
     """(p, q, E, R_p, R_q) at the vertices of a layer, once per LayerData."""
     got = getattr(ld, "_slopes_cache", None)
     if got is None:
-        from sketchforge.geometry.heightfield import slopes_from_heights
-        from sketchforge.geometry.reflectance import evaluate_pq
+        from sketchforge.plugin_api import slopes_from_heights
+        from sketchforge.plugin_api import evaluate_pq
 
         pd = ld.planar
         p, q = slopes_from_heights(pd.Gp, pd.Gq, ld.z)
@@ -235,6 +252,20 @@ def _slopes(ld: LayerData):
         got = (p, q, E, Rp, Rq)
         ld._slopes_cache = got
     return got
+
+
+def _moves_only_in_margin(pd, pieces: list[np.ndarray], iso, honoured: np.ndarray, h: float) -> bool:
+    """Whether the stroke asks for a move only inside the rim margin: outside it, where an
+    isophote is promised, it runs within the resolution of the isophote (mean distance), while
+    inside the margin some of it is farther. Such a stroke is refused like one drawn entirely
+    there (it once got "lies on the isophote already" from one solver, and from the other a
+    change of 9% of the peak that barely moved the isophote). The stroke's own smoothing
+    carries a little of the move out of the margin, hence the mean, not each point."""
+    if mean_distance(honoured, iso) > RESOLUTION_EDGES * h:
+        return False
+    P = np.concatenate(pieces)
+    off = shapely.distance(shapely.points(P), iso) > RESOLUTION_EDGES * h
+    return bool(np.any(off & (pd.rim_distance(P) < pd.margin_at(P))))
 
 
 def build_problem(ld: LayerData, c: float, pick, iso, band_geom, in_band: np.ndarray, r: float, pieces: list,
@@ -291,8 +322,14 @@ class PreparedStroke:
 
 def _prepare(ld: LayerData, pick, r: float, stroke) -> PreparedStroke:
     """Pick, band and stroke of one isophote edit on ``ld`` (band radius ``r``). Raises
-    SculptError for a stroke with no part inside the band or only within the rim margin."""
+    SculptError for a band narrower than one edge length, a stroke with no part inside the band,
+    or one whose moving part lies only within the rim margin."""
     pd, h = ld.planar, ld.h
+    if r < h:
+        # Narrower than one edge length the band holds no vertex to change across it: the edit
+        # would do nothing visible.
+        raise SculptError(f"the band ({r:.3g}) is narrower than one edge length of this layer ({h:.3g}): "
+                          f"widen it to at least {h:.3g}")
     c, iso, band_geom, in_band = _pick(ld, pick, r)
     cleaned = prepare_stroke(stroke, h)
     pieces = clip_to_band(cleaned, band_geom, h)
@@ -301,7 +338,7 @@ def _prepare(ld: LayerData, pick, r: float, stroke) -> PreparedStroke:
     ignored = max(0.0, drawn - used)
     stroke_geom = shapely.MultiLineString(pieces) if len(pieces) > 1 else shapely.LineString(pieces[0])
     honoured = honoured_samples(pd, pieces, band_geom)
-    if len(honoured) == 0:
+    if len(honoured) == 0 or _moves_only_in_margin(pd, pieces, iso, honoured, h):
         local = float(np.max(np.minimum(pd.margin_at(np.concatenate(pieces)), pd.margin)))
         raise SculptError(
             f"the stroke runs within the rim margin ({local:.2g} from the outline here), where the surface "
@@ -329,6 +366,19 @@ def _run_solver(solver, problem: SculptProblem, full: dict, provider, n: int):
     if not np.isfinite(dz).all():
         raise SolverError(f"the sculpt solver {solver.name!r} produced non-finite heights; the layer was left unchanged")
     return solution, dz
+
+
+def change_bound(ld: LayerData, dz: np.ndarray) -> tuple[float, float]:
+    """The largest height change of ``dz`` (n,) off the rim as a fraction of the layer's peak,
+    and the scale (<= 1) that brings it to :data:`MAX_CHANGE` (1 when it is within)."""
+    peak = float(ld.z.max())
+    largest = float(np.abs(np.where(ld.planar.is_contour, 0.0, dz)).max(initial=0.0)) / max(peak, 1e-300)
+    return largest, (min(1.0, MAX_CHANGE / largest) if largest > 0.0 else 1.0)
+
+
+def bound_note(largest: float) -> str:
+    """The figure a refusal of a scaled-down edit gives (``largest``: see :func:`change_bound`)."""
+    return f" (the full edit would change heights by {largest:.0%} of the peak; at most {MAX_CHANGE:.0%} is applied)"
 
 
 def _default_solver():
@@ -364,7 +414,7 @@ def sculpt(
     mesh : Mesh
         The layer's front surface (z >= 0, z = 0 on ``mesh.boundary``).
     light : (3,) float64
-        Unit light direction in the drawing plane (z = 0).
+        Unit direction towards the light (z >= 0).
     pick : (2,) float64
         A point on the layer; its shading (0 in shadow) is the isovalue c.
     band : float
@@ -425,20 +475,28 @@ def sculpt(
     T["solve"] = time.perf_counter() - t
 
     t = time.perf_counter()
-    fraction, z, after = 1.0, None, np.inf
-    for frac in (1.0,) + (FALLBACK_FRACTIONS if never_worse else ()):
+    largest, scale = change_bound(ld, dz)
+    fraction, z, after = scale, None, np.inf
+    for frac in (scale,) + (tuple(scale * f for f in FALLBACK_FRACTIONS) if never_worse else ()):
         zf = np.maximum(ld.z + frac * dz, 0.0)  # heights >= 0 by contract
         zf[pd.is_contour] = 0.0
         af = problem.distance_after(zf)
         if z is None or af < after:
             fraction, z, after = frac, zf, af
-        if not never_worse or af <= max(before, RESOLUTION_EDGES * h):
+        if not never_worse or af <= before:
             break
     T["check"] = time.perf_counter() - t
-    if never_worse and after > max(before, RESOLUTION_EDGES * h):
+    if never_worse and after > before:
+        if before <= RESOLUTION_EDGES * h:
+            # A stroke within the resolution of the isophote: no version of the edit may leave
+            # it farther (the tolerance once let an edit through that moved heights by 24% of
+            # the peak and took the isophote from 0.11 to 0.16 edge lengths).
+            raise NothingToDoError(f"the stroke lies on the isophote already ({before / h:.2f} edge lengths from it, "
+                                   "within what the shading resolves): nothing to change")
+        bound = bound_note(largest) if scale < 1.0 else ""
         raise SculptError(
             f"the surface cannot take this shading here: every version of the edit left the isophote farther "
-            f"from the stroke ({after / h:.1f} edge lengths) than it was ({before / h:.1f}); draw the new "
+            f"from the stroke ({after / h:.1f} edge lengths) than it was ({before / h:.1f}){bound}; draw the new "
             "isophote closer to the old one, or further from the rim"
         )
     if not np.isfinite(z).all():
@@ -452,5 +510,5 @@ def sculpt(
     reach = float(solution.info.get("reach", r))
     return SculptResult(
         new_mesh, changed, c, iso, band_geom, stroke_geom, dE, before, after, fraction, T, full, ld, r, reach,
-        solver.name, solution, ignored, ignored / drawn if drawn > 0 else 0.0,
+        solver.name, solution, ignored, ignored / drawn if drawn > 0 else 0.0, largest if scale < 1.0 else 0.0,
     )

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from sketchforge.plugins.hookspecs import hookimpl
+from sketchforge.plugin_api import hookimpl
 
 
 @hookimpl
@@ -28,7 +28,7 @@ def sketchforge_tools():
 
 @hookimpl
 def sketchforge_qt_panels():
-    from sketchforge.plugins.registry import Panel
+    from sketchforge.plugin_api import Panel
 
     return [Panel("isophote_sculpt", "sculpture", _create_panel, label="Isophote sculpt", order=10)]
 
@@ -37,3 +37,10 @@ def _create_panel(app):
     from .qt import create_panel  # Qt: imported only by the app, when it builds its panels
 
     return create_panel(app)
+
+
+@hookimpl
+def sketchforge_dataset_generators():
+    from .dataset import HOLES, ISOPHOTE_EDIT
+
+    return [HOLES, ISOPHOTE_EDIT]

@@ -23,8 +23,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from sketchforge.errors import SolverError
-from sketchforge.geometry.dirichlet import DirichletSolver
+from sketchforge.plugin_api import SolverError
+from sketchforge.plugin_api import DirichletSolver
 
 from .layerdata import PlanarData
 

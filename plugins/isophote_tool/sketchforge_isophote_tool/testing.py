@@ -9,7 +9,7 @@ import functools
 
 import numpy as np
 
-from sketchforge.geometry.mesh import Mesh
+from sketchforge.plugin_api import Mesh
 
 LIGHT = np.array([1.0 / np.sqrt(2.0), 1.0 / np.sqrt(2.0), 0.0])
 

@@ -73,8 +73,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sketchforge.errors import SculptError, SketchforgeError
-from sketchforge.tools.base import Tool
+from sketchforge.plugin_api import SculptError, SketchforgeError
+from sketchforge.plugin_api import Tool
 
 from .command import SculptIsophote, SculptIsophotes
 
@@ -317,7 +317,7 @@ class SculptIsophoteTool(Tool):
 
     # --- band ---------------------------------------------------------------------------------
     def set_band(self, radius) -> bool:
-        from sketchforge.geometry.band import band_radius
+        from sketchforge.plugin_api import band_radius
 
         try:  # the pipeline's own check: a radius it would refuse at the stroke is refused now
             r = band_radius(radius)

@@ -12,6 +12,6 @@ def warm_up(model=None) -> None:
     Shapes do not depend on the layer (inputs are padded), so later edits on any layer reuse
     the compilation.
     """
-    from sketchforge.geometry.reflectance import LAMBERTIAN, evaluate_pq
+    from sketchforge.plugin_api import LAMBERTIAN, evaluate_pq
 
     evaluate_pq(model or LAMBERTIAN, np.zeros(4), np.zeros(4), np.array([1.0, 0.0, 0.0]))

@@ -1,7 +1,7 @@
 """Per-vertex fields as smooth functions of (x, y) for the strips' right-hand side.
 
-The strips read the characteristic direction (R_p, R_q) of the surface, the shading change δE
-and a rim mask at arbitrary points, inside ``jax.jit``/``vmap``. The layer's fields are
+The strips read the characteristic direction (R_p, R_q) of the surface and a rim mask at
+arbitrary points, inside ``jax.jit``/``vmap``. The layer's fields are
 piecewise linear (one value per vertex); their gradients jump across every edge, which forces
 an adaptive solver into tiny steps and makes it miss its tolerance by 50–200× (measured
 facts). So each field is sampled at the nodes of a square grid (barycentrically: the

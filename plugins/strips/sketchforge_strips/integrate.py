@@ -1,48 +1,107 @@
 """Characteristic strips integrated with diffrax (thesis 4.5), jitted and vmapped over strips.
 
-Each strip is the base characteristic of the surface before the edit, dx/ds = −R_p,
-dy/ds = −R_q (3.1.2, 4.3.3), carrying the linearised height change: along it
-R_p ∂δz/∂x + R_q ∂δz/∂y = δE becomes dδz/ds = −δE (the failure analysis' fix 4(b): integrate
-only the change, so a stroke drawn on the isophote (δE = 0) changes nothing, exactly, and
-the error scales with the edit instead of with the surface). The state is (x, y, J) with
-J = ∫ δE ds from the seed; δz at a point of the strip is J at its upstream end minus J there.
+Each strip is a base characteristic of the surface before the edit, dx/ds = −R_p,
+dy/ds = −R_q (3.1.2, 4.3.3). The linearised system the edit solves is triangular: the path
+depends on the old surface only, and the height change along it, dδz/ds = −δE, is a
+quadrature on the path (:func:`strip_integrals`). So the ODE integrated here is the path
+alone, once per edit, and the shading change is read on its saved points afterwards (the
+first release integrated the paths twice: once to find S•, once with δE on board).
 
-The strips are parametrised by arc length σ (dx/dσ the unit direction, ds = dσ / |∇R|), so
-one integration length — the layer's diameter — covers every strip, and rescaled to t ∈ [0, 1]
-so one compiled function serves every layer: the length is an argument. A strip stops where
-the rim mask falls to 0 (the rim margin, where the surface turns vertical: 4.3's Ω*).
+The strips are parametrised by arc length σ (dx/dσ the unit direction; ds = dσ / |∇R|) and
+integrated in segments of a fixed number of saved points (:data:`SEGMENT`) a fixed arc
+length apart, for a fixed number of strips at a time (:data:`BATCH`, padded): one compiled
+function per integrator serves every layer, stroke and strip count (the tolerances, the
+field's grid, the sample spacing are arguments). A strip goes on segment after segment until
+it stops: in the rim margin (the rim mask falls to 0 and stops it, 4.3's Ω*), at a point where
+the flow vanishes (a tilted light's brightest point), or at the length cap. So the work grows
+with the strips' actual length, not with a length guessed for the whole layer.
 
 Solvers: ``tsit5`` (explicit, the default: the system is not stiff and Tsit5 was 2–4× faster
 than Kvaerno5 with the same accuracy on the prototype) and ``kvaerno5`` (the thesis' implicit
-A-L-stable solver), both with an adaptive PID step controller on the C² field of
-:mod:`.field`. One compiled function per (solver, tolerances, saved points, batch size); batch
-sizes and saved points are rounded up to powers of four so a session compiles a handful.
+A-L-stable solver), on the C² field of :mod:`.field`. By default one step per saved point
+(a fifth-order step of half an edge length on a field that is smooth on the scale of an edge):
+an adaptive controller accepts or rejects steps by comparing an error estimate with its
+tolerance, a decision that round-off flips, and a stroke moved by 1e-12 moved the strips by
+6e-5 and the heights by 1e-5 of the peak. diffrax's PID controller remains a choice
+(``step_control: "pid"``, with ``rtol`` and ``atol``), and Kvaerno5 always uses it (its implicit
+stages take the controller's tolerances).
+
+Compilation: the first call of a process traces the function (~0.7 s) and compiles it
+(~1–2 s). JAX's persistent compilation cache (:func:`enable_compilation_cache`, under the
+user's cache directory) keeps the compiled code across processes, so a later process (the
+app, ``sketchforge replay``) pays the tracing only. equinox's runtime checks would put a host
+callback into the compiled code, which the cache refuses to store; they are switched to
+``nan`` (``EQX_ON_ERROR``, unless the environment sets it) — the solve runs with
+``throw=False`` and reads its own status instead.
 """
 
 from __future__ import annotations
 
 import functools
+import os
+from pathlib import Path
 
 import numpy as np
 
 #: |∇R| below which the strip's speed is floored (1/|∇R| turns a shading change into a
 #: height change; where the shading does not depend on the slope no edit can act).
 SPEED_FLOOR = 1e-3
-#: Steps a strip may take before it is cut off where it is (never an error: its samples up to
-#: there are kept, the rest dropped).
-MAX_STEPS = 8192
+#: Strips integrated by one compiled call (a batch is padded to it): one shape, one compile.
+BATCH = 64
+#: Points saved per strip and call; a strip's path is built segment by segment.
+SEGMENT = 128
+#: Steps a strip may take in one segment before it is cut off where it is.
+MAX_STEPS = 4096
+
+
+def cache_directory() -> Path:
+    """Where compiled strip functions are kept across processes:
+    ``$SKETCHFORGE_CACHE_DIR/jax``, else ``$XDG_CACHE_HOME/sketchforge/jax``, else
+    ``~/.cache/sketchforge/jax``."""
+    own = os.environ.get("SKETCHFORGE_CACHE_DIR")
+    if own:
+        return Path(own) / "jax"
+    xdg = os.environ.get("XDG_CACHE_HOME")
+    return (Path(xdg) if xdg else Path.home() / ".cache") / "sketchforge" / "jax"
+
+
+_CACHE_SET = False
+
+
+def enable_compilation_cache(jax) -> None:
+    """Point JAX's persistent compilation cache at :func:`cache_directory` (once per process),
+    unless one is configured already (``JAX_COMPILATION_CACHE_DIR``). A directory that cannot
+    be created leaves the cache off: it only saves time."""
+    global _CACHE_SET
+    if _CACHE_SET:
+        return
+    _CACHE_SET = True
+    if jax.config.jax_compilation_cache_dir:
+        return
+    path = cache_directory()
+    try:
+        path.mkdir(parents=True, exist_ok=True)
+    except OSError:
+        return
+    jax.config.update("jax_compilation_cache_dir", str(path))
+    # The strip function compiles in 1-2 s; the defaults (cache only compiles over 1 s) would
+    # skip it on a fast machine.
+    jax.config.update("jax_persistent_cache_min_compile_time_secs", 0.0)
 
 
 def _jax():
+    os.environ.setdefault("EQX_ON_ERROR", "nan")  # before equinox is imported (see the docstring)
     import jax
 
     jax.config.update("jax_enable_x64", True)  # before any array: the strips are float64
+    enable_compilation_cache(jax)
     return jax
 
 
-@functools.lru_cache(maxsize=32)
-def _strip_function(integrator: str, rtol: float, atol: float, n_saved: int):
-    """The jitted, vmapped integration of a batch of strips (see :func:`integrate_strips`)."""
+@functools.lru_cache(maxsize=8)
+def _segment_function(integrator: str, adaptive: bool = False):
+    """The jitted, vmapped integration of one segment of :data:`BATCH` strips: one step per
+    saved point, or (``adaptive``) diffrax's PID step controller."""
     jax = _jax()
     import diffrax
     import jax.numpy as jnp
@@ -51,97 +110,114 @@ def _strip_function(integrator: str, rtol: float, atol: float, n_saved: int):
 
     def rhs(t, y, args):
         coeffs, origin, spacing, length, sign = args
-        v = bspline_eval(coeffs, origin, spacing, y[:2])
+        v = bspline_eval(coeffs, origin, spacing, y)
         d = -v[:2]  # (−R_p, −R_q): the base characteristic's direction
         speed = jnp.sqrt(d[0] * d[0] + d[1] * d[1] + SPEED_FLOOR * SPEED_FLOOR)
-        m = jnp.clip(v[3], 0.0, 1.0)  # the rim mask stops the strip in the rim margin
-        step = length * m / speed
-        return jnp.stack([sign * step * d[0], sign * step * d[1], step * v[2] * sign])
+        m = jnp.clip(v[2], 0.0, 1.0)  # the rim mask stops the strip in the rim margin
+        return sign * length * m * d / speed
 
     solver = {"tsit5": diffrax.Tsit5, "kvaerno5": diffrax.Kvaerno5}[integrator]()
-    ts = jnp.linspace(0.0, 1.0, n_saved)
+    ts = jnp.linspace(0.0, 1.0, SEGMENT + 1)[1:]
 
-    def one(y0, sign, coeffs, origin, spacing, length):
+    def one(y0, sign, coeffs, origin, spacing, length, rtol, atol):
+        if adaptive:
+            control, dt0 = diffrax.PIDController(rtol=rtol, atol=atol), None
+        else:
+            control, dt0 = diffrax.ConstantStepSize(), 1.0 / SEGMENT
         sol = diffrax.diffeqsolve(
-            diffrax.ODETerm(rhs), solver, t0=0.0, t1=1.0, dt0=None, y0=y0,
+            diffrax.ODETerm(rhs), solver, t0=0.0, t1=1.0, dt0=dt0, y0=y0,
             args=(coeffs, origin, spacing, length, sign),
             saveat=diffrax.SaveAt(ts=ts),
-            stepsize_controller=diffrax.PIDController(rtol=rtol, atol=atol),
+            stepsize_controller=control,
             max_steps=MAX_STEPS, throw=False,
         )
         return sol.ys, sol.stats["num_steps"]
 
-    batched = jax.vmap(one, in_axes=(0, 0, None, None, None, None))
-    return jax.jit(batched)
+    return jax.jit(jax.vmap(one, in_axes=(0, 0, None, None, None, None, None, None)))
 
 
-def _bucket(n: int, smallest: int) -> int:
-    """``n`` rounded up to ``smallest`` times a power of 4: few shapes, so few compilations
-    (each costs 2–6 s), for at most 4× the work of the exact shape."""
-    size = smallest
-    while size < n:
-        size *= 4
-    return size
-
-
-def integrate_strips(seeds: np.ndarray, coeffs: np.ndarray, origin: np.ndarray, spacing: float, length: float,
-                     n_saved: int, integrator: str = "tsit5", rtol: float = 1e-6, atol: float = 1e-9):
-    """Trace every seed's strip downstream and upstream.
+def integrate_paths(seeds: np.ndarray, coeffs: np.ndarray, origin: np.ndarray, spacing: float, step: float,
+                    max_length: float, integrator: str = "tsit5", rtol: float = 1e-6, atol: float = 1e-9,
+                    adaptive: bool = False):
+    """Trace every seed's strip downstream and upstream until it stops.
 
     Parameters
     ----------
     seeds : (k, 2) float64
-    coeffs : (G, G, 4) float64
-        B-spline coefficients of R_p, R_q, δE and the rim mask (:class:`.field.Raster`).
+    coeffs : (G, G, 3) float64
+        B-spline coefficients of R_p, R_q and the rim mask (:class:`.field.Raster`).
     origin : (2,) float64
     spacing : float
-    length : float
-        Arc length to integrate each way (drawing units).
-    n_saved : int
-        Points saved per direction (rounded up to 256 times a power of 4).
+        The grid's spacing.
+    step : float
+        Arc length between saved points (drawing units).
+    max_length : float
+        Longest a strip may grow each way (drawing units).
     integrator : {"tsit5", "kvaerno5"}
     rtol, atol : float
+        The PID controller's tolerances (``adaptive`` only).
+    adaptive : bool
+        diffrax's PID step controller instead of one step per saved point.
 
     Returns
     -------
-    down, up : (k, K, 3) float64
-        (x, y, J) at K evenly spaced arc lengths from the seed, downstream and upstream; J is
-        ∫ δE ds from the seed in the downstream sense (negative upstream). Rows of a strip that
-        could not be integrated that far are NaN.
-    steps : (2k,) int64
-        Steps taken per strip (diagnostics).
+    down, up : list of (j_i, 2) float64
+        Per seed, the saved points downstream and upstream of it (the seed excluded), in
+        order from the seed; a strip that has stopped is cut after its last moving point
+        (points closer than step/10 to the one before are its standing still).
+    steps : int
+        Most steps one strip took in one segment (diagnostics).
     """
     import jax.numpy as jnp
 
     k = len(seeds)
-    K = _bucket(n_saved, 256)
-    B = _bucket(2 * k, 64)
-    y0 = np.zeros((B, 3))
-    y0[:k, :2] = seeds
-    y0[k:2 * k, :2] = seeds
-    y0[2 * k:, :2] = seeds[0] if k else 0.0  # padding: copies of a real seed, results dropped
-    sign = np.ones(B)
-    sign[k:2 * k] = -1.0
-    fn = _strip_function(integrator, float(rtol), float(atol), K)
-    ys, steps = fn(jnp.asarray(y0), jnp.asarray(sign), jnp.asarray(coeffs), jnp.asarray(origin),
-                   jnp.asarray(float(spacing)), jnp.asarray(float(length)))
-    ys = np.array(ys)
-    ys[~np.isfinite(ys).all(axis=2)] = np.nan  # a strip cut off at MAX_STEPS: its later samples
-    return ys[:k], ys[k:2 * k], np.asarray(steps)[:2 * k]
+    fn = _segment_function(integrator, bool(adaptive))
+    seg_length = step * SEGMENT
+    n_seg = max(int(np.ceil(max_length / seg_length)), 1)
+    start = np.concatenate([seeds, seeds]).astype(np.float64)  # downstream, then upstream
+    sign = np.concatenate([np.ones(k), -np.ones(k)])
+    paths: list[list[np.ndarray]] = [[] for _ in range(2 * k)]
+    alive = np.ones(2 * k, bool)
+    args = (jnp.asarray(coeffs), jnp.asarray(origin), jnp.asarray(float(spacing)), jnp.asarray(seg_length),
+            jnp.asarray(float(rtol)), jnp.asarray(float(atol)))
+    most = 0
+    for _ in range(n_seg):
+        live = np.nonzero(alive)[0]
+        if len(live) == 0:
+            break
+        for b in range(0, len(live), BATCH):
+            idx = live[b:b + BATCH]
+            y0 = np.empty((BATCH, 2))
+            y0[:len(idx)] = start[idx]
+            y0[len(idx):] = start[idx[0]]  # padding: copies of a real strip, results dropped
+            sg = np.ones(BATCH)
+            sg[:len(idx)] = sign[idx]
+            ys, n_steps = fn(jnp.asarray(y0), jnp.asarray(sg), *args)
+            ys = np.asarray(ys)[:len(idx)]  # (b, SEGMENT, 2)
+            most = max(most, int(np.max(np.asarray(n_steps)[:len(idx)])))
+            # A strip cut off at MAX_STEPS keeps what it reached: its rows from the first
+            # non-finite one on are standing still.
+            fin = np.isfinite(ys).all(axis=2)
+            upto = np.where(fin.all(axis=1), SEGMENT, np.argmin(fin, axis=1))
+            prev = np.concatenate([start[idx][:, None, :], ys[:, :-1]], axis=1)
+            moving = (np.linalg.norm(np.nan_to_num(ys - prev), axis=2) >= 0.1 * step) & (np.arange(SEGMENT) < upto[:, None])
+            any_moving = moving.any(axis=1)
+            last = SEGMENT - 1 - np.argmax(moving[:, ::-1], axis=1)
+            for j in np.nonzero(any_moving)[0]:
+                i = idx[j]
+                paths[i].append(ys[j, :last[j] + 1])
+                start[i] = ys[j, last[j]]
+            # Still moving at the end of the segment: it goes on; otherwise it stopped here.
+            alive[idx] = any_moving & (last == SEGMENT - 1) & (upto == SEGMENT)
+    out = [np.concatenate(p) if p else np.zeros((0, 2)) for p in paths]
+    return out[:k], out[k:], most
 
 
-#: The (strips, saved points) shapes a typical edit uses (a stroke up to ~120 edge lengths
-#: across the flow, a layer up to ~170 edge lengths across): compiled by :func:`warm_up`.
-WARM_SHAPES = ((32, 256), (128, 256), (128, 1024))
-
-
-def warm_up(integrator: str = "tsit5", rtol: float = 1e-6, atol: float = 1e-9) -> None:
-    """Compile the strip integration for :data:`WARM_SHAPES` (2–6 s each on first use), so the
-    first ``strips`` edit of a session does not wait for it. Any layer reuses them: the
-    field's size is fixed and its origin, spacing and the strips' length are arguments."""
+def warm_up(integrator: str = "tsit5", adaptive: bool = False) -> None:
+    """Compile the strip integration (~2 s on first use, ~0.7 s of tracing once the persistent
+    cache holds it), so the first ``strips`` edit of a session does not wait for it."""
     from .field import GRID_SIZE
 
-    coeffs = np.zeros((GRID_SIZE, GRID_SIZE, 4))
+    coeffs = np.zeros((GRID_SIZE, GRID_SIZE, 3))
     coeffs[:, :, 0] = -1.0  # a uniform flow, mask 0: every strip stops at once
-    for strips, saved in WARM_SHAPES:
-        integrate_strips(np.zeros((strips, 2)), coeffs, np.zeros(2), 1.0 / GRID_SIZE, 1.0, saved, integrator, rtol, atol)
+    integrate_paths(np.zeros((1, 2)), coeffs, np.zeros(2), 1.0 / GRID_SIZE, 0.01, 0.01, integrator, adaptive=adaptive)

@@ -1,6 +1,12 @@
-"""CREATION controls: the current layer's inflation parameters, whether it is closed (a free
-part) or open (attached by its closing segment), and how the drawing region shades (Lambertian
-or cel, isophote lines, layer tints and outlines).
+"""CREATION controls: the inflater and its parameters (of the selected part, and for the next
+new part), whether the part is closed (a free part) or open (attached by its closing
+segment), and how the drawing region shades (a display shader or a reflectance model,
+isophote lines, layer tints and outlines).
+
+The inflater's parameters are a form generated from what it declares
+(:class:`~sketchforge.qt.param_form.SolverForm`): the built-in ``poisson`` and any plugin's
+alike, none of them writes Qt for it. Choosing another inflater switches the selected part to
+it (one undo step, from its defaults) and new parts are inflated by it.
 
 A new stroke decides open or closed by itself (its ends meet: closed); the box shows the
 selected part's kind and flips it (:attr:`closed_toggled`), it never carries over to the next
@@ -8,20 +14,18 @@ stroke."""
 
 from __future__ import annotations
 
-from PySide6.QtCore import Signal
+from PySide6.QtCore import Qt, Signal
 from PySide6.QtWidgets import QCheckBox, QComboBox, QDoubleSpinBox, QFormLayout, QGroupBox, QLabel, QSpinBox
 
-#: (key, label, minimum, maximum, step, decimals, tooltip)
-PARAMS = (
-    ("resolution", "Resolution", 0.002, 1.0, 0.005, 3, "Target triangle edge length, drawing units"),
-    ("inflation", "Inflation", 0.0, 10.0, 0.1, 2, "Height scale of the inflated shape"),
-    ("smoothing", "Smoothing", 0.0, 0.99, 0.05, 2, "Fairing weight α (0 = none)"),
-)
+from sketchforge.errors import SketchforgeError
+from sketchforge.qt.param_form import SolverForm
 
 
 class CreationPanel(QGroupBox):
     #: {key: value} for the current layer
     params_edited = Signal(dict)
+    #: the inflater chosen (its name): for the selected part and the next new ones
+    inflater_changed = Signal(str)
     shader_changed = Signal(str)
     isolines_changed = Signal(int)
     #: the person ticked or unticked "closed" for the selected part
@@ -31,22 +35,22 @@ class CreationPanel(QGroupBox):
     #: thin lines along the layers' visible outlines on / off
     outlines_changed = Signal(bool)
 
-    def __init__(self, parent=None) -> None:
+    def __init__(self, host=None, parent=None) -> None:
         super().__init__("Creation", parent)
+        self.host = host
         form = QFormLayout(self)
         self.layer_label = QLabel("no layer: draw to create one")
         form.addRow(self.layer_label)
-        self.spins: dict[str, QDoubleSpinBox] = {}
-        for key, label, lo, hi, step, dec, tip in PARAMS:
-            s = QDoubleSpinBox()
-            s.setRange(lo, hi)
-            s.setSingleStep(step)
-            s.setDecimals(dec)
-            s.setKeyboardTracking(False)
-            s.setToolTip(tip)
-            s.valueChanged.connect(lambda v, k=key: self._edited(k, v))
-            self.spins[key] = s
-            form.addRow(label, s)
+        self.inflater = QComboBox()
+        self.inflater.setToolTip("The inflater of the selected part, and of the next new part (plugins can add inflaters)")
+        form.addRow("Inflater", self.inflater)
+        self.params = SolverForm(host, "inflate")
+        self.params.edited.connect(lambda d: self._updating or self.params_edited.emit(dict(d)))
+        form.addRow(self.params)
+        #: The inflater new parts get (None: the host's default).
+        self.new_part_inflater: str | None = None
+        self._fill_inflaters()
+        self.inflater.currentIndexChanged.connect(lambda _: self._inflater_chosen())
         self.closed = QCheckBox("closed outline (free part)")
         self.closed.setToolTip(
             "The selected part's kind; click to flip it. A new stroke is closed when its ends "
@@ -56,7 +60,7 @@ class CreationPanel(QGroupBox):
         self.closed.clicked.connect(lambda on: self._updating or self.closed_toggled.emit(bool(on)))
         form.addRow(self.closed)
         self.shader = QComboBox()
-        self.shader.currentTextChanged.connect(self.shader_changed.emit)
+        self.shader.currentIndexChanged.connect(lambda i: self.shader_changed.emit(self.shader.itemData(i) or ""))
         form.addRow("Shading", self.shader)
         self.isolines = QSpinBox()
         self.isolines.setRange(0, 20)
@@ -75,11 +79,42 @@ class CreationPanel(QGroupBox):
         form.addRow(self.outlines)
         self._updating = False
 
-    def set_shaders(self, names, current: str) -> None:
+    @property
+    def spins(self) -> dict:
+        """The inflater form's spin boxes by parameter (a number shown as one)."""
+        return {k: w for k, w in self.params.widgets.items() if isinstance(w, (QDoubleSpinBox, QSpinBox))}
+
+    def _fill_inflaters(self) -> None:
+        try:
+            solvers = dict(self.host.solvers("inflate")) if self.host is not None else {}
+            default = self.host.default_solver_name("inflate") if self.host is not None else None
+        except SketchforgeError:
+            solvers, default = {}, None
+        self._default_inflater = default
+        for name, solver in sorted(solvers.items(), key=lambda item: (item[0] != default, item[0])):
+            self.inflater.addItem(name, name)
+            self.inflater.setItemData(self.inflater.count() - 1, getattr(solver, "description", "") or name,
+                                      Qt.ItemDataRole.ToolTipRole)
+        if self.inflater.count():
+            self.params.set_solver(self.inflater.itemData(0))
+
+    def _inflater_chosen(self) -> None:
+        name = self.inflater.currentData()
+        if self._updating or not name:
+            return
+        self.new_part_inflater = None if name == self._default_inflater else name
+        self.params.set_solver(name)
+        self.inflater_changed.emit(name)
+
+    def set_shaders(self, names, current: str, labels: dict | None = None) -> None:
+        """The display shadings: ``names`` (keys), shown as ``labels[name]`` where given."""
+        labels = labels or {}
         self.shader.blockSignals(True)
         self.shader.clear()
-        self.shader.addItems(list(names))
-        self.shader.setCurrentText(current)
+        for name in names:
+            self.shader.addItem(labels.get(name, name), name)
+        i = self.shader.findData(current)
+        self.shader.setCurrentIndex(max(i, 0))
         self.shader.blockSignals(False)
 
     def show_layer(self, layer, pending: dict | None = None) -> None:
@@ -87,13 +122,14 @@ class CreationPanel(QGroupBox):
         values edited during a solve and not applied yet (shown, not reverted)."""
         self._updating = True
         try:
-            for s in self.spins.values():
-                s.setEnabled(layer is not None)
             self.closed.setEnabled(layer is not None and layer.points is not None)
             if layer is None:
                 self.layer_label.setText("no layer: draw to create one")
                 self.closed.setChecked(False)
+                self._show_inflater(self.new_part_inflater or self._default_inflater, {})
+                self.params.setEnabled(False)
                 return
+            self.params.setEnabled(True)
             closed = bool(layer.closed) or (layer.mesh is not None and len(layer.mesh.junction) == 0)
             kind = "no contour yet: draw it" if layer.points is None else (
                 f"{'closed' if closed else 'open'}, {len(layer.edits)} sculpt edits"
@@ -101,12 +137,18 @@ class CreationPanel(QGroupBox):
             self.layer_label.setText(f"<b>{layer.name}</b> ({kind})")
             # Closed as the assembly sees it: marked closed, or a stroke whose ends met.
             self.closed.setChecked(closed if layer.points is not None else False)
-            values = {**dict(layer.params), **(pending or {})}
-            for key, s in self.spins.items():
-                s.setValue(float(values.get(key, s.value())))
+            self._show_inflater(layer.solver or self._default_inflater, {**dict(layer.params), **(pending or {})})
         finally:
             self._updating = False
 
-    def _edited(self, key: str, value: float) -> None:
-        if not self._updating:
-            self.params_edited.emit({key: float(value)})
+    def _show_inflater(self, name: str | None, values: dict) -> None:
+        """The combo on ``name`` and its form with ``values`` (signals blocked by the caller's
+        ``_updating``). A layer's inflater that is not installed shows as such, without a form."""
+        i = self.inflater.findData(name)
+        if i < 0 and name:
+            self.inflater.addItem(f"{name} (not installed)", name)
+            i = self.inflater.count() - 1
+        if i >= 0:
+            self.inflater.setCurrentIndex(i)
+        self.params.set_solver(name)
+        self.params.set_values(values)

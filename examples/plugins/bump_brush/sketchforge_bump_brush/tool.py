@@ -8,20 +8,10 @@ step; headless (tests, scripts) ``release`` pushes it on the document directly.
 from __future__ import annotations
 
 import numpy as np
-from shapely.geometry import Point, Polygon
 
-from sketchforge.plugin_api import SculptError, Tool
+from sketchforge.plugin_api import SculptError, Tool, layer_at
 
 from sketchforge_bump_brush.brush import BumpBrush
-
-
-def layer_at(doc, point) -> str | None:
-    """The front-most visible layer whose outline contains ``point`` (None: none)."""
-    for layer in reversed(doc.layers):
-        if layer.visible and layer.mesh is not None and len(layer.mesh.boundary) >= 3:
-            if Polygon(layer.mesh.V[layer.mesh.boundary, :2]).contains(Point(*point)):
-                return layer.id
-    return None
 
 
 class BumpTool(Tool):

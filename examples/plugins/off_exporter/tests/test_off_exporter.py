@@ -5,7 +5,6 @@ import pytest
 
 import sketchforge_off_exporter as plugin
 from sketchforge.plugin_api import ExportError
-from sketchforge.plugins.testing import FanInflater
 
 
 def read_off(path):
@@ -19,8 +18,8 @@ def read_off(path):
 
 
 @pytest.fixture
-def doc(make_sketchforge_host, make_sketchforge_document):
-    return make_sketchforge_document(make_sketchforge_host(FanInflater(), plugin))
+def doc(make_sketchforge_host, make_sketchforge_document, sketchforge_fan_inflater):
+    return make_sketchforge_document(make_sketchforge_host(sketchforge_fan_inflater, plugin))
 
 
 def test_off_round_trips_the_mesh_exactly(doc, tmp_path):

@@ -18,7 +18,7 @@ def test_registered_with_its_provider(host):
 
 
 def test_values_and_sign(host):
-    from sketchforge.geometry.reflectance import evaluate
+    from sketchforge.plugin_api import evaluate
 
     rng = np.random.default_rng(3)
     N = rng.normal(size=(200, 3))
@@ -31,7 +31,7 @@ def test_values_and_sign(host):
 
 
 def test_slope_gradient_matches_finite_differences(host):
-    from sketchforge.geometry.reflectance import evaluate_pq
+    from sketchforge.plugin_api import evaluate_pq
 
     rng = np.random.default_rng(4)
     p, q = rng.uniform(-2, 2, 50), rng.uniform(-2, 2, 50)

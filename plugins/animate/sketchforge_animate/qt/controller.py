@@ -13,12 +13,12 @@ import threading
 import numpy as np
 from PySide6.QtCore import QObject, QTimer, Signal
 
-from sketchforge.document.commands import new_gesture_id
-from sketchforge.errors import SketchforgeError
+from sketchforge.plugin_api import new_gesture_id
+from sketchforge.plugin_api import SketchforgeError
 from sketchforge.qt.panel_api import error_text
 
 from ..commands import AddPin, CopyMotion, HoldPin, MovePin, RecordMotion, RemovePin
-from ..state import FPS, Animation
+from ..state import FPS, KEY, Animation
 
 
 class PoseWorker(QObject):
@@ -69,7 +69,13 @@ class PoseWorker(QObject):
 
 
 class AnimationController(QObject):
-    """Turns pin gestures into animation commands and keeps the displayed pose current."""
+    """Turns pin gestures into animation commands and keeps the displayed pose current.
+
+    While the loop plays, a timer tick only advances the frame and asks the pose; the view
+    changes once, when that pose arrives (``pose_ready``, then ``changed``): the posed model,
+    the pins and the timeline are repainted together, one repaint per shown frame (software
+    OpenGL pays ~10 ms per repaint of the window at 1280x800, issue 34).
+    """
 
     changed = Signal()  # frame, loop, selection or play state changed
     pose_ready = Signal(object)  # (n,3) float64 vertices of the displayed pose
@@ -89,6 +95,8 @@ class AnimationController(QObject):
         self._animator = None
         self._pose = None
         self._token = 0
+        self._frame_unshown = False  # the timer advanced the frame; `changed` waits for its pose
+        self._anim_cache = None  # (the document's stored value, its Animation): read per frame
         self.worker = PoseWorker(self)
         self.worker.posed.connect(self._posed)
         self.timer = QTimer(self)
@@ -98,10 +106,18 @@ class AnimationController(QObject):
 
     # --- state ----------------------------------------------------------------------------------
     def animation(self):
-        try:
-            return Animation.of(self.doc)
-        except SketchforgeError:
-            return Animation()
+        """The document's animation (an empty one where the stored value is malformed)."""
+        raw = self.doc.plugin_data(KEY)
+        # Parsing and checking the stored value costs ~1 ms at 4 pins x 48 frames, and a played
+        # frame asks it several times: parsed once per value (the document replaces the value
+        # on every change, it never edits it in place).
+        if self._anim_cache is None or self._anim_cache[0] is not raw:
+            try:
+                anim = Animation.from_json(raw)
+            except SketchforgeError:
+                anim = Animation()
+            self._anim_cache = (raw, anim)
+        return self._anim_cache[1]
 
     @property
     def loop(self) -> int:
@@ -130,9 +146,11 @@ class AnimationController(QObject):
         return [p.id for p in anim.pins], self.current_targets()
 
     # --- posing (worker thread) -----------------------------------------------------------------
-    def _request(self, restart: bool = False) -> None:
+    def _request(self, restart: bool = False) -> bool:
+        """Ask the worker for the pose of the current frame and targets; False when there is
+        no model to pose."""
         if self.mesh is None:
-            return
+            return False
         anim = self.animation()
         mesh = self.mesh
         targets = self.current_targets()
@@ -152,13 +170,17 @@ class AnimationController(QObject):
             return a, a.drag(targets, previous)
 
         self.worker.request(self._token, solve)
+        return True
 
     def _posed(self, token, result) -> None:
         if isinstance(result, Exception):
             self.message.emit(f"posing failed: {error_text(result)}")
-            return
-        self._animator, self._pose = result
-        self.pose_ready.emit(self._pose)
+        else:
+            self._animator, self._pose = result
+            self.pose_ready.emit(self._pose)
+        if self._frame_unshown:  # the timeline follows the pose on screen, in the same repaint
+            self._frame_unshown = False
+            self.changed.emit()
 
     def _anim_changed(self) -> None:
         if self.loop and self.frame >= self.loop:
@@ -192,8 +214,10 @@ class AnimationController(QObject):
             self._drag["samples"].append(np.array(self._drag["pos"]))
         if self.loop:
             self.frame = (self.frame + 1) % self.loop
-        self._request()
-        self.changed.emit()
+        if self._request():
+            self._frame_unshown = True  # `changed` comes with the pose (_posed)
+        else:
+            self.changed.emit()
 
     # --- pin gestures -------------------------------------------------------------------------------
     def add_pin(self, point) -> None:

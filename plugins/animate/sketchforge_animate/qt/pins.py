@@ -8,7 +8,7 @@ import numpy as np
 from PySide6.QtCore import QEvent, QObject, Qt
 from PySide6.QtWidgets import QWidget
 
-from sketchforge.errors import SketchforgeError
+from sketchforge.plugin_api import SketchforgeError
 from sketchforge.qt.panel_api import error_text
 
 from ..picking import pick_vertex, unproject_at_depth
@@ -26,6 +26,7 @@ class PinInteraction(QObject):
         self.c = controller
         self.panel = panel
         self._scatter = None
+        self._shown = None  # (pin ids, their positions' bytes, the selected pin) last drawn
         self._installed = None
         controller.pose_ready.connect(self._show_pose)
         controller.changed.connect(self._show_pins)
@@ -105,6 +106,12 @@ class PinInteraction(QObject):
         import pyqtgraph.opengl as pgl
 
         ids, T = self.c.pin_positions()
+        # a played frame asks twice (with the pose, then with the timeline): only a change is
+        # drawn, so still pins never cost the view a repaint
+        shown = (tuple(ids), T.tobytes(), self.c.selected)
+        if self._scatter is not None and shown == self._shown:
+            return
+        self._shown = shown
         W = np.c_[T[:, 0], -T[:, 2], T[:, 1]] if len(T) else np.zeros((0, 3))
         colours = np.array([(0.85, 0.15, 0.1, 1.0) if i == self.c.selected else (0.1, 0.3, 0.85, 1.0) for i in ids]).reshape(-1, 4)
         if self._scatter is None:

@@ -1,12 +1,13 @@
 """The isophote tool's SCULPTURE controls: the reflectance model the height solve inverts, the
-sculpt solver, the band radius (slider and field; the mouse wheel in the drawing too), the live
+sculpt solver and its parameters (a form the app generates from what the solver declares,
+``panel_api.SolverForm``), the band radius (slider and field; the mouse wheel in the drawing too), the live
 preview, what to show of the last edit (characteristics, edit region) and, with several
 isophotes picked (Shift+click), a button that applies the strokes drawn so far.
 
 The panel drives the app's sculpt controller (``app.sculpt``) and shows its state; the model
 and solver become the tool's options (:meth:`SculptIsophoteTool.set_options`), always set
-together, so the next ``sculpt_isophote`` command carries ``"model"`` and ``"solver"`` (each
-absent for the default). It is enabled while the isophote tool is the chosen tool.
+together, so the next ``sculpt_isophote`` command carries ``"model"``, ``"solver"`` and the
+parameters changed from the solver's defaults, ``"params"`` (each absent for the default). It is enabled while the isophote tool is the chosen tool.
 """
 
 from __future__ import annotations
@@ -16,8 +17,8 @@ import math
 from PySide6.QtCore import Qt
 from PySide6.QtWidgets import QCheckBox, QComboBox, QDoubleSpinBox, QFormLayout, QPushButton, QSlider, QWidget
 
-from sketchforge.errors import SketchforgeError
-from sketchforge.qt.panel_api import MAX_RADIUS, MIN_RADIUS
+from sketchforge.plugin_api import SketchforgeError
+from sketchforge.qt.panel_api import MAX_RADIUS, MIN_RADIUS, SolverForm
 
 from ..tool import SculptIsophoteTool
 
@@ -46,6 +47,11 @@ class IsophoteSculptPanel(QWidget):
         self.solver = QComboBox()
         self.solver.setToolTip("Sculpt solver that turns the new shading into heights (plugins can add solvers)")
         form.addRow("Solver", self.solver)
+        # The chosen solver's parameters: a form the app generates from what the solver
+        # declares (no solver writes Qt for them); values changed from its defaults go to the
+        # next edit's "params".
+        self.params = SolverForm(app.host, "sculpt", collapsible=True)
+        form.addRow(self.params)
         self.slider = QSlider(Qt.Orientation.Horizontal)
         self.slider.setRange(0, _STEPS)
         self.spin = QDoubleSpinBox()
@@ -81,7 +87,9 @@ class IsophoteSculptPanel(QWidget):
         self.regions.toggled.connect(lambda _: self._show_changed())
         self.apply.clicked.connect(lambda: c.apply_drawn())
         self.model.currentIndexChanged.connect(lambda _: self._choice_changed())
-        self.solver.currentIndexChanged.connect(lambda _: self._choice_changed())
+        self.solver.currentIndexChanged.connect(lambda _: self._solver_changed())
+        self.params.edited.connect(lambda _: self._choice_changed())
+        self.params.set_solver(self.solver.currentData())
         c.changed.connect(self.show_state)
         if self.options():  # no built-in solver and several installed: the first is chosen
             self._choice_changed()
@@ -124,7 +132,16 @@ class IsophoteSculptPanel(QWidget):
         solver = self.solver.currentData()
         if solver and solver != self._default_solver:
             out["solver"] = solver
+        params = self.params.changed_from_defaults()
+        if params:
+            out["params"] = params
         return out
+
+    def _solver_changed(self) -> None:
+        """Another solver: its own parameters, from its defaults."""
+        self.params.set_solver(self.solver.currentData())
+        self.params.set_values({})
+        self._choice_changed()
 
     def _choice_changed(self) -> None:
         if self._updating:
@@ -157,6 +174,8 @@ class IsophoteSculptPanel(QWidget):
             i = self.solver.findData(solver)
             if i >= 0:
                 self.solver.setCurrentIndex(i)
+            self.params.set_solver(solver)
+            self.params.set_values(options.get("params", {}))
         finally:
             self._updating = False
 
@@ -183,6 +202,7 @@ class IsophoteSculptPanel(QWidget):
             mine = c.tool is not None and c.tool_name == SculptIsophoteTool.name
             for w in (self.model, self.solver):
                 w.setEnabled(mine and w.count() > 0)
+            self.params.setEnabled(mine)
             self.slider.setEnabled(mine)
             self.spin.setEnabled(mine)
             picked, drawn = getattr(c, "pick_count", 0), getattr(c, "strokes_drawn", 0)
