@@ -309,13 +309,16 @@ def test_problems_without_glue_or_without_depth_rows():
 
 def test_equality_solution_solves_the_kkt_system_or_says_none():
     P, q, Aeq, beq, _, _ = _random_qp(0)
-    x = _equality_solution(P, q, Aeq, beq)
+    x0 = x = _equality_solution(P, q, Aeq, beq)
     assert np.max(np.abs(Aeq @ x - beq)) <= 1e-12
     assert _kkt_residual(P, q, Aeq, beq, sp.csr_matrix((0, P.shape[0])), np.zeros(0), x, 0.0) <= 1e-12
     x = _equality_solution(P, q, sp.csr_matrix((0, P.shape[0])), np.zeros(0))
     assert np.abs(P @ x + q).max() <= 1e-12
-    # glue rows that repeat one another make the KKT matrix singular: nothing to screen with
-    assert _equality_solution(P, q, sp.vstack([Aeq, Aeq]).tocsr(), np.r_[beq, beq]) is None
+    # glue rows that repeat one another (a singular KKT matrix) still have the same answer
+    y = _equality_solution(P, q, sp.vstack([Aeq, Aeq]).tocsr(), np.r_[beq, beq])
+    assert y is not None and np.abs(y - x0).max() <= 1e-9
+    # rows that contradict each other have none: nothing to screen with
+    assert _equality_solution(P, q, sp.vstack([Aeq, Aeq]).tocsr(), np.r_[beq, beq + 1.0]) is None
     with np.errstate(all="ignore"):
         assert _equality_solution(P, q * np.inf, Aeq, beq) is None  # no finite answer: none
 
@@ -363,7 +366,7 @@ def test_screening_guess_is_the_anchored_glue_only_minimiser(monkeypatch):
     def no_fallback(*a, **k):
         raise AssertionError("the SuperLU fallback was used")
 
-    monkeypatch.setattr(depth, "_equality_solution", no_fallback)
+    monkeypatch.setattr(depth.sla, "splu", no_fallback)
     assert np.abs(_screening_guess(P, q, Aeq, beq) - ref).max() <= 1e-9
     monkeypatch.undo()
     # with no glue rows: the anchored minimiser
