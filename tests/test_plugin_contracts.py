@@ -691,9 +691,13 @@ def test_exporters_one_suffix_one_mesh_exporter_and_document_exporters_chosen_fo
 
     doc_exp = Exporter("anim", (".glb",), lambda path, mesh: None, write_document=lambda p, d: "ok", handles=handles)
     host = make_test_host(Solvers(exporters=[mesh_exp, doc_exp]), Other(exporters=[clash]))
-    assert "off" in host.exporters and "anim" in host.exporters and "off2" not in host.exporters
-    assert any("exporter 'off2' claims '.off', already written by exporter 'off'" in p for p in host.problems)
-    assert host.exporter_for(tmp_path / "a.OFF") is mesh_exp
+    # two exporters claiming '.off': neither writes it (issue 37: never load order), each its other suffixes
+    assert "off" in host.exporters and "anim" in host.exporters and "off2" in host.exporters
+    with pytest.raises(PluginError, match=r"'plugin-0-Solvers' and 'plugin-1-Other' both write '\.off'"):
+        host.exporter_for(tmp_path / "a.OFF")
+    assert host.exporter_for(tmp_path / "a.xyz") is clash
+    one = make_test_host(Solvers(exporters=[mesh_exp]))
+    assert one.exporter_for(tmp_path / "a.OFF") is mesh_exp
     assert host.exporter_for(tmp_path / "a.glb", doc="animated") is doc_exp
     assert host.exporter_for(tmp_path / "a.glb", doc="still").name == "gltf"  # the core's mesh exporter
     assert host.exporter_for(tmp_path / "a.glb").name == "gltf" and calls == ["animated", "still"]
