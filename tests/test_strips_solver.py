@@ -93,6 +93,25 @@ def test_the_shift_is_shared_by_both_ends_and_returns_to_zero_across_the_rim_mar
     assert np.abs(dz).max() < 0.6 * peak
 
 
+def test_a_stroke_running_into_the_rim_margin_changes_the_shading_no_more_than_it_asks(ellipse):
+    """Where the stroke reaches the rim margin (the change is held at 0 there) its constraints
+    fade in with the change: asked at full weight right beside the margin, the smoothest change
+    bent past the stroke's value beside it, a dark pit twice as deep as the stroke asked."""
+    from sketchforge.geometry.reflectance import LAMBERTIAN
+    from sketchforge_isophote_tool.layerdata import layer_data
+    from sketchforge_isophote_tool.shading import bary_rows
+
+    pick = [-0.2, 0.3]
+    stroke, c, _ = isophote_stroke(ellipse, pick, offset=-0.12, half=0.4)  # 0.12 towards the light
+    r = sculpt(ellipse, LIGHT, pick, 0.3, stroke, solver=STRIPS)
+    before, after = layer_data(ellipse, LIGHT, LAMBERTIAN), layer_data(r.mesh, LIGHT, LAMBERTIAN)
+    line = shapely.LineString(stroke)
+    P = np.array([line.interpolate(t, normalized=True).coords[0] for t in np.linspace(0.0, 1.0, 400)])
+    asked = np.abs(c - bary_rows(before.planar, P) @ before.E).max()
+    assert np.abs(after.E - before.E).max() <= 1.3 * asked  # 2.05x before the fade, 1.14x now
+    assert r.after <= max(2.0 * r.h, 0.3 * r.before), (r.before / r.h, r.after / r.h)
+
+
 def test_a_stroke_on_the_isophote_changes_nothing(ellipse):
     stroke, _, _ = isophote_stroke(ellipse, PICK, offset=0.0)
     with pytest.raises(NothingToDoError):
