@@ -32,7 +32,7 @@ directory keep that work for every later process (the app, ``sketchforge replay`
 benchmark's workers): JAX's persistent compilation cache (:func:`enable_compilation_cache`)
 keeps the compiled code, and the traced function itself is kept as a ``jax.export`` artifact
 (StableHLO, :func:`_segment_function`), so a later process neither imports diffrax nor traces:
-its first edit loads the artifact and finds the compiled code (~0.3 s of CPU instead of ~1.1 s;
+its first edit loads the artifact and finds the compiled code (~0.25 s of CPU instead of ~1.3 s;
 issue 36 counts that first edit in the time per edit). Every process, the first included,
 runs the exported function, so all run the very same code. equinox's runtime checks would put
 a host callback into the compiled code, which neither cache can store; they are switched to
