@@ -90,6 +90,8 @@ def _shape_worker(shape: str, layers: int, edits: int, seed: int, queue) -> None
             rng.bit_generator.state = state  # both solvers: the same null stroke and later edits
             null = _null_drift(mesh, rng, LIGHT, solver)
             acc = _accumulated_drift(shape, mesh, rng, LIGHT, solver) if i < 3 else None
+            if acc is not None:
+                acc.update(shape=shape, layer=i)
             queue.put(("edits", name, shape, outcomes, null, acc))
     queue.put(("done", None, shape, None, None, None))
 
@@ -271,6 +273,10 @@ def report(name: str, outcomes, nulls, accum, crashed, first=()) -> None:
               f"over 2.5x: {(ju > 2.5).sum()}")
         print(f"  new folded triangles near the rim: {int(folds.sum())} in {(folds > 0).sum()} of {len(folds)} chains; "
               f"largest height change of a chain's edit: max {max(a['largest'] for a in accum):.0%}")
+        for a, d, j in zip(accum, di, ju):
+            if d > 2.5 or j > 2.5 or a["folds"]:
+                print(f"    over a target: {a['shape']} layer {a['layer']}: dihedral {d:.2f}x, shading jump {j:.2f}x, "
+                      f"folds {a['folds']}")
     if ok:
         bounded = [o for o in ok if o.bounded > 0]
         print(f"edits scaled down to 60% of the peak: {len(bounded)}" + (

@@ -26,11 +26,16 @@ tolerance, a decision that round-off flips, and a stroke moved by 1e-12 moved th
 (``step_control: "pid"``, with ``rtol`` and ``atol``), and Kvaerno5 always uses it (its implicit
 stages take the controller's tolerances).
 
-Compilation: the first call of a process traces the function (~0.7 s) and compiles it
-(~1–2 s). JAX's persistent compilation cache (:func:`enable_compilation_cache`, under the
-user's cache directory) keeps the compiled code across processes, so a later process (the
-app, ``sketchforge replay``) pays the tracing only. equinox's runtime checks would put a host
-callback into the compiled code, which the cache refuses to store; they are switched to
+Compilation: the first process ever traces the function through diffrax (~0.6 s of CPU,
+after ~0.4 s importing diffrax) and compiles it (~1–2 s). Two caches under the user's cache
+directory keep that work for every later process (the app, ``sketchforge replay``, a
+benchmark's workers): JAX's persistent compilation cache (:func:`enable_compilation_cache`)
+keeps the compiled code, and the traced function itself is kept as a ``jax.export`` artifact
+(StableHLO, :func:`_segment_function`), so a later process neither imports diffrax nor traces:
+its first edit loads the artifact and finds the compiled code (~0.25 s of CPU instead of ~1.3 s;
+issue 36 counts that first edit in the time per edit). Every process, the first included,
+runs the exported function, so all run the very same code. equinox's runtime checks would put
+a host callback into the compiled code, which neither cache can store; they are switched to
 ``nan`` (``EQX_ON_ERROR``, unless the environment sets it) — the solve runs with
 ``throw=False`` and reads its own status instead.
 """
@@ -38,6 +43,7 @@ callback into the compiled code, which the cache refuses to store; they are swit
 from __future__ import annotations
 
 import functools
+import hashlib
 import os
 from pathlib import Path
 
@@ -47,7 +53,11 @@ import numpy as np
 #: height change; where the shading does not depend on the slope no edit can act).
 SPEED_FLOOR = 1e-3
 #: Strips integrated by one compiled call (a batch is padded to it): one shape, one compile.
-BATCH = 64
+#: A call's cost grows with the batch whether its lanes are real strips or padding (measured
+#: per call: 2.7, 3.9 and 8.6 ms of CPU for 16, 32 and 64 strips of 128 steps): 32 wastes
+#: less on padding than 64 (an edit's 40–100 strip halves filled two calls of 64, half of
+#: the second one padding) at the same cost per strip.
+BATCH = 32
 #: Points saved per strip and call; a strip's path is built segment by segment.
 SEGMENT = 128
 #: Steps a strip may take in one segment before it is cut off where it is.
@@ -98,10 +108,9 @@ def _jax():
     return jax
 
 
-@functools.lru_cache(maxsize=8)
-def _segment_function(integrator: str, adaptive: bool = False):
-    """The jitted, vmapped integration of one segment of :data:`BATCH` strips: one step per
-    saved point, or (``adaptive``) diffrax's PID step controller."""
+def _traced_segment_function(integrator: str, adaptive: bool = False):
+    """The jitted, vmapped integration of one segment of :data:`BATCH` strips through diffrax:
+    one step per saved point, or (``adaptive``) diffrax's PID step controller."""
     jax = _jax()
     import diffrax
     import jax.numpy as jnp
@@ -134,6 +143,121 @@ def _segment_function(integrator: str, adaptive: bool = False):
         return sol.ys, sol.stats["num_steps"]
 
     return jax.jit(jax.vmap(one, in_axes=(0, 0, None, None, None, None, None, None)))
+
+
+def _argument_specs(jax):
+    """The shapes and dtypes of a segment call's arguments (y0, sign, coeffs, origin, spacing,
+    length, rtol, atol): the one shape the exported function takes."""
+    from .field import GRID_SIZE
+
+    f64 = jax.numpy.float64
+    S = jax.ShapeDtypeStruct
+    return (S((BATCH, 2), f64), S((BATCH,), f64), S((GRID_SIZE, GRID_SIZE, 3), f64), S((2,), f64),
+            S((), f64), S((), f64), S((), f64), S((), f64))
+
+
+#: The artifact's first bytes, then a blake2b digest of the serialized function: a file cut
+#: short or changed on disk is seen as such and traced anew, never run.
+_MAGIC = b"sketchforge-strips-export-1\n"
+_DIGEST = 32
+
+
+def export_path(integrator: str, adaptive: bool) -> Path:
+    """Where the exported segment function of ``integrator`` is kept (beside the compilation
+    cache, ``.../sketchforge/strips/``): named by everything that makes it (the versions of
+    jax, jaxlib and the diffrax stack, the backend, this module's and :mod:`.field`'s source,
+    the batch and segment shapes, ``EQX_ON_ERROR``), so a change to any of them finds no
+    artifact and traces anew instead of running stale code."""
+    import importlib.metadata as md
+
+    jax = _jax()  # EQX_ON_ERROR, which the key holds, is set there
+    h = hashlib.blake2b(digest_size=12)
+    for dist in ("jax", "jaxlib", "diffrax", "equinox", "lineax", "optimistix"):
+        try:
+            h.update(f"{dist}={md.version(dist)};".encode())
+        except md.PackageNotFoundError:
+            h.update(f"{dist}=?;".encode())
+    h.update(f"{jax.default_backend()};{BATCH};{SEGMENT};{MAX_STEPS};{SPEED_FLOOR!r};"
+             f"{os.environ.get('EQX_ON_ERROR')};".encode())
+    here = Path(__file__).resolve().parent
+    for name in ("integrate.py", "field.py"):
+        h.update((here / name).read_bytes())
+    return cache_directory().parent / "strips" / f"{integrator}-{'pid' if adaptive else 'fixed'}-{h.hexdigest()}.jaxexport"
+
+
+def _load_exported(path: Path, jax):
+    """The exported function kept at ``path``, or None where there is none that this process
+    can run: missing, unreadable, cut short, changed on disk (its digest), not deserializable,
+    or made for other argument shapes or another backend."""
+    from jax import export
+
+    try:
+        data = path.read_bytes()
+    except OSError:
+        return None
+    head, digest, body = data[:len(_MAGIC)], data[len(_MAGIC):len(_MAGIC) + _DIGEST], data[len(_MAGIC) + _DIGEST:]
+    if head != _MAGIC or hashlib.blake2b(body, digest_size=_DIGEST).digest() != digest:
+        return None
+    try:
+        exported = export.deserialize(bytearray(body))
+        specs = _argument_specs(jax)
+        if (len(exported.in_avals) != len(specs) or jax.default_backend() not in exported.platforms
+                or any(a.shape != s.shape or a.dtype != s.dtype for a, s in zip(exported.in_avals, specs))):
+            return None
+    except Exception:  # noqa: BLE001  (a format this jax cannot read: a cache, traced anew)
+        return None
+    return exported
+
+
+def _store_exported(exported, path: Path) -> None:
+    """Keep ``exported`` at ``path`` for the next process. Best effort: a cache directory that
+    cannot be written, or a jax without serialization (flatbuffers), only costs the next
+    process the tracing. Written beside its final name and renamed, so a process reading it
+    never sees half a file."""
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    try:
+        body = bytes(exported.serialize())
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp.write_bytes(_MAGIC + hashlib.blake2b(body, digest_size=_DIGEST).digest() + body)
+        os.replace(tmp, path)
+    except Exception:  # noqa: BLE001  (OSError, ImportError: the cache only saves time)
+        try:
+            tmp.unlink(missing_ok=True)
+        except OSError:
+            pass
+
+
+@functools.lru_cache(maxsize=8)
+def _segment_function(integrator: str, adaptive: bool = False):
+    """The segment function of :func:`_traced_segment_function`, run from its ``jax.export``
+    artifact: loaded from :func:`export_path` when a process before this one made it, else
+    traced, exported and stored there. Either way the process runs the exported function (the
+    same StableHLO, so the same strips to the bit). Only a function that cannot be exported
+    (``EQX_ON_ERROR`` set to ``raise`` by the environment puts a host callback in it) runs as
+    traced."""
+    jax = _jax()
+    from jax import export
+
+    path = export_path(integrator, adaptive)
+    specs = _argument_specs(jax)
+    exported = _load_exported(path, jax)
+    if exported is not None:
+        fn = jax.jit(exported.call)
+        try:
+            # Compiled here rather than in the first edit, so that an artifact this jaxlib
+            # cannot compile is traced anew; the edit's call then finds it compiled (~30 ms
+            # with the compilation cache holding it).
+            fn.lower(*specs).compile()
+            return fn
+        except Exception:  # noqa: BLE001  (a cache: traced anew below)
+            pass
+    traced = _traced_segment_function(integrator, adaptive)
+    try:
+        exported = export.export(traced, platforms=[jax.default_backend()])(*specs)
+    except Exception:  # noqa: BLE001  (not exportable: run it as traced, uncached)
+        return traced
+    _store_exported(exported, path)
+    return jax.jit(exported.call)
 
 
 def integrate_paths(seeds: np.ndarray, coeffs: np.ndarray, origin: np.ndarray, spacing: float, step: float,
@@ -214,8 +338,9 @@ def integrate_paths(seeds: np.ndarray, coeffs: np.ndarray, origin: np.ndarray, s
 
 
 def warm_up(integrator: str = "tsit5", adaptive: bool = False) -> None:
-    """Compile the strip integration (~2 s on first use, ~0.7 s of tracing once the persistent
-    cache holds it), so the first ``strips`` edit of a session does not wait for it."""
+    """Compile the strip integration (~2–3 s the first time ever, ~0.3 s once the exported
+    artifact and the compiled code are cached), so the first ``strips`` edit of a session does
+    not wait for it."""
     from .field import GRID_SIZE
 
     coeffs = np.zeros((GRID_SIZE, GRID_SIZE, 3))
