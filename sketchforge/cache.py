@@ -18,8 +18,8 @@ import threading
 import types
 import weakref
 from collections import OrderedDict
-from collections.abc import Mapping
-from typing import Any, Callable, Hashable
+from collections.abc import Callable, Hashable, Mapping
+from typing import Any
 
 import numpy as np
 

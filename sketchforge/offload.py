@@ -23,14 +23,13 @@ No Qt here: the window wraps its document's host with :class:`OffloadedInflation
 from __future__ import annotations
 
 import multiprocessing
-import os
 import threading
 import time
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 
-from sketchforge.errors import SketchforgeError, SolverError
+from sketchforge.errors import SolverError
 
 #: Seconds to wait for the child to start (imports and plugin host) before inflating here.
 START_TIMEOUT_S = 60.0

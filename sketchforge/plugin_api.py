@@ -62,7 +62,6 @@ from __future__ import annotations
 import importlib
 
 from sketchforge.cache import LRUCache, array_key
-
 from sketchforge.document.commands import (
     Command,
     MacroCommand,

@@ -4,7 +4,7 @@ keep every depth row satisfied and stay at the QP's optimum."""
 
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cache
 from pathlib import Path
 
 import numpy as np
@@ -20,7 +20,7 @@ from sketchforge_assemble.testing import meshes_from_journal
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
 
-@lru_cache(maxsize=None)
+@cache
 def _creature():
     return meshes_from_journal(EXAMPLES / "creature.json")
 
@@ -121,7 +121,7 @@ def test_cache_stays_within_its_entries_and_bytes():
 # --- the depth solve ---------------------------------------------------------------------------
 
 
-@lru_cache(maxsize=None)
+@cache
 def _creature_qp():
     """The creature's depth QP with everything solve_without_free_parts is given, with the plain
     sleeve (``fillet: 0``): there the eye at rest clears the head, so the free-part and
@@ -145,7 +145,7 @@ def _creature_qp():
     return got["args"], got["kw"], res
 
 
-@lru_cache(maxsize=None)
+@cache
 def _exact():
     """solve_without_free_parts' answer on the creature and the exact optimum of the whole QP
     (the eye in it, the dual active set to 1e-10), asked for the same clearance."""

@@ -15,10 +15,17 @@ import scipy.sparse as sp
 import shapely
 from scipy.optimize import nnls
 
-from sketchforge_assemble import DepthOrderError
-from sketchforge_assemble import depth
-from sketchforge_assemble.depth import (_active_set, _crossing_rows, _equality_solution, _pair_rows, _polish_glue,
-                                        _Rows, _screening_guess, solve_depth)
+from sketchforge_assemble import DepthOrderError, depth
+from sketchforge_assemble.depth import (
+    _active_set,
+    _crossing_rows,
+    _equality_solution,
+    _pair_rows,
+    _polish_glue,
+    _Rows,
+    _screening_guess,
+    solve_depth,
+)
 from sketchforge_assemble.sheet import unique_edges
 
 
@@ -376,9 +383,8 @@ def test_screening_guess_is_the_anchored_glue_only_minimiser(monkeypatch):
 
 def _disk_sheet(layer, cx, cy, r, h, angle=0.0):
     """A sheet of a triangulated disk (Triangle, quality mesh)."""
-    from sketchforge_inflate import inflate_stroke
-
     from sketchforge_assemble.sheet import sheet_from_mesh
+    from sketchforge_inflate import inflate_stroke
 
     t = np.linspace(0, 2 * np.pi, 40, endpoint=False) + angle
     mesh = inflate_stroke(np.c_[cx + r * np.cos(t), cy + 0.8 * r * np.sin(t)], closed=True,

@@ -14,7 +14,8 @@ the first unknown entry's error or a "mesh differs".
 
 from __future__ import annotations
 
-from typing import Any, Iterable, Iterator
+from collections.abc import Iterable, Iterator
+from typing import Any
 
 from sketchforge.errors import DocumentFormatError, quote, shorten
 

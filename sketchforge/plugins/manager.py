@@ -16,10 +16,10 @@ from __future__ import annotations
 
 import logging
 import os
+from collections.abc import Iterable
 from functools import cached_property
 from importlib import metadata
 from importlib.metadata import entry_points
-from typing import Iterable
 
 import pluggy
 
@@ -150,7 +150,7 @@ class PluginHost:
         self.pm = pm
 
     @classmethod
-    def create(cls, plugins: Iterable = (), load_entry_points: bool = True, allowlist=None, skip_broken: bool = False) -> "PluginHost":
+    def create(cls, plugins: Iterable = (), load_entry_points: bool = True, allowlist=None, skip_broken: bool = False) -> PluginHost:
         return cls(make_plugin_manager(plugins, load_entry_points, allowlist, skip_broken))
 
     @property
@@ -590,7 +590,7 @@ class PluginHost:
         no animation plugin is installed)."""
         return self._solve("sketchforge_pose", doc=doc, frame=int(frame))
 
-    def exporter_for(self, path, doc=None) -> "object":
+    def exporter_for(self, path, doc=None) -> object:
         """The exporter for ``path``'s suffix. With ``doc``, the document exporter of that
         suffix (an animation) if it handles ``doc``, else the suffix's mesh exporter.
 

@@ -75,7 +75,7 @@ LAYER_TINTS = np.array(
 class CanvasViewBox(pg.ViewBox):
     """A ViewBox that offers left drags, clicks and wheel turns to the canvas first."""
 
-    def __init__(self, canvas: "Canvas") -> None:
+    def __init__(self, canvas: Canvas) -> None:
         super().__init__(lockAspect=True, enableMenu=False, invertY=False)
         self._canvas = canvas
 
@@ -511,7 +511,7 @@ class Canvas(pg.GraphicsView):
         self._refresh_handles()
         cursor = Qt.CursorShape.CrossCursor if name in ("draw", "sculpt", "light") else Qt.CursorShape.ArrowCursor
         self.viewport().setCursor(cursor)
-        for key, item in self.overlays.items():
+        for item in self.overlays.values():
             item.setVisible(name == "sculpt")
         self._update_light_indicator()
 

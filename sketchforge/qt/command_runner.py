@@ -22,12 +22,11 @@ JobRunner (the OBSERVATION view's assembly).
 from __future__ import annotations
 
 import functools
-from typing import Callable
+from collections.abc import Callable
 
 from PySide6.QtCore import QObject, QThreadPool, Signal
 
 from sketchforge.qt.workers import JobRunner
-
 
 #: ``run``'s default ``guard_token``: the runner starts its own crash record.
 _NO_TOKEN = object()

@@ -12,21 +12,18 @@ from __future__ import annotations
 import math
 import numbers
 import time
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Mapping, Sequence
 
 import numpy as np
 
-from sketchforge.plugin_api import GeometryError, LimitError, ParameterError, quote
-from sketchforge.plugin_api import number
-from sketchforge.plugin_api import laplacian_and_mass
-from sketchforge.plugin_api import Mesh
+from sketchforge.plugin_api import GeometryError, LimitError, Mesh, ParameterError, laplacian_and_mass, number, quote
 
 from .attach import Attachment, find_attachments
 from .blend import blend_junctions
 from .cache import AssemblyCache, memo
-from .errors import AttachmentError, DepthOrderError
 from .depth import build_problem, settle_free_parts, solve_without_free_parts
+from .errors import AttachmentError, DepthOrderError
 from .fair import fair_clear, hold_weights, interior_edges, ring_region, seam_zone, supports, wide_zone
 from .remesh import insert_chains
 from .sheet import THIN_HEIGHT_EDGES, refine_thin, sheet_from_mesh, taper
@@ -425,7 +422,7 @@ def _cut_junctions(sheets: list, attachments: list, knames: list[str], cache) ->
         s = sheets[lo]
         try:
             cut = memo(cache, "remesh", (s.xy, s.z, s.F, s.boundary, s.junction, s.holes, s.h, chains, sides),
-                       lambda: insert_chains(s, chains, knames, [a.upper for a in mine], sides))
+                       lambda: insert_chains(s, chains, knames, [a.upper for a in mine], sides))  # noqa: B023 - called in this iteration
         except AttachmentError as exc:
             raise _PartsFailed(exc, exc.parts or [a.upper for a in mine]) from None
         except GeometryError as exc:  # a degenerate re-triangulation: every part glued here

@@ -14,9 +14,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from sketchforge.plugin_api import GeometryError
-from sketchforge.plugin_api import guard
-from sketchforge.plugin_api import BACK, FRONT, plan_attachments
+from sketchforge.plugin_api import BACK, FRONT, GeometryError, guard, plan_attachments
 
 from .errors import AttachmentError
 from .sheet import Sheet

@@ -18,7 +18,7 @@ from __future__ import annotations
 import hashlib
 import threading
 from collections import Counter, OrderedDict
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 

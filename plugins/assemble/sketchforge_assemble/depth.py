@@ -53,12 +53,10 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as sla
-from scipy.sparse.csgraph import connected_components
 from scipy.linalg import cho_solve, cholesky, solve_triangular
+from scipy.sparse.csgraph import connected_components
 
-from sketchforge.plugin_api import guard
-from sketchforge.plugin_api import laplacian_and_mass
-from sketchforge.plugin_api import TriangleLocator
+from sketchforge.plugin_api import TriangleLocator, guard, laplacian_and_mass
 
 from .attach import FRONT, Attachment, lo_chain_index
 from .cache import AssemblyCache, memo
@@ -92,7 +90,7 @@ class _Rows:
         self.b.append(rhs)
         self.m += k
 
-    def add_block(self, other: "_Rows", colmap, layers) -> None:
+    def add_block(self, other: _Rows, colmap, layers) -> None:
         """Append the rows of ``other`` (columns and pairs numbered within it) with each column
         c replaced by ``colmap(c)`` and each pair entry p by ``layers[p]``."""
         layers = np.asarray(layers)
@@ -957,7 +955,7 @@ def solve_without_free_parts(P, q, Aeq, beq, Ain, bin_, offsets, free, rest, met
                     xg, gi = local[tuple(members)]
                 else:
                     xg, gi = _memo_solve(cache, sub, method, pad)
-            except DepthOrderError as exc:
+            except DepthOrderError:
                 squeezed = [int(f) for f in free if not out[f] and f in members]
                 if not squeezed:
                     raise

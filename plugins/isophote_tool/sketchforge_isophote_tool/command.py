@@ -18,16 +18,18 @@ from typing import ClassVar
 import numpy as np
 
 from sketchforge.plugin_api import (
+    MAX_COORDINATE,
+    DocumentFormatError,
+    Layer,
+    NothingToDoError,
     ReplaceLayerCommand,
+    SculptError,
     parse_field,
     parse_params,
     parse_points,
     parse_vector,
     transform_points,
 )
-from sketchforge.plugin_api import Layer
-from sketchforge.plugin_api import DocumentFormatError, NothingToDoError, SculptError
-from sketchforge.plugin_api import MAX_COORDINATE
 
 
 def _model(doc, name: str):
@@ -146,7 +148,7 @@ class SculptIsophote(ReplaceLayerCommand):
         return d
 
     @classmethod
-    def from_dict(cls, d: dict) -> "SculptIsophote":
+    def from_dict(cls, d: dict) -> SculptIsophote:
         pick = parse_vector(d, "pick", cls.name)
         if len(pick) != 2:
             raise DocumentFormatError(f"command {cls.name!r}: 'pick' must be 2 numbers [x, y]")
@@ -274,7 +276,7 @@ class SculptIsophotes(ReplaceLayerCommand):
         return d
 
     @classmethod
-    def from_dict(cls, d: dict) -> "SculptIsophotes":
+    def from_dict(cls, d: dict) -> SculptIsophotes:
         raw = parse_field(d, "edits", list, cls.name)
         if not raw:
             raise DocumentFormatError(f"command {cls.name!r}: 'edits' must list at least one edit")
