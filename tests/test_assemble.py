@@ -24,7 +24,8 @@ from sketchforge.geometry.mesh import Mesh
 from sketchforge.geometry.normals import face_normals
 from sketchforge_assemble import BACK, FRONT, AttachmentError, DepthOrderError, assemble_detailed, assemble_meshes
 from sketchforge_assemble import diagnostics as dg
-from sketchforge_assemble.depth import _active_set, solve_depth
+from sketchforge_assemble.active_set import _active_set
+from sketchforge_assemble.depth import solve_depth
 from sketchforge_assemble.plugin import assemble_layers
 from sketchforge_assemble.testing import meshes_from_journal
 

@@ -19,7 +19,7 @@ from assemble_shapes import inflate as _inflate
 from sketchforge.errors import GeometryError
 from sketchforge_assemble import assemble_detailed
 from sketchforge_assemble import diagnostics as dg
-from sketchforge_assemble.depth import _crossing_rows, _Rows
+from sketchforge_assemble.depth_rows import _crossing_rows, _Rows
 
 
 def _leg(pts):

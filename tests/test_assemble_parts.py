@@ -122,9 +122,9 @@ def test_each_sheet_gets_one_point_locator_per_assembly(monkeypatch):
             super().__init__(xy, F, *a, **k)
 
     monkeypatch.setattr(locate, "TriangleLocator", Counting)
-    import sketchforge_assemble.depth as depth
+    import sketchforge_assemble.depth_rows as depth_rows
 
-    monkeypatch.setattr(depth, "TriangleLocator", Counting)
+    monkeypatch.setattr(depth_rows, "TriangleLocator", Counting)
     import sketchforge.plugin_api as api  # the blend's locator comes through the public API
 
     monkeypatch.setattr(api, "TriangleLocator", Counting)

@@ -25,7 +25,7 @@ from sketchforge.geometry.mesh import Mesh
 from sketchforge_assemble import BACK, FRONT, assemble_detailed
 from sketchforge_assemble import diagnostics as dg
 from sketchforge_assemble.attach import lo_chain_index
-from sketchforge_assemble.depth import _sheet_operators
+from sketchforge_assemble.depth_rows import _sheet_operators
 
 
 @cache
