@@ -33,6 +33,7 @@ class Job(QRunnable):
         self.setAutoDelete(False)  # the runner keeps a reference until the signal arrives
         self.fn = fn
         self.label = label
+        self.background = False  # a job no progress is shown for (JobRunner.start)
         self.cancelled = False
         self.done = False
         self.signals = _JobSignals()

@@ -81,7 +81,7 @@ def find_attachments(sheets: list[Sheet], names: list[str], on_bad_junction: str
             raise AttachmentError(problem[0].upper() + problem[1:] + ".")
         warnings.append(problem if "free part" in problem else problem + " (assembled as a free part)")
 
-    junctions = []
+    junctions: list = []  # per sheet: its drawn junction (k, 2), or None
     for u, s in enumerate(sheets):
         if len(s.junction) == 0 or u in exclude:
             junctions.append(None)

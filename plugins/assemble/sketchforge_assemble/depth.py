@@ -55,6 +55,8 @@ screening, glue polish) and :mod:`.active_set` is the dual active-set method it 
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.csgraph import connected_components
@@ -127,7 +129,7 @@ def solve_without_free_parts(P, q, Aeq, beq, Ain, bin_, offsets, free, rest, met
     lifted: dict[int, float] = {}
     while True:
         x = np.zeros(N)
-        info = {"method": method, "osqp_iterations": 0, "iterations": 0, "groups": 0}
+        info: dict[str, Any] = {"method": method, "osqp_iterations": 0, "iterations": 0, "groups": 0}
         touch = out[in_lo] | out[in_hi]  # depth rows of a free part left out
         # Independent groups: sheets in the QP linked by a glue or depth row. Each is its own
         # QP (in one problem they would not interact), solved and cached on its own, so

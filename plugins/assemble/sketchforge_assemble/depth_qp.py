@@ -6,6 +6,8 @@ docstring and ``benchmarks/bench_depth_qp.py``).
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as sla
@@ -223,7 +225,7 @@ def _osqp_screened(P, q, Aeq, beq, Ain, bin_, pad, rounds: int = 6):
     Pu = sp.triu(P).tocsc()
     y_all = np.zeros(r)
     y_eq = np.zeros(len(beq))
-    info = {"osqp_iterations": 0, "osqp_rounds": 0}
+    info: dict[str, Any] = {"osqp_iterations": 0, "osqp_rounds": 0}
     x = x0
     for _ in range(rounds):
         rows = np.flatnonzero(use)

@@ -13,7 +13,7 @@ the light it used.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -116,7 +116,7 @@ class SculptIsophote(ReplaceLayerCommand):
     solver: str | None = None
     params: dict = field(default_factory=dict)
     #: The last SculptResult (edit zone, fidelity, timings) for display; not saved.
-    result: object = field(default=None, repr=False, compare=False)
+    result: Any = field(default=None, repr=False, compare=False)
 
     def text(self) -> str:
         return "Sculpt isophote"
@@ -243,7 +243,7 @@ class SculptIsophotes(ReplaceLayerCommand):
     solver: str | None = None
     params: dict = field(default_factory=dict)
     #: The last JointSculptResult, for display; not saved.
-    result: object = field(default=None, repr=False, compare=False)
+    result: Any = field(default=None, repr=False, compare=False)
 
     def text(self) -> str:
         return f"Sculpt {len(self.edits)} isophotes" if len(self.edits) != 1 else "Sculpt isophote"

@@ -14,6 +14,7 @@ the shading E at every vertex.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import scipy.ndimage as ndi
@@ -83,7 +84,7 @@ class PlanarData:
     Gq: sp.csr_matrix
     Q: sp.csr_matrix
     mass: np.ndarray
-    outline: object
+    outline: Any  # a shapely polygon (untyped)
     locator: TriangleLocator
     is_contour: np.ndarray
     d_rim: np.ndarray

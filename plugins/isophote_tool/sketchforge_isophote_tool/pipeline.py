@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import shapely
@@ -114,20 +115,20 @@ class SculptResult:
     mesh: Mesh
     changed: np.ndarray
     c: float
-    isophote: object
-    band: object
-    stroke: object
+    isophote: Any  # shapely geometries (untyped)
+    band: Any
+    stroke: Any
     dE: np.ndarray
     before: float
     after: float
     fraction: float = 1.0
     timings: dict = field(default_factory=dict)
     params: dict = field(default_factory=dict)
-    layer: object = field(default=None, repr=False)
+    layer: Any = field(default=None, repr=False)  # the LayerData it was solved on
     band_radius: float = 0.0
     reach: float = 0.0
     solver: str = "gauss_newton"
-    solution: object = field(default=None, repr=False)
+    solution: Any = field(default=None, repr=False)  # the solver's SculptSolution
     ignored_length: float = 0.0
     ignored_fraction: float = 0.0
     bounded_from: float = 0.0
@@ -316,8 +317,8 @@ class PreparedStroke:
     of the drawn stroke was left out (``ignored`` of ``drawn``, drawing units)."""
 
     c: float
-    iso: object
-    band: object
+    iso: Any  # shapely geometries (untyped)
+    band: Any
     in_band: np.ndarray
     radius: float
     pieces: list
