@@ -9,7 +9,7 @@ PLUGINS := plugins/inflate plugins/isophote_tool plugins/assemble plugins/animat
 # `make test` runs their own tests (pyproject's testpaths) against sketchforge's fixtures.
 EXAMPLE_PLUGINS := examples/plugins/soft_brdf examples/plugins/bump_brush examples/plugins/off_exporter
 
-.PHONY: run deps test venv bench mutate screenshots clean
+.PHONY: run deps lint test venv bench mutate screenshots clean
 
 # What Qt's xcb window plugin needs on a minimal Debian/Ubuntu image (the same list as
 # sketchforge/qt/platform_check.py's XCB_LIBRARIES; a test keeps the two equal).
@@ -24,7 +24,7 @@ venv: $(STAMP)
 $(STAMP): pyproject.toml $(addsuffix /pyproject.toml,$(PLUGINS) $(EXAMPLE_PLUGINS))
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install -q --upgrade pip
-	$(BIN)/python -m pip install -q -e '.[test]' $(addprefix -e ,$(PLUGINS) $(EXAMPLE_PLUGINS))
+	$(BIN)/python -m pip install -q -e '.[test,dev]' $(addprefix -e ,$(PLUGINS) $(EXAMPLE_PLUGINS))
 	touch $@
 
 # Checks first that a window can open (display, xcb libraries): if not, the last line says
@@ -38,9 +38,16 @@ run: $(STAMP)
 deps:
 	$(SUDO) apt-get install -y --no-install-recommends $(DEB_PACKAGES)
 
+# Lint and types, first in `make test` (so CI runs them): ruff on the whole tree, then mypy
+# on sketchforge/ and plugins/ held to mypy-baseline.json (tools/check_types.py: a module's
+# error count may only go down). Configuration: pyproject.toml's [tool.ruff] and [tool.mypy].
+lint: $(STAMP)
+	$(BIN)/ruff check .
+	$(BIN)/python tools/check_types.py
+
 # The whole suite. Qt runs offscreen; the few OpenGL tests start their own Xvfb
 # (pytest-xvfb) and are skipped where no Xvfb binary exists.
-test: $(STAMP)
+test: $(STAMP) lint
 	QT_QPA_PLATFORM=offscreen $(BIN)/python -m pytest -q $(PYTEST_ARGS)
 
 bench: $(STAMP)

@@ -40,7 +40,11 @@ def tube(n_target: int):
     c0, c1 = len(V), len(V) + 1
     V = np.r_[V, [[0, 0, 0], [8.0, 0, 0]]]
     ring = np.arange(nr)
-    F = np.r_[F, np.c_[np.full(nr, c0), ring, (ring + 1) % nr], np.c_[np.full(nr, c1), (nx - 1) * nr + (ring + 1) % nr, (nx - 1) * nr + ring]]
+    F = np.r_[
+        F,
+        np.c_[np.full(nr, c0), ring, (ring + 1) % nr],
+        np.c_[np.full(nr, c1), (nx - 1) * nr + (ring + 1) % nr, (nx - 1) * nr + ring],
+    ]
     return V, F.astype(np.int64)
 
 

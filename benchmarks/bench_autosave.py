@@ -14,7 +14,6 @@ import time
 from pathlib import Path
 
 import sketchforge_inflate.plugin as inflate
-
 from sketchforge.document import commands as C
 from sketchforge.document import fileformat as ff
 from sketchforge.document.autosave import Autosaver
@@ -40,9 +39,9 @@ def main() -> None:
         for i in range(REPEAT):
             doc.execute({"command": "rename_layer", "layer": layer, "name": f"changed {i}"})
             tokens = []
-            full.append(timed(lambda: tokens.append(saver.begin_solve(cmd))))  # changed: everything
+            full.append(timed(lambda: tokens.append(saver.begin_solve(cmd))))  # changed: everything  # noqa: B023 - called in this iteration
             saver.end_solve(tokens.pop())
-            small.append(timed(lambda: tokens.append(saver.begin_solve(cmd))))  # unchanged: the record
+            small.append(timed(lambda: tokens.append(saver.begin_solve(cmd))))  # unchanged: the record  # noqa: B023 - called in this iteration
             record = saver.pending_path.stat().st_size
             saver.end_solve(tokens.pop())
         size = saver.path.stat().st_size

@@ -81,16 +81,16 @@ def osqp_polishing():
 def solve_pipeline(qp, pad, polish=False, osqp_only=False):
     """``solve_depth`` as the assembly calls it; ``osqp_only``: without its exact glue-only
     first step (what it did before issue 39)."""
-    from sketchforge_assemble import depth
+    from sketchforge_assemble import depth_qp
     from sketchforge_assemble.depth import solve_depth
 
     if osqp_only:
-        real = depth._equality_solution
-        depth._equality_solution = lambda *a: None
+        real = depth_qp._equality_solution
+        depth_qp._equality_solution = lambda *a: None
         try:
             return solve_pipeline(qp, pad, polish)
         finally:
-            depth._equality_solution = real
+            depth_qp._equality_solution = real
     if polish:
         with osqp_polishing():
             x, info = solve_depth(*qp, method="osqp", pad=pad)
@@ -200,7 +200,7 @@ def main(n_random: int) -> None:
         print(f"{qname}: {P.shape[0]} unknowns, {len(beq)} glue rows, {len(bin_)} depth rows, gap {2 * pad:.3g}")
         for name, fn in solvers.items():
             try:
-                t, (x, note) = cpu(lambda: fn(qp, pad))
+                t, (x, note) = cpu(lambda: fn(qp, pad))  # noqa: B023 - called in this iteration
                 m = measure(qp, pad, x, ref)
             except Exception as exc:  # noqa: BLE001 - a solver that fails is a result too
                 t, m, note = float("nan"), None, f"{type(exc).__name__}: {exc}"

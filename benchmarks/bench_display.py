@@ -133,9 +133,9 @@ def _models() -> list:
 
 
 def app() -> None:
-    from sketchforge.geometry.model_shading import model_shader
     from sketchforge.document import commands as C
     from sketchforge.document import fileformat as ff
+    from sketchforge.geometry.model_shading import model_shader
     from sketchforge.qt.app import ensure_qapp, plugin_host
     from sketchforge.qt.canvas import Canvas
 

@@ -35,9 +35,18 @@ def measure(meshes, closed, params):
               and dg.euler_characteristics(F) == [2] * res.components)
     inter = len(dg.intersecting_pairs(V, F))
     fair = res.timings.get("fair", 0.0) + res.timings.get("fair_check", 0.0)
-    return res, {"max": float(d.max()), "over90": int(np.sum(d > 90)), "le45": float(np.mean(d <= 45)),
-                 "fair": fair, "fallback": any("plain fold" in w for w in res.warnings), "zone": res.solver.get("fair_zone"), "closed": ok, "inter": inter, "time": t,
-                 "target": bool(d.max() <= 90 and np.mean(d <= 45) >= 0.999 and ok and inter == 0)}
+    return res, {
+        "max": float(d.max()),
+        "over90": int(np.sum(d > 90)),
+        "le45": float(np.mean(d <= 45)),
+        "fair": fair,
+        "fallback": any("plain fold" in w for w in res.warnings),
+        "zone": res.solver.get("fair_zone"),
+        "closed": ok,
+        "inter": inter,
+        "time": t,
+        "target": bool(d.max() <= 90 and np.mean(d <= 45) >= 0.999 and ok and inter == 0),
+    }
 
 
 def line(name, m):

@@ -22,10 +22,10 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
 
 from sculpt_helpers import isophote_stroke  # noqa: E402
-from sketchforge_isophote_tool import sculpt  # noqa: E402
-from sketchforge_isophote_tool.testing import LIGHT, inflated  # noqa: E402
 
 from sketchforge.errors import SketchforgeError  # noqa: E402
+from sketchforge_isophote_tool import sculpt  # noqa: E402
+from sketchforge_isophote_tool.testing import LIGHT, inflated  # noqa: E402
 
 PICK = [0.2, 0.1]
 #: ellipse 1 x 0.7 at this resolution: about 5 000 vertices
@@ -119,7 +119,7 @@ def bounds(solver) -> dict:
 
         def ok(c):
             try:
-                solver.check_params({key: int(c) if whole else c})
+                solver.check_params({key: int(c) if whole else c})  # noqa: B023 - called in this iteration
                 return True
             except SketchforgeError:
                 return False
@@ -161,7 +161,7 @@ def bench_assemble() -> None:
               (", ".join(f"{k}={v:g}" for k, v in lows.items()), lows),
               ("every top at once, fair=50", dict(ASSEMBLY_TOPS, fair=50))]
     for label, params in cases:
-        report(label, timed(lambda: f"{asm.assemble(layers, asm.check_params(params)).n_vertices} vertices"))
+        report(label, timed(lambda: f"{asm.assemble(layers, asm.check_params(params)).n_vertices} vertices"))  # noqa: B023 - called in this iteration
 
 
 def main() -> None:

@@ -13,7 +13,6 @@ shared machine): it is reported as "> ceiling".
 from __future__ import annotations
 
 import argparse
-import base64
 import json
 import os
 import signal

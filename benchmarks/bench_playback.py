@@ -95,7 +95,7 @@ def _shots(app, w, ctl, out: Path) -> None:
         # each frame warm-starts from the pose on display: wait for this one to arrive
         shown = ctl._pose
         ctl.set_frame(f)
-        _wait(app, lambda: ctl._pose is not shown and ctl.worker._pending is None and not ctl.worker.busy)
+        _wait(app, lambda: ctl._pose is not shown and ctl.worker._pending is None and not ctl.worker.busy)  # noqa: B023 - called in this iteration
     _run_loop(app, 200)
     out.mkdir(parents=True, exist_ok=True)
     for style in ("shaded", "cel", "isophotes"):

@@ -79,7 +79,7 @@ def save_load_replay_check(n: int) -> tuple[int, float]:
     bad = 0
     t = time.perf_counter()
     with tempfile.TemporaryDirectory() as d:
-        for i in range(n):
+        for _ in range(n):
             doc = Document(host=host)
             a = rng.uniform(-math.pi, math.pi)
             doc.push(C.SetLight(direction=[math.cos(a) * 3.7, math.sin(a) * 3.7, 0.0]))

@@ -24,6 +24,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "tests"))
 
 from sculpt_helpers import isophote_stroke  # noqa: E402
+
 from sketchforge_isophote_tool import layerdata, pipeline, sculpt  # noqa: E402
 from sketchforge_isophote_tool.testing import LIGHT, inflated  # noqa: E402
 

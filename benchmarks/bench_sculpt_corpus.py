@@ -106,7 +106,7 @@ def _elevation_worker(shape: str, layers: int, edits: int, seed: int, queue) -> 
     """The single-edit corpus under each raised light (gauss_newton)."""
     from sketchforge_isophote_tool.corpus import corpus_layers, draw_edits, run_edit
 
-    for _, i, mesh, rng in corpus_layers((shape,), per_shape=layers, seed=seed):
+    for _, i, mesh, _rng in corpus_layers((shape,), per_shape=layers, seed=seed):
         for el in ELEVATIONS:
             light = _light(el)
             # One stream per light, seeded from the layer's: the same shapes, each light's own
@@ -121,7 +121,7 @@ def _pairs_worker(shape: str, layers: int, pairs: int, seed: int, queue) -> None
     """Pairs of edits, jointly and one after the other (gauss_newton)."""
     from sketchforge_isophote_tool.corpus import corpus_layers, draw_pairs, run_pair
 
-    for _, i, mesh, rng in corpus_layers((shape,), per_shape=layers, seed=seed):
+    for _, i, mesh, _rng in corpus_layers((shape,), per_shape=layers, seed=seed):
         for el in PAIR_ELEVATIONS:
             light = _light(el)
             sub = np.random.default_rng([seed, int(el), i, len(shape), 2])
@@ -249,7 +249,8 @@ def report(name: str, outcomes, nulls, accum, crashed, first=()) -> None:
         mdz = np.array([o.max_dz for o in ok])
         ch = np.array([o.changed for o in ok])
         reach = np.array([o.reach for o in ok])
-        print(f"largest height change per edit (fraction of the peak): median {np.median(mdz):.1%}, p95 {_pct(mdz, 95):.1%}, max {mdz.max():.1%}")
+        print(f"largest height change per edit (fraction of the peak): median {np.median(mdz):.1%}, "
+              f"p95 {_pct(mdz, 95):.1%}, max {mdz.max():.1%}")
         print(f"locality: vertices moved {np.median(ch):.1%} of the layer median, p95 {_pct(ch, 95):.1%}; farthest moved "
               f"vertex from the stroke {np.median(reach):.1f}h median, p95 {_pct(reach, 95):.1f}h")
     for shape in SHAPES:
@@ -260,7 +261,8 @@ def report(name: str, outcomes, nulls, accum, crashed, first=()) -> None:
               f"after median {np.nanmedian(a):.2f}h p95 {np.nanpercentile(a, 95):.2f}h")
     if nulls:
         nd = np.array(nulls)
-        print(f"null drift, fresh layers (max |dz| / peak): median {np.median(nd):.3%}, p95 {_pct(nd, 95):.3%}, max {nd.max():.3%} ({len(nd)} layers)")
+        print(f"null drift, fresh layers (max |dz| / peak): median {np.median(nd):.3%}, p95 {_pct(nd, 95):.3%}, "
+              f"max {nd.max():.3%} ({len(nd)} layers)")
     if accum:
         ad = np.array([a["null"] for a in accum])
         di = np.array([a["dihedral"] / a["dihedral_fresh"] for a in accum])
@@ -283,7 +285,8 @@ def report(name: str, outcomes, nulls, accum, crashed, first=()) -> None:
             f" (their full change: max {max(o.bounded for o in bounded):.0%})" if bounded else ""))
     if len(times):
         cpu = np.array([o.cpu for o in outcomes if o.status != "crash"])
-        print(f"time per edit (wall): p50 {1e3 * np.median(times):.0f} ms, p95 {1e3 * _pct(times, 95):.0f} ms, max {1e3 * times.max():.0f} ms; "
+        print(f"time per edit (wall): p50 {1e3 * np.median(times):.0f} ms, p95 {1e3 * _pct(times, 95):.0f} ms, "
+              f"max {1e3 * times.max():.0f} ms; "
               f"CPU per edit, mean {1e3 * np.nanmean(cpu):.0f} ms (fresh processes, compilation included)")
     if first:
         print(f"first edit of each process (compiling): {', '.join(f'{1e3 * t:.0f}' for t in first)} ms")
@@ -354,7 +357,8 @@ def report_elevations(outcomes: dict, nulls: dict, crashed) -> None:
 
     invalid = {"stroke outside the band", "stroke in the rim margin"}
     print("\n== gauss_newton under raised lights (azimuth 45°) ==")
-    print("elevation | valid edits | land (of valid) | worse | crashes | after median / p95 (h) | refused unreachable | null drift max | time p50 / p95")
+    print("elevation | valid edits | land (of valid) | worse | crashes | after median / p95 (h) | refused unreachable | "
+          "null drift max | time p50 / p95")
     for name, outs in outcomes.items():
         ok = [o for o in outs if o.status == "ok"]
         valid = [o for o in outs if not (o.status == "refused" and refusal_reason(o.reason) in invalid)]

@@ -39,7 +39,7 @@ def moves(doc, n: int, draw=None) -> tuple[float, float]:
     tracemalloc.start()
     before = tracemalloc.get_traced_memory()[0]
     t0 = time.process_time()
-    for i in range(n):
+    for _ in range(n):
         doc.execute({"command": "transform_layer", "layer": "a", "matrix": [[1, 0, 0.001], [0, 1, 0.0005]]})
         if draw is not None:
             draw(doc)

@@ -79,8 +79,8 @@ MODULES: dict[str, dict] = {
         "only": ["_translated", "check_affine", "transform_points", "_transformed", "transformed_edits",
                  "compose_affine", "scale_about", "rotate_about", "TransformLayer", "TranslateLayer",
                  "MirrorLayer", "mirror_axis_x", "twin_source", "DuplicateLayer"],
-        "tests": ["tests/test_transform_contracts.py", "tests/test_undo_memory.py", "tests/test_transform.py", "tests/test_transform_edits.py",
-                  "tests/test_mirror_twin.py", "tests/test_command_roundtrip.py"]},
+        "tests": ["tests/test_transform_contracts.py", "tests/test_undo_memory.py", "tests/test_transform.py",
+                  "tests/test_transform_edits.py", "tests/test_mirror_twin.py", "tests/test_command_roundtrip.py"]},
     "offload": {"files": ["sketchforge/offload.py"],
                 "tests": ["tests/test_offload.py",
                           "tests/qt/test_qt_issue30.py::test_the_app_inflates_in_a_child_process_with_the_same_result",
@@ -193,7 +193,7 @@ class _Finder(ast.NodeVisitor):
 
     def _replace_op(self, node, op, kind: str) -> None:
         # Only the operator changes: the text between the operands is rewritten, the rest kept.
-        (a0, a1), (b0, b1) = self.span(node.left), self.span(node.right)
+        (_, a1), (b0, _) = self.span(node.left), self.span(node.right)
         start, end = self.span(node)
         middle = self.src[a1:b0].decode()
         sym = {ast.Add: "+", ast.Sub: "-"}
@@ -208,13 +208,13 @@ class _Finder(ast.NodeVisitor):
             if isinstance(node.op, ast.USub) and not isinstance(node.operand, ast.Constant):
                 self.add("sign", node, self.text(node.operand))
             elif isinstance(node.op, ast.Not):
-                self.add("boolean", node, self.text(node.operand) if isinstance(node.operand, (ast.Name, ast.Call, ast.Attribute, ast.Subscript))
-                         else f"({self.text(node.operand)})")
+                atom = isinstance(node.operand, (ast.Name, ast.Call, ast.Attribute, ast.Subscript))
+                self.add("boolean", node, self.text(node.operand) if atom else f"({self.text(node.operand)})")
         self.generic_visit(node)
 
     def visit_Compare(self, node) -> None:
         if self._inside and len(node.ops) == 1 and type(node.ops[0]) in _FLIP_CMP:
-            (a0, a1), (b0, b1) = self.span(node.left), self.span(node.comparators[0])
+            (_, a1), (b0, _) = self.span(node.left), self.span(node.comparators[0])
             start, end = self.span(node)
             middle = self.src[a1:b0].decode()
             sym = {ast.Lt: "<", ast.LtE: "<=", ast.Gt: ">", ast.GtE: ">=", ast.Eq: "==", ast.NotEq: "!=",
@@ -234,7 +234,7 @@ class _Finder(ast.NodeVisitor):
 
     def visit_BoolOp(self, node) -> None:
         if self._inside and len(node.values) == 2:
-            (a0, a1), (b0, b1) = self.span(node.values[0]), self.span(node.values[1])
+            (_, a1), (b0, _) = self.span(node.values[0]), self.span(node.values[1])
             start, end = self.span(node)
             middle = self.src[a1:b0].decode()
             old, new = ("and", "or") if isinstance(node.op, ast.And) else ("or", "and")

@@ -69,7 +69,7 @@ def remove_stale_temps(path) -> list[Path]:
     folder = path.parent if str(path.parent) else Path(".")
     prefix = temp_prefix(path)
     legacy = re.compile(re.escape(f".{path.name}.") + r"[A-Za-z0-9_]{8}\.tmp\Z")
-    removed = []
+    removed: list[Path] = []
     try:
         entries = list(os.scandir(folder))
     except OSError:
@@ -107,7 +107,7 @@ def remove_stale_temps_in(folder) -> list[Path]:
     gone), whatever file it was for. For folders whose targets change name at each session
     (the autosaves: a fresh name each time, so "the next save of the same file" never
     comes). A live writer's temp is left alone. Returns what was removed; never raises."""
-    removed = []
+    removed: list[Path] = []
     try:
         entries = list(os.scandir(folder))
     except OSError:

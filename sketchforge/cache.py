@@ -18,10 +18,12 @@ import threading
 import types
 import weakref
 from collections import OrderedDict
-from collections.abc import Mapping
-from typing import Any, Callable, Hashable
+from collections.abc import Callable, Hashable, Mapping
+from typing import Any, TypeVar
 
 import numpy as np
+
+T = TypeVar("T")
 
 __all__ = ["LRUCache", "array_key", "held_arrays", "nbytes_of"]
 
@@ -233,7 +235,7 @@ class LRUCache:
 
         return forget
 
-    def get_or_make(self, key, make: Callable[[], Any]):
+    def get_or_make(self, key, make: Callable[[], T]) -> T:
         """The value for ``key``, made by ``make()`` (and stored) on a miss."""
         value = self.get(key, _MISSING)
         if value is not _MISSING:

@@ -124,7 +124,10 @@ def cmd_replay(args) -> int:
             if mesh is None:
                 raise SketchforgeError("--frame needs an animation plugin (sketchforge-animate) and none is installed")
             doc.host.export(out, mesh=mesh)  # atomic, one-line errors naming the plugin
-            print(f"wrote {printable(out)} (frame {quote(args.frame, 40)}, {mesh.n_vertices} vertices, {mesh.n_faces} triangles)", file=sys.stderr)
+            print(
+                f"wrote {printable(out)} (frame {quote(args.frame, 40)}, {mesh.n_vertices} vertices, {mesh.n_faces} triangles)",
+                file=sys.stderr,
+            )
         else:
             if args.layer:
                 summary = doc.host.export(out, mesh=doc.export_mesh(args.layer))
@@ -170,7 +173,8 @@ def cmd_info(args) -> int:
         free = layer.closed or (layer.mesh is not None and len(layer.mesh.junction) == 0)
         kind = "closed" if free else "open"
         vis = "" if layer.visible else " (hidden)"
-        print(f"  {i}: {printable(layer.id)} '{printable(layer.name)}'{vis} {kind}, {nv} vertices, {nf} triangles, {len(layer.edits)} sculpt edits")
+        print(f"  {i}: {printable(layer.id)} '{printable(layer.name)}'{vis} {kind}, {nv} vertices, {nf} triangles, "
+              f"{len(layer.edits)} sculpt edits")
     if missing:
         print(f"{printable(args.doc)} needs plugins that are not installed:")
         for item in missing:

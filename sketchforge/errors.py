@@ -6,7 +6,6 @@ message on one line and the app shows it in a dialog. Anything else escaping is 
 
 import unicodedata
 
-
 #: An error's sentence is cut to this many characters: every message is one readable line,
 #: whatever size of value a file or a script put in it (issue 30: a 5 MB layer id was echoed
 #: whole). Values quoted in messages are cut much shorter, by :func:`quote`.

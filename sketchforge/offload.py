@@ -23,14 +23,13 @@ No Qt here: the window wraps its document's host with :class:`OffloadedInflation
 from __future__ import annotations
 
 import multiprocessing
-import os
 import threading
 import time
-from typing import Callable
+from collections.abc import Callable
 
 import numpy as np
 
-from sketchforge.errors import SketchforgeError, SolverError
+from sketchforge.errors import SolverError
 
 #: Seconds to wait for the child to start (imports and plugin host) before inflating here.
 START_TIMEOUT_S = 60.0
@@ -166,8 +165,12 @@ class OffloadedInflation:
                 self._child = _Child()
 
     def _current(self) -> _Child:
-        self.start()
-        return self._child
+        # Made and read under one lock: a restart or close() on another thread may clear it
+        # between the two (mypy found the gap: start() then self._child could be None).
+        with self._lock:
+            if self._child is None:
+                self._child = _Child()
+            return self._child
 
     def offloading(self, solver: str | None = None) -> bool:
         """True when inflations by the inflater ``solver`` (None: the default) go to the child

@@ -62,7 +62,6 @@ from __future__ import annotations
 import importlib
 
 from sketchforge.cache import LRUCache, array_key
-
 from sketchforge.document.commands import (
     Command,
     MacroCommand,
@@ -118,7 +117,7 @@ from sketchforge.tools.queries import isophote_through, layer_at
 
 #: Names loaded when first used: {name: (module, attribute)}. The geometry core's modules
 #: import SciPy, Triangle, libigl, shapely or JAX; a plugin pays for what it uses.
-_LAZY: dict[str, tuple[str, str]] = {
+_LAZY: dict[str, tuple[str, str | None]] = {
     # hosts and documents (tests, scripts, a plugin's own test support)
     "make_host": ("sketchforge.plugins.testing", "make_host"),
     "document_from_dict": ("sketchforge.document.fileformat", "document_from_dict"),

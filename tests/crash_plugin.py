@@ -36,7 +36,7 @@ class AbortSolve(ReplaceLayerCommand):
         return {"command": self.name, "layer": self.layer}
 
     @classmethod
-    def from_dict(cls, d: dict) -> "AbortSolve":
+    def from_dict(cls, d: dict) -> AbortSolve:
         return cls(layer=parse_field(d, "layer", str, cls.name))
 
 

@@ -259,7 +259,12 @@ def test_cli_exports_animation_and_a_posed_frame(real_host, tmp_path):
     ff.save(doc, path)
 
     def run(*args):
-        return subprocess.run([sys.executable, "-m", "sketchforge", "replay", str(path), *args], capture_output=True, text=True, timeout=300)
+        return subprocess.run(
+            [sys.executable, "-m", "sketchforge", "replay", str(path), *args],
+            capture_output=True,
+            text=True,
+            timeout=300,
+        )
 
     r = run("--export", str(tmp_path / "a.glb"))
     assert r.returncode == 0, r.stderr

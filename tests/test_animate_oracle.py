@@ -16,6 +16,7 @@ import math
 
 import numpy as np
 import pytest
+from test_animate import bar
 
 from sketchforge.errors import DocumentFormatError, ParameterError
 from sketchforge.geometry.mesh import Mesh
@@ -30,7 +31,6 @@ from sketchforge_animate.state import (
     fit_recording,
     smooth_loop,
 )
-from test_animate import bar
 
 RNG = np.random.default_rng(3901)
 

@@ -6,37 +6,38 @@ the real ``sketchforge_inflate.inflate_stroke``, then assembled.
 
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cache
 from pathlib import Path
 
 import numpy as np
 import pytest
 import scipy.sparse as sp
 import shapely
+from assemble_shapes import arc as _arc
+from assemble_shapes import ellipse as _ellipse
+from assemble_shapes import inflate as _inflate
 
 from sketchforge.document.layer import Layer
 from sketchforge.errors import SketchforgeError
 from sketchforge.geometry.locate import TriangleLocator
 from sketchforge.geometry.mesh import Mesh
 from sketchforge.geometry.normals import face_normals
-from assemble_shapes import arc as _arc
-from assemble_shapes import ellipse as _ellipse
-from assemble_shapes import inflate as _inflate
 from sketchforge_assemble import BACK, FRONT, AttachmentError, DepthOrderError, assemble_detailed, assemble_meshes
 from sketchforge_assemble import diagnostics as dg
-from sketchforge_assemble.depth import _active_set, solve_depth
+from sketchforge_assemble.active_set import _active_set
+from sketchforge_assemble.depth import solve_depth
 from sketchforge_assemble.plugin import assemble_layers
 from sketchforge_assemble.testing import meshes_from_journal
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
 
-@lru_cache(maxsize=None)
+@cache
 def _inflated(name: str):
     return meshes_from_journal(EXAMPLES / f"{name}.json")
 
 
-@lru_cache(maxsize=None)
+@cache
 def _assembled(name: str, order: tuple | None = None):
     layers, meshes, closed = _inflated(name)
     idx = list(range(len(layers))) if order is None else list(order)
@@ -282,7 +283,7 @@ def test_active_set_matches_osqp_on_a_small_document():
     assert np.abs(r1.mesh.V - r2.mesh.V).max() < 0.02
 
 
-@lru_cache(maxsize=None)
+@cache
 def _small_qp():
     """The depth QP (P, q, Aeq, beq, Ain, bin_) and OSQP's pad of the small body + arm document."""
     import sketchforge_assemble.depth as asm  # the assembly calls solve_depth through this module

@@ -5,7 +5,7 @@ guarantee of the plain sleeve and reach the issue's target: no dihedral angle ab
 
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cache
 from pathlib import Path
 
 import numpy as np
@@ -54,7 +54,7 @@ def _check_closed(res, meshes=None):
         assert np.min(np.linalg.norm(ends - c, axis=1)) < 4 * h, (a, b)
 
 
-@lru_cache(maxsize=None)
+@cache
 def _example(name):
     return meshes_from_journal(EXAMPLES / f"{name}.json")
 

@@ -11,15 +11,15 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 import shapely
-
 from assemble_shapes import arc as _arc
 from assemble_shapes import assemble_caught
 from assemble_shapes import ellipse as _ellipse
 from assemble_shapes import inflate as _inflate
+
 from sketchforge.errors import GeometryError
-from sketchforge_assemble import AttachmentError, assemble_detailed
+from sketchforge_assemble import assemble_detailed
 from sketchforge_assemble import diagnostics as dg
-from sketchforge_assemble.depth import _crossing_rows, _Rows
+from sketchforge_assemble.depth_rows import _crossing_rows, _Rows
 
 
 def _leg(pts):

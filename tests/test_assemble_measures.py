@@ -69,7 +69,8 @@ def test_digest_tells_bytes_and_types_apart_and_refuses_what_it_cannot_read():
 def test_the_memory_budget_sentence_counts_the_rows_in_play():
     from test_depth_qp import _random_qp
 
-    from sketchforge_assemble.depth import _WorkingSet, solve_depth
+    from sketchforge_assemble.active_set import _WorkingSet
+    from sketchforge_assemble.depth import solve_depth
 
     P, q, Aeq, beq, Ain, bin_ = _random_qp(6, n=2000, n_in=20)
     with pytest.raises(DepthOrderError) as err:

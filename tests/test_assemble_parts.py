@@ -5,22 +5,22 @@ point locator per sheet per assembly."""
 
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 import pytest
 import shapely
-
 from assemble_shapes import arc as _arc
 from assemble_shapes import ellipse as _ellipse
 from assemble_shapes import inflate as _inflate
+
 from sketchforge_assemble import assemble_detailed
 from sketchforge_assemble import diagnostics as dg
 from sketchforge_assemble.fair import adjacency, fairing_is_safe, supports
 from sketchforge_assemble.sheet import end_taper, unique_edges
 
 
-@lru_cache(maxsize=None)
+@cache
 def _scene():
     """An eye drawn *behind* the body (it settles onto the body's back face), the body and an
     arm glued to its front, assembled with the blended junction."""
@@ -122,9 +122,9 @@ def test_each_sheet_gets_one_point_locator_per_assembly(monkeypatch):
             super().__init__(xy, F, *a, **k)
 
     monkeypatch.setattr(locate, "TriangleLocator", Counting)
-    import sketchforge_assemble.depth as depth
+    import sketchforge_assemble.depth_rows as depth_rows
 
-    monkeypatch.setattr(depth, "TriangleLocator", Counting)
+    monkeypatch.setattr(depth_rows, "TriangleLocator", Counting)
     import sketchforge.plugin_api as api  # the blend's locator comes through the public API
 
     monkeypatch.setattr(api, "TriangleLocator", Counting)

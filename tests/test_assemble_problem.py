@@ -10,26 +10,25 @@ The problem and the answer are caught on their way through the assembly (spies o
 from __future__ import annotations
 
 import time
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 import pytest
 import scipy.sparse as sp
-
-from sketchforge.errors import ParameterError
-from sketchforge.geometry.laplacian import laplacian_and_mass
-from sketchforge.geometry.mesh import Mesh
 from assemble_shapes import arc as _arc
 from assemble_shapes import assemble_caught
 from assemble_shapes import ellipse as _ellipse
 from assemble_shapes import inflate as _inflate
+
+from sketchforge.errors import ParameterError
+from sketchforge.geometry.mesh import Mesh
 from sketchforge_assemble import BACK, FRONT, assemble_detailed
-from sketchforge_assemble.attach import lo_chain_index
-from sketchforge_assemble.depth import _sheet_operators
 from sketchforge_assemble import diagnostics as dg
+from sketchforge_assemble.attach import lo_chain_index
+from sketchforge_assemble.depth_rows import _sheet_operators
 
 
-@lru_cache(maxsize=None)
+@cache
 def _layers(eye_at=(0.45, -0.3)):
     """(meshes, closed): slot 0 empty, 1 an arm behind the body, 2 the body, 3 an arm in front,
     4 a free eye drawn over the front arm where it leaves the body."""
@@ -40,7 +39,7 @@ def _layers(eye_at=(0.45, -0.3)):
     return (None, back_arm, body, front_arm, eye), (False, False, False, False, True)
 
 
-@lru_cache(maxsize=None)
+@cache
 def _caught(fillet: float, eye_at=(0.45, -0.3)):
     """(result, build_problem's arguments and answer, settle_free_parts' answer)."""
     meshes, closed = _layers(eye_at)

@@ -4,14 +4,16 @@ keep every depth row satisfied and stay at the QP's optimum."""
 
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cache
 from pathlib import Path
 
 import numpy as np
 import pytest
 import scipy.sparse as sp
 
+import sketchforge_assemble.active_set as active_set
 import sketchforge_assemble.depth as depth
+import sketchforge_assemble.depth_qp as depth_qp
 from sketchforge.geometry.mesh import Mesh
 from sketchforge_assemble import assemble_detailed
 from sketchforge_assemble.cache import AssemblyCache, digest
@@ -20,7 +22,7 @@ from sketchforge_assemble.testing import meshes_from_journal
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 
 
-@lru_cache(maxsize=None)
+@cache
 def _creature():
     return meshes_from_journal(EXAMPLES / "creature.json")
 
@@ -121,7 +123,7 @@ def test_cache_stays_within_its_entries_and_bytes():
 # --- the depth solve ---------------------------------------------------------------------------
 
 
-@lru_cache(maxsize=None)
+@cache
 def _creature_qp():
     """The creature's depth QP with everything solve_without_free_parts is given, with the plain
     sleeve (``fillet: 0``): there the eye at rest clears the head, so the free-part and
@@ -145,7 +147,7 @@ def _creature_qp():
     return got["args"], got["kw"], res
 
 
-@lru_cache(maxsize=None)
+@cache
 def _exact():
     """solve_without_free_parts' answer on the creature and the exact optimum of the whole QP
     (the eye in it, the dual active set to 1e-10), asked for the same clearance."""
@@ -154,7 +156,7 @@ def _exact():
     x, info = depth.solve_without_free_parts(P, q, Aeq, beq, Ain, bin_, offsets, free, rest, pad=pad)
     Ain = sp.csr_matrix(Ain)
     warm = np.flatnonzero(Ain @ x - bin_ <= pad + 1e-6)
-    xe, _, _ = depth._active_set(P, q, sp.csr_matrix(Aeq), beq, Ain, bin_ + pad, warm, 1e-10, 100000)
+    xe, _, _ = active_set._active_set(P, q, sp.csr_matrix(Aeq), beq, Ain, bin_ + pad, warm, 1e-10, 100000)
     return x, info, xe
 
 
@@ -243,18 +245,18 @@ def test_screened_rows_give_the_answer_of_all_rows(screen, monkeypatch):
     keep = np.asarray(abs(Ain[:, ~glued]).sum(axis=1)).ravel() == 0
     Pg, qg, Aeqg = sp.csc_matrix(P)[glued][:, glued], q[glued], sp.csr_matrix(Aeq)[:, glued]
     Ag, bg = Ain[keep][:, glued], bin_[keep]
-    monkeypatch.setattr(depth, "SCREEN_PADS", screen)
+    monkeypatch.setattr(depth_qp, "SCREEN_PADS", screen)
     x, info = depth.solve_depth(Pg, qg, Aeqg, beq, Ag, bg, pad=pad)
     assert np.min(Ag @ x - bg) >= 0.0
     assert np.max(np.abs(Aeqg @ x - beq)) < 1e-3 * pad
     if screen == 6.0:  # the default: measured 2 124 of 10 740 rows in the end (2 022 first)
         assert info["osqp_rows"] < 0.3 * len(bg)
-        guess = depth._screening_guess(Pg, qg, Aeqg, beq)
+        guess = depth_qp._screening_guess(Pg, qg, Aeqg, beq)
         assert np.max(np.abs(Aeqg @ guess - beq)) < 1e-9  # glued exactly, anchored near the rest stack
         # libigl's LDLᵀ answers what SuperLU's KKT solve (its fallback) answers
         d = np.maximum(Pg @ np.ones(Pg.shape[0]), 0.0)
-        lu = depth._equality_solution((Pg + sp.diags(depth.ANCHOR * d)).tocsc(),
-                                      qg + depth.ANCHOR * np.where(d > 0, qg, 0.0), Aeqg, beq)
+        lu = depth_qp._equality_solution((Pg + sp.diags(depth_qp.ANCHOR * d)).tocsc(),
+                                      qg + depth_qp.ANCHOR * np.where(d > 0, qg, 0.0), Aeqg, beq)
         assert np.abs(guess - lu).max() < 1e-9
     # the exact optimum of the whole QP, on the glued parts (the eye's rows are inactive there)
     xe = _exact()[2][glued]

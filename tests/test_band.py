@@ -2,9 +2,9 @@
 
 import numpy as np
 import pytest
+from meshes import gaussian_bump, hemisphere
 from shapely.geometry import LineString, Point, Polygon
 
-from meshes import gaussian_bump, hemisphere
 from sketchforge.errors import SculptError
 from sketchforge.geometry.band import band
 from sketchforge.geometry.isophotes import isophotes

@@ -5,8 +5,8 @@ import warnings
 
 import numpy as np
 import pytest
-
 from inflate_shapes import circle, figure_eight, star
+
 from sketchforge.errors import ContourError
 from sketchforge.geometry.contour import (
     JUNCTION_GAP_EDGES,

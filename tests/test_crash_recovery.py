@@ -17,14 +17,12 @@ import sys
 from pathlib import Path
 
 import pytest
+from crash_plugin import live_session
 
-from sketchforge.document import Document
+from sketchforge.document import Document, autosave
 from sketchforge.document import fileformat as ff
-from sketchforge.document import autosave
 from sketchforge.document.autosave import Autosaver, describe_stop, find_recoverable, forget, recover, writer_alive
 from sketchforge.plugins.testing import FanInflater, make_test_host
-
-from crash_plugin import live_session
 
 ROOT = Path(__file__).resolve().parent.parent
 TESTS = Path(__file__).resolve().parent

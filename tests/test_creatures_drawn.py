@@ -5,10 +5,10 @@ shares no code with the assembler."""
 
 from __future__ import annotations
 
+import mesh_checks as mc
 import numpy as np
 import pytest
 
-import mesh_checks as mc
 from sketchforge.geometry import guard
 from sketchforge_assemble import BACK, FRONT, assemble_detailed
 from sketchforge_assemble.drawn import KINDS, drawn_creature

@@ -13,7 +13,14 @@ import pytest
 
 from sketchforge import cli
 from sketchforge.batch import samples
-from sketchforge.batch.dataset import MANIFEST_NAME, dataset_sample, manifest_bytes, prepare_dataset_dir, render_sample, run_dataset
+from sketchforge.batch.dataset import (
+    MANIFEST_NAME,
+    dataset_sample,
+    manifest_bytes,
+    prepare_dataset_dir,
+    render_sample,
+    run_dataset,
+)
 from sketchforge.batch.jobs import software
 from sketchforge.batch.progress import ProgressBar
 

@@ -15,15 +15,16 @@ import scipy.sparse as sp
 import shapely
 from scipy.optimize import nnls
 
-from sketchforge_assemble import DepthOrderError
-from sketchforge_assemble import depth
-from sketchforge_assemble.depth import (_active_set, _crossing_rows, _equality_solution, _pair_rows, _polish_glue,
-                                        _Rows, _screening_guess, solve_depth)
+from sketchforge_assemble import DepthOrderError, active_set, depth_qp
+from sketchforge_assemble.active_set import _active_set
+from sketchforge_assemble.depth import solve_depth
+from sketchforge_assemble.depth_qp import _equality_solution, _polish_glue, _screening_guess
+from sketchforge_assemble.depth_rows import _crossing_rows, _pair_rows, _Rows
 from sketchforge_assemble.sheet import unique_edges
 
 
 def _random_qp(seed: int, n: int = 60, n_eq: int = 3, n_in: int = 50, twins: int = 0, sheets: int = 3):
-    """(P, q, Aeq, beq, Ain, bin_) shaped like :func:`depth.build_problem`'s: ``sheets`` blocks of
+    """(P, q, Aeq, beq, Ain, bin_) shaped like :func:`depth_rows.build_problem`'s: ``sheets`` blocks of
     unknowns, each with a path Laplacian (a shift is free, a bend costs) plus a mass term pulling
     it towards its own rest depth; glue rows of two terms and depth rows of one vertex against a
     point of a triangle of another block. Feasible by construction (every row holds at a random
@@ -121,7 +122,7 @@ def test_osqp_answer_clears_every_row_by_the_pad_and_sits_at_the_padded_optimum(
     assert 1 <= info["osqp_rounds"] <= 6
     assert 0 < info["osqp_iterations"] < 20000
     # every row within reach of the answer was given to OSQP
-    assert info["osqp_rows"] >= int(np.sum(slack < depth.SCREEN_PADS * pad))
+    assert info["osqp_rows"] >= int(np.sum(slack < depth_qp.SCREEN_PADS * pad))
     assert info["osqp_rows"] <= len(bin_)
 
 
@@ -146,8 +147,8 @@ def test_osqp_rounds_grow_the_rows_until_every_row_holds(monkeypatch):
     x_ref, _ = solve_depth(P, q, Aeq, beq, Ain, bin_ + pad, method="active_set")
     far_guess = np.full(P.shape[0], np.nan)
     far_guess[:] = sp.linalg.spsolve(P, -q)  # the glue-free, anchor-free minimiser
-    monkeypatch.setattr(depth, "_screening_guess", lambda *a: far_guess + 0.0)
-    x, y, info = depth._osqp_screened(P, q, Aeq, beq, Ain, bin_, pad)
+    monkeypatch.setattr(depth_qp, "_screening_guess", lambda *a: far_guess + 0.0)
+    x, y, info = depth_qp._osqp_screened(P, q, Aeq, beq, Ain, bin_, pad)
     assert info["osqp_rounds"] >= 2
     assert np.min(Ain @ x - bin_) >= -1e-3 * pad
     assert np.abs(x - x_ref).max() <= 0.5 * pad  # OSQP's accuracy, as above
@@ -171,12 +172,12 @@ def test_warm_started_rounds_need_fewer_iterations_than_a_cold_start(monkeypatch
             return super().warm_start(**kw)
 
     monkeypatch.setattr(osqp, "OSQP", Spy)
-    _, _, info = depth._osqp_screened(P, q, Aeq, beq, Ain, bin_, pad)
+    _, _, info = depth_qp._osqp_screened(P, q, Aeq, beq, Ain, bin_, pad)
     assert len(calls) == info["osqp_rounds"]  # every round starts from the last point
     assert calls[0]["x"].shape == (P.shape[0],) and np.all(np.isfinite(calls[0]["x"]))
-    monkeypatch.setattr(depth, "_screening_guess", lambda *a: None)
+    monkeypatch.setattr(depth_qp, "_screening_guess", lambda *a: None)
     calls.clear()
-    _, _, cold = depth._osqp_screened(P, q, Aeq, beq, Ain, bin_, pad)
+    _, _, cold = depth_qp._osqp_screened(P, q, Aeq, beq, Ain, bin_, pad)
     assert calls == [] and cold["osqp_rows"] == len(bin_)  # no guess: every row at once, cold
 
 
@@ -184,7 +185,7 @@ def test_osqp_left_short_of_a_row_hands_over_to_the_active_set():
     # without a pad, OSQP's 1e-4 accuracy leaves tight rows violated (here by 1.3e-4): the
     # active set finishes from OSQP's active rows and the answer is exact, not OSQP's
     P, q, Aeq, beq, Ain, bin_ = _random_qp(0)
-    x_osqp, _, _ = depth._osqp_screened(P, q, Aeq, beq, Ain, bin_, 0.0)
+    x_osqp, _, _ = depth_qp._osqp_screened(P, q, Aeq, beq, Ain, bin_, 0.0)
     assert np.min(Ain @ x_osqp - bin_) < -1e-5
     x, info = solve_depth(P, q, Aeq, beq, Ain, bin_, method="osqp", pad=0.0)
     assert info["osqp_iterations"] > 0
@@ -225,7 +226,7 @@ def test_memory_budget_counts_what_the_working_set_holds(monkeypatch):
     # rows probed, the buffer's columns and the m×m factor, never more
     P, q, Aeq, beq, Ain, bin_ = _random_qp(6, n=2000, n_in=20)
     seen = []
-    real = depth._WorkingSet.check_budget
+    real = active_set._WorkingSet.check_budget
 
     def spy(self, new_columns=0, z_columns=None, m=None):
         n = len(self.x0)
@@ -234,7 +235,7 @@ def test_memory_budget_counts_what_the_working_set_holds(monkeypatch):
         seen.append((len(self.cache) + new_columns, zc, mm, 8 * n * (len(self.cache) + new_columns + zc) + 8 * mm * mm))
         return real(self, new_columns, z_columns, m)
 
-    monkeypatch.setattr(depth._WorkingSet, "check_budget", spy)
+    monkeypatch.setattr(active_set._WorkingSet, "check_budget", spy)
     solve_depth(P, q, Aeq, beq, Ain, bin_, method="active_set")
     rows = len(bin_) + len(beq)
     assert max(s[0] for s in seen) <= rows
@@ -242,7 +243,7 @@ def test_memory_budget_counts_what_the_working_set_holds(monkeypatch):
     assert max(s[2] for s in seen) <= 16
     assert all(s[1] == 16 for s in seen)
     peak = max(s[3] for s in seen)
-    monkeypatch.setattr(depth._WorkingSet, "check_budget", real)
+    monkeypatch.setattr(active_set._WorkingSet, "check_budget", real)
     solve_depth(P, q, Aeq, beq, Ain, bin_, method="active_set", memory_budget=peak)  # exactly enough
     with pytest.raises(DepthOrderError, match=r"needed \d+ MB, over its budget of 0 MB .*Reorder or redraw"):
         solve_depth(P, q, Aeq, beq, Ain, bin_, method="active_set", memory_budget=peak - 1)
@@ -345,8 +346,8 @@ def test_polish_glue_moves_least_to_make_the_glue_exact():
 def test_screening_guess_is_the_anchored_glue_only_minimiser(monkeypatch):
     P, q, Aeq, beq, _, _ = _random_qp(0)
     d = np.asarray(P @ np.ones(P.shape[0])).ravel()
-    Pa = (P + sp.diags(depth.ANCHOR * d)).tocsc()
-    qa = q + depth.ANCHOR * q
+    Pa = (P + sp.diags(depth_qp.ANCHOR * d)).tocsc()
+    qa = q + depth_qp.ANCHOR * q
     ref = _equality_solution(Pa, qa, Aeq, beq)
     g = _screening_guess(P, q, Aeq, beq)
     assert np.abs(g - ref).max() <= 1e-9
@@ -366,7 +367,7 @@ def test_screening_guess_is_the_anchored_glue_only_minimiser(monkeypatch):
     def no_fallback(*a, **k):
         raise AssertionError("the SuperLU fallback was used")
 
-    monkeypatch.setattr(depth.sla, "splu", no_fallback)
+    monkeypatch.setattr(depth_qp.sla, "splu", no_fallback)
     assert np.abs(_screening_guess(P, q, Aeq, beq) - ref).max() <= 1e-9
     monkeypatch.undo()
     # with no glue rows: the anchored minimiser
@@ -379,9 +380,8 @@ def test_screening_guess_is_the_anchored_glue_only_minimiser(monkeypatch):
 
 def _disk_sheet(layer, cx, cy, r, h, angle=0.0):
     """A sheet of a triangulated disk (Triangle, quality mesh)."""
-    from sketchforge_inflate import inflate_stroke
-
     from sketchforge_assemble.sheet import sheet_from_mesh
+    from sketchforge_inflate import inflate_stroke
 
     t = np.linspace(0, 2 * np.pi, 40, endpoint=False) + angle
     mesh = inflate_stroke(np.c_[cx + r * np.cos(t), cy + 0.8 * r * np.sin(t)], closed=True,
@@ -497,7 +497,7 @@ def test_a_glue_only_optimum_that_clears_every_row_is_the_answer_with_no_iterati
     x_eq = _equality_solution(P, q, Aeq, beq)
     loose = bin_ - (np.max(bin_ - Ain @ x_eq) + 0.5)  # every row now holds there, with room
     calls = []
-    monkeypatch.setattr(depth, "_osqp_screened", lambda *a: calls.append(a) or (_ for _ in ()).throw(AssertionError))
+    monkeypatch.setattr(depth_qp, "_osqp_screened", lambda *a: calls.append(a) or (_ for _ in ()).throw(AssertionError))
     x, info = solve_depth(P, q, Aeq, beq, Ain, loose, method="osqp", pad=0.01)
     assert calls == [] and info["exact"] and info["osqp_iterations"] == 0 and info["iterations"] == 0
     assert np.array_equal(x, x_eq) and info["active"] == 0

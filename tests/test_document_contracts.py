@@ -13,6 +13,7 @@ import pytest
 from sketchforge.document import Document
 from sketchforge.document.commands import (
     AddLayer,
+    Command,
     MacroCommand,
     RenameLayer,
     TranslateLayer,
@@ -20,9 +21,8 @@ from sketchforge.document.commands import (
     rotate_about,
     scale_about,
 )
-from sketchforge.document.layer import Light
-from sketchforge.document.commands import Command
 from sketchforge.document.fileformat import _short
+from sketchforge.document.layer import Light
 from sketchforge.errors import DocumentFormatError, ParameterError
 
 
@@ -563,7 +563,11 @@ def test_the_assembled_model_takes_the_visible_layers_with_meshes_once_per_chang
     doc = _two_layer_doc(fan_host)
     doc.push(AddLayer(id="empty"))  # visible, no mesh
     calls = []
-    monkeypatch.setattr(doc.host, "assemble", lambda layers, params=None, solver=None: calls.append(([l.id for l in layers], params)) or "model")
+    monkeypatch.setattr(
+        doc.host,
+        "assemble",
+        lambda layers, params=None, solver=None: calls.append(([l.id for l in layers], params)) or "model",
+    )
     monkeypatch.setattr(doc.host, "has_assembler", lambda: True)
     assert doc.assembled() == "model" and doc.assembled() == "model"
     assert calls == [(["a", "b"], {})]  # once, the hidden and the empty layer left out

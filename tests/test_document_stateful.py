@@ -10,6 +10,7 @@ import numpy as np
 from hypothesis import HealthCheck, settings
 from hypothesis import strategies as st
 from hypothesis.stateful import RuleBasedStateMachine, initialize, invariant, precondition, rule
+from tests_support import IN_MUTATION_RUN, assert_save_open_replay_agree, assert_undo_all_redo_all, examples
 
 from sketchforge.document import Document
 from sketchforge.document import fileformat as ff
@@ -28,7 +29,6 @@ from sketchforge.document.commands import (
     new_gesture_id,
 )
 from sketchforge.plugins.testing import FanInflater, make_test_host
-from tests_support import IN_MUTATION_RUN, assert_save_open_replay_agree, assert_undo_all_redo_all, examples
 
 HOST = make_test_host(FanInflater())
 

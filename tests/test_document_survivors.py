@@ -15,9 +15,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from test_crash_recovery import contour, dirty_doc
+from test_document_contracts import NO_LENGTH, _apply, _three_layer_doc, _Wreck, exactly
 
-from sketchforge.document import Document
-from sketchforge.document import autosave
+from sketchforge.document import Document, autosave
 from sketchforge.document import fileformat as ff
 from sketchforge.document.autosave import (
     Autosaver,
@@ -43,9 +44,6 @@ from sketchforge.document.commands import (
 )
 from sketchforge.document.layer import Light
 from sketchforge.errors import DocumentFormatError, ExportError, ParameterError, PluginError
-
-from test_crash_recovery import contour, dirty_doc
-from test_document_contracts import NO_LENGTH, _Wreck, _apply, _three_layer_doc, exactly
 
 
 # --- undo texts and journal entries of the layer commands -------------------------------------

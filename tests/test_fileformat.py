@@ -67,9 +67,19 @@ def test_opening_uses_snapshot_not_solver(tmp_path, fan_host):
         (lambda d: d["journal"].append({"command": "explode"}), "unknown command 'explode'"),
         (lambda d: d["journal"].append({"command": "rename_layer", "layer": "body"}), "needs the field 'name'"),
         (lambda d: d["journal"].append({"command": "set_contour", "layer": "body", "points": [[1, 2, 3]]}), "'points'"),
-        (lambda d: d["journal"].append({"command": "set_contour", "layer": "nope", "points": [[0, 0], [1, 0], [0, 1]]}), "no layer with id 'nope'"),
+        (
+            lambda d: d["journal"].append(
+                {"command": "set_contour", "layer": "nope", "points": [[0, 0], [1, 0], [0, 1]]}
+            ),
+            "no layer with id 'nope'",
+        ),
         (lambda d: d["journal"].append([1, 2]), "must be an object"),
-        (lambda d: d["journal"].append({"command": "set_inflate_params", "layer": "body", "params": {"resolution": -1}}), "inflater 'fan': 'resolution' must be > 0"),
+        (
+            lambda d: d["journal"].append(
+                {"command": "set_inflate_params", "layer": "body", "params": {"resolution": -1}}
+            ),
+            "inflater 'fan': 'resolution' must be > 0",
+        ),
     ],
 )
 def test_invalid_documents_are_rejected_with_named_field(mutate, message, fan_host):

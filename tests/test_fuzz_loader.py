@@ -4,16 +4,16 @@ The only acceptable failure is a SketchforgeError (one readable message); no oth
 no hang (hypothesis' deadline bounds each case)."""
 
 import copy
-import os
 import json
+import os
 from datetime import timedelta
 
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from tests_support import SPEC_DOC
 
 from sketchforge.document import fileformat as ff
 from sketchforge.errors import SketchforgeError
-from tests_support import SPEC_DOC
 
 json_values = st.recursive(
     st.none() | st.booleans() | st.integers(-10**6, 10**6) | st.floats(allow_nan=True, allow_infinity=True) | st.text(max_size=12),
@@ -68,7 +68,11 @@ def _snapshot_doc():
 
 VALID_WITH_SNAPSHOT = _snapshot_doc()
 # FUZZ_EXAMPLES=3000 for a longer local run (3000 each passed before this was committed).
-FUZZ = settings(max_examples=int(os.environ.get("FUZZ_EXAMPLES", "150")), deadline=timedelta(seconds=20), suppress_health_check=list(HealthCheck))
+FUZZ = settings(
+    max_examples=int(os.environ.get("FUZZ_EXAMPLES", "150")),
+    deadline=timedelta(seconds=20),
+    suppress_health_check=list(HealthCheck),
+)
 
 
 def open_both_ways(data, host):

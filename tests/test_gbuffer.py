@@ -1,8 +1,8 @@
 """The per-pixel rasteriser and shading shared by the canvas and ``sketchforge render``."""
 
 import numpy as np
-
 from meshes import hemisphere
+
 from sketchforge.geometry import gbuffer as gb
 from sketchforge.geometry.mesh import Mesh
 from sketchforge.geometry.shaders import lambert_shade

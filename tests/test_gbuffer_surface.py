@@ -3,8 +3,8 @@ shading as numbers (``gbuffer.reflectance_image``): what a shape-from-shading sa
 
 import numpy as np
 import pytest
-
 from meshes import hemisphere
+
 from sketchforge.geometry import gbuffer as gb
 from sketchforge.geometry.mesh import Mesh
 

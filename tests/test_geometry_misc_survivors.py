@@ -525,10 +525,10 @@ def test_a_system_with_every_vertex_fixed_returns_the_fixed_values():
 
 
 def test_the_dirichlet_solver_names_the_linear_system_by_default():
+    import scipy.sparse as sp
+
     from sketchforge.errors import SketchforgeError
     from sketchforge.geometry.dirichlet import DirichletSolver
-
-    import scipy.sparse as sp
 
     with pytest.raises(SketchforgeError) as info:
         DirichletSolver(sp.csr_matrix((2, 3)), [0])
@@ -536,10 +536,10 @@ def test_the_dirichlet_solver_names_the_linear_system_by_default():
 
 
 def test_bad_triangle_and_fixed_indices_are_named_in_the_message():
+    import scipy.sparse as sp
+
     from sketchforge.errors import SketchforgeError
     from sketchforge.geometry import guard
-
-    import scipy.sparse as sp
 
     V = np.array([[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])
     with pytest.raises(SketchforgeError) as info:

@@ -32,11 +32,11 @@ from scipy.spatial import cKDTree
 
 from sketchforge.errors import GeometryError, SculptError, SketchforgeError, SolverError
 from sketchforge.geometry import guard
+from sketchforge.geometry.band import band
 from sketchforge.geometry.contour import MAX_COORDINATE
 from sketchforge.geometry.dirichlet import DirichletSolver
 from sketchforge.geometry.laplacian import laplacian_and_mass
 from sketchforge.geometry.mesh import Mesh
-from sketchforge.geometry.band import band
 from sketchforge.geometry.triangulate import _format_area, triangulate_polygon
 
 HERE = Path(__file__).resolve().parent
@@ -642,7 +642,7 @@ def _assembly(layers, scale):
         doc.execute({"command": "set_inflate_params", "layer": f"l{k}", "params": {"resolution": 0.15 * scale}})
         pts = (P + [shift, 0.5 * shift]) * scale
         _outcome("set_contour", lambda: doc.execute(
-            {"command": "set_contour", "layer": f"l{k}", "points": pts.tolist(), "closed": closed}))
+            {"command": "set_contour", "layer": f"l{k}", "points": pts.tolist(), "closed": closed}))  # noqa: B023 - called in this iteration
     mesh = _outcome("assemble", doc.assembled)
     if mesh is not None:
         assert np.isfinite(mesh.V).all()

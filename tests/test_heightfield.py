@@ -90,9 +90,9 @@ def test_a_faired_rim_keeps_its_finite_slope(smoothing):
     """The fairing bends the rim off the vertical (w ~ distance² there, not ~ distance): its rim
     vertices and their first ring keep the area-weighted normals, the rest of the layer the
     w-form, and an unfaired layer's rim stays vertical."""
-    from sketchforge_inflate.inflate import inflate_stroke
-
     from inflate_shapes import ellipse
+
+    from sketchforge_inflate.inflate import inflate_stroke
 
     faired = inflate_stroke(ellipse(300, 0.75, 0.5), closed=True, params={"smoothing": smoothing})
     rim = faired.boundary

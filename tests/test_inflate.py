@@ -5,8 +5,8 @@ import warnings
 import numpy as np
 import pluggy
 import pytest
-
 from inflate_shapes import circle, ellipse, figure_eight, letter_m, min_angles, signed_face_areas, star
+
 from sketchforge.document.layer import DEFAULT_INFLATE_PARAMS
 from sketchforge.errors import ContourError, LimitError, ParameterError
 from sketchforge.geometry.contour import clean_contour, signed_area
@@ -120,7 +120,10 @@ def test_minimum_angle_respected_away_from_sharp_corners(name):
     P = contour.points
     d_in = P[contour.corners] - P[contour.corners - 1]
     d_out = P[(contour.corners + 1) % len(P)] - P[contour.corners]
-    inner = np.degrees(np.pi - np.arccos(np.einsum("ij,ij->i", d_in, d_out) / (np.linalg.norm(d_in, axis=1) * np.linalg.norm(d_out, axis=1))))
+    inner = np.degrees(
+        np.pi
+        - np.arccos(np.einsum("ij,ij->i", d_in, d_out) / (np.linalg.norm(d_in, axis=1) * np.linalg.norm(d_out, axis=1)))
+    )
     sharp = contour.corners[inner < 25.0]
     away = ~np.isin(mesh.F, sharp).any(axis=1)
     assert min_angles(mesh.V, mesh.F[away]).min() >= 25.0 - 1e-9

@@ -15,8 +15,8 @@ import warnings
 
 import numpy as np
 import pytest
-
 from meshes import hemisphere
+
 from sketchforge.errors import SculptError
 from sketchforge.geometry.intensity import (
     face_gradient,

@@ -2,8 +2,8 @@
 
 import numpy as np
 import pytest
-
 from meshes import disk, gaussian_bump, hemisphere
+
 from sketchforge.errors import SculptError
 from sketchforge.geometry.contour import signed_area
 from sketchforge.geometry.intensity import vertex_intensity

@@ -4,12 +4,12 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as sla
-
 from meshes import disk
+
+from sketchforge.geometry import guard
 from sketchforge.geometry.contour import signed_area
 from sketchforge.geometry.dirichlet import DirichletSolver
 from sketchforge.geometry.fairing import FairingSolver, fair_heights, fairing_weight, squared_laplacian_matrix
-from sketchforge.geometry import guard
 from sketchforge.geometry.laplacian import laplacian_and_mass
 
 

@@ -12,7 +12,6 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sketchforge.document import commands as C
 from sketchforge.document import fileformat as ff
 from sketchforge.document.document import Document
 from sketchforge.document.layer import Light

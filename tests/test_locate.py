@@ -3,8 +3,8 @@
 import time
 
 import numpy as np
-
 from meshes import disk, hemisphere
+
 from sketchforge.geometry.locate import TriangleLocator, interpolate, locate
 
 

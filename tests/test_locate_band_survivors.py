@@ -17,9 +17,9 @@ import warnings
 
 import numpy as np
 import pytest
+from meshes import disk
 from shapely.geometry import Point, Polygon
 
-from meshes import disk
 from sketchforge.errors import GeometryError, SculptError
 from sketchforge.geometry.band import band
 from sketchforge.geometry.locate import BARY_TOL, TriangleLocator, interpolate, locate

@@ -2,8 +2,8 @@
 
 import numpy as np
 import pytest
-
 from meshes import hemisphere, hemisphere_normals
+
 from sketchforge.geometry.normals import (
     NZ_MIN,
     corner_normals,

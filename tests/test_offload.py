@@ -63,13 +63,13 @@ def test_the_child_answers_for_the_hosts_own_inflater_and_matches_it_bit_for_bit
     assert offloaded.wrapped is host and offloaded.commands is host.commands
     assert offloaded.solvers("inflate") is host.solvers("inflate")
     with pytest.raises(AttributeError) as info:
-        offloaded.__no_such_dunder__
+        offloaded.__no_such_dunder__  # noqa: B018 - the lookup is the test
     assert str(info.value) == "__no_such_dunder__"
     # special names are never the host's (pickling and copying ask the wrapper itself)
     host.__dict__["__sketchforge_probe__"] = 1
     try:
         with pytest.raises(AttributeError):
-            offloaded.__sketchforge_probe__
+            offloaded.__sketchforge_probe__  # noqa: B018 - the lookup is the test
     finally:
         del host.__dict__["__sketchforge_probe__"]
 

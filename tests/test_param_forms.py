@@ -10,12 +10,23 @@ import math
 import numpy as np
 import pytest
 
-from sketchforge.plugin_api import MAX_PARAMETER, ParameterError, SculptSolver, choice, declare_params, describe_params, flag, number, validate_params
+from sketchforge.plugin_api import (
+    MAX_PARAMETER,
+    ParameterError,
+    SculptSolver,
+    choice,
+    declare_params,
+    describe_params,
+    flag,
+    number,
+    validate_params,
+)
 from sketchforge.plugins.param_forms import ParamField
 
 
 def _solvers(host):
     from third_party_solvers import ThirdPartySolvers
+
     from sketchforge.plugins.testing import FanInflater, make_host
 
     out = []
@@ -77,7 +88,7 @@ def test_the_built_in_solvers_declare_every_parameter(real_host):
     """No parameter of a built-in falls back to a guess from its default: each has a range,
     options or a switch, and the built-ins say what each one means."""
     for kind in ("inflate", "sculpt", "assemble"):
-        for name, solver in real_host.solvers(kind).items():
+        for name in real_host.solvers(kind):
             fields = real_host.solver_fields(kind, name)
             assert all(f.declared for f in fields), (name, [f.key for f in fields if not f.declared])
             if name != "strips":  # the thesis' solver states its ranges only

@@ -20,7 +20,7 @@ import pytest
 
 from sketchforge.document import Document
 from sketchforge.document import fileformat as ff
-from sketchforge.errors import DocumentFormatError, ParameterError, SketchforgeError, SolverError
+from sketchforge.errors import DocumentFormatError, ParameterError, SolverError
 from sketchforge.plugins.solvers import MAX_PARAMETER, number
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -185,7 +185,7 @@ def test_numeric_warnings_of_a_failed_command_are_folded_into_its_line(tmp_path,
 
     def warn_then_fail(*a, **k):
         np.float64(1e308) * np.float64(10.0)  # numpy: "overflow encountered in scalar multiply"
-        warnings.warn("a library deprecation", DeprecationWarning)
+        warnings.warn("a library deprecation", DeprecationWarning, stacklevel=1)
         raise SolverError("the solve failed")
 
     monkeypatch.setattr(fileformat, "document_from_dict", warn_then_fail)  # how info builds the document

@@ -6,8 +6,8 @@ import zlib
 
 import numpy as np
 import pytest
-
 from meshes import gaussian_bump, hemisphere
+
 from sketchforge.document.layer import Light
 from sketchforge.errors import ExportError
 from sketchforge.geometry.mesh import Mesh

@@ -1,9 +1,12 @@
 """Solver-side reflectance: signed Lambertian, R(p, q) and R_p, R_q by autodiff, plugin models."""
 
+import jax
+import jax.numpy as jnp
 import numpy as np
 import pluggy
 import pytest
 
+from sketchforge.geometry.normals import normals_from_slopes
 from sketchforge.geometry.reflectance import (
     LAMBERTIAN,
     evaluate,
@@ -12,12 +15,8 @@ from sketchforge.geometry.reflectance import (
     reflectance_pq,
     reflectance_pq_grad,
 )
-from sketchforge.geometry.normals import normals_from_slopes
 from sketchforge.plugins import hookspecs
 from sketchforge.plugins.registry import ReflectanceModel
-
-import jax
-import jax.numpy as jnp
 
 LIGHT = np.array([np.cos(0.7), np.sin(0.7), 0.0])
 

@@ -17,7 +17,15 @@ import scipy.sparse as sp
 from sketchforge.document import Document
 from sketchforge.document import fileformat as ff
 from sketchforge.document.autosave import Autosaver, find_recoverable
-from sketchforge.document.commands import AddLayer, MirrorLayer, MoveLayer, RemoveLayer, RenameLayer, SetContour, SetLight
+from sketchforge.document.commands import (
+    AddLayer,
+    MirrorLayer,
+    MoveLayer,
+    RemoveLayer,
+    RenameLayer,
+    SetContour,
+    SetLight,
+)
 from sketchforge.geometry.normals import vertex_normals
 
 # --- undo -----------------------------------------------------------------------------------

@@ -12,14 +12,14 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
-
 from meshes import hemisphere
+from test_raster import _decode_png
+
 from sketchforge.errors import LimitError
 from sketchforge.geometry import gbuffer as gb
 from sketchforge.geometry.mesh import Mesh
 from sketchforge.geometry.raster import check_raster_cost, encode_png, render_top
 from sketchforge.geometry.shaders import AMBIENT, CEL_TONES, CLAY, lambert_shade
-from test_raster import _decode_png
 
 BG = np.array([0.2, 0.5, 0.8])  # three different channels: a swapped channel shows
 LIGHT = np.array([0.48, 0.36, 0.8])  # unit, no zero component

@@ -5,8 +5,8 @@ import numpy as np
 import pytest
 import shapely
 import shapely.ops
-
 from sculpt_helpers import fidelity, isophote_stroke
+
 from sketchforge.errors import ParameterError, SculptError, SketchforgeError
 from sketchforge.geometry.contour import segment_crossings
 from sketchforge.geometry.isophotes import isophotes
@@ -184,7 +184,7 @@ def test_round_off_in_any_input_moves_heights_below_1e6_of_the_peak(shape, pick,
     st, _, _ = isophote_stroke(mesh, pick, offset)
     ref = sculpt(mesh, LIGHT, pick, 0.3, st).mesh.V[:, 2]
     peak = mesh.V[:, 2].max()
-    for trial in range(2):
+    for _trial in range(2):
         noisy_mesh = Mesh(_perturbed(mesh.V, rng), mesh.F, mesh.boundary, mesh.junction)
         for m, p, s in ((mesh, _perturbed(pick, rng), st), (mesh, pick, _perturbed(st, rng)), (noisy_mesh, pick, st)):
             z = sculpt(m, LIGHT, p, 0.3, s).mesh.V[:, 2]
@@ -339,9 +339,9 @@ def test_edits_on_two_threads_at_once_match_the_sequential_ones():
 
         def run(i):
             try:
-                got[i] = sculpt(mesh, LIGHT, [0.2, 0.1], 0.3, jobs[i]).mesh
+                got[i] = sculpt(mesh, LIGHT, [0.2, 0.1], 0.3, jobs[i]).mesh  # noqa: B023 - called in this iteration
             except Exception as exc:  # noqa: BLE001
-                errors.append(exc)
+                errors.append(exc)  # noqa: B023 - called in this iteration
 
         threads = [threading.Thread(target=run, args=(i,)) for i in range(len(jobs))]
         [t.start() for t in threads]

@@ -6,10 +6,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from test_sculpt_tool import PICK, STROKE, ellipse_doc
 
 from sketchforge.errors import DocumentFormatError, SculptError
 from sketchforge_isophote_tool.command import SculptIsophote
-from test_sculpt_tool import PICK, STROKE, ellipse_doc
 
 GOOD = {"command": "sculpt_isophote", "layer": "body", "pick": PICK, "band": 0.3, "stroke": STROKE}
 

@@ -13,10 +13,10 @@ import dataclasses
 import numpy as np
 import pytest
 import shapely
+from test_sculpt_tool import PICK, RING, STROKE, ellipse_doc, make_tool
 
 from sketchforge.errors import SculptError
 from sketchforge_isophote_tool.layerdata import vertex_shading
-from test_sculpt_tool import PICK, RING, STROKE, ellipse_doc, make_tool
 
 
 @pytest.fixture(scope="module")
@@ -117,8 +117,9 @@ def test_the_landed_isophote_is_shown_in_pieces_and_only_as_lines(result, monkey
 
 
 def test_a_parameter_change_re_applies_an_edit_with_its_own_model():
-    from sketchforge.document.document import Document
     from test_sculpt_tool_preview import _half_lambert_host
+
+    from sketchforge.document.document import Document
 
     host = _half_lambert_host()
     entry = {"command": "sculpt_isophote", "layer": "body", "pick": PICK, "band": 0.3, "stroke": STROKE,

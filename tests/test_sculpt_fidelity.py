@@ -6,8 +6,8 @@ Light (1/√2, 1/√2, 0), band 0.3, strokes = the picked isophote offset by ±0
 import numpy as np
 import pytest
 import shapely
-
 from sculpt_helpers import fidelity, isophote_stroke
+
 from sketchforge.geometry.reflectance import LAMBERTIAN
 from sketchforge_isophote_tool import sculpt
 from sketchforge_isophote_tool.fidelity import isophote_lines

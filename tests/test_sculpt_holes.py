@@ -3,8 +3,8 @@ distance, the rim margin and the fixed z = 0 vertices include the holes."""
 
 import numpy as np
 import shapely
-
 from sculpt_helpers import isophote_stroke
+
 from sketchforge_inflate import inflate_stroke
 from sketchforge_isophote_tool.layerdata import planar_data
 from sketchforge_isophote_tool.pipeline import sculpt

@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import shapely
-
 from sculpt_helpers import isophote_stroke
+
 from sketchforge_isophote_tool import sculpt
 from sketchforge_isophote_tool.stroke import prepare_stroke
 from sketchforge_isophote_tool.testing import LIGHT, inflated

@@ -15,8 +15,8 @@ import math
 
 import numpy as np
 import pytest
-
 from sculpt_helpers import isophote_stroke, stroke_moving_only_in_the_margin
+
 from sketchforge.document import fileformat as ff
 from sketchforge.document.document import Document
 from sketchforge.errors import DocumentFormatError, NothingToDoError, SculptError
@@ -297,14 +297,23 @@ def test_the_command_is_one_step_reapplies_follows_a_move_and_replays(real_host,
     assert doc.layer("a").mesh is before
 
 
-@pytest.mark.parametrize("edit, words", [
-    ({"edits": []}, "'edits' must list at least one edit"),
-    ({"edits": [{"pick": [0, 0], "band": 0.2}]}, "needs the field 'stroke' (edits[0])"),
-    ({"edits": [{"pick": [0, 0], "band": 0.2, "stroke": [[0, 0], [1, 1]], "c": 1}]}, "unknown field 'c' (an edit has pick, band and stroke) (edits[0])"),
-    ({"edits": [{"pick": [0, 0, 0], "band": 0.2, "stroke": [[0, 0], [1, 1]]}]}, "'pick' must be 2 numbers [x, y] (edits[0])"),
-    ({"edits": [[0, 0]]}, "each edit must be an object"),
-    ({"edits": [{"pick": [0, 0], "band": 0.2, "stroke": [[0, 0], [1, 1]]}] * 17}, "at most 16 isophotes"),
-])
+@pytest.mark.parametrize(
+    "edit, words",
+    [
+        ({"edits": []}, "'edits' must list at least one edit"),
+        ({"edits": [{"pick": [0, 0], "band": 0.2}]}, "needs the field 'stroke' (edits[0])"),
+        (
+            {"edits": [{"pick": [0, 0], "band": 0.2, "stroke": [[0, 0], [1, 1]], "c": 1}]},
+            "unknown field 'c' (an edit has pick, band and stroke) (edits[0])",
+        ),
+        (
+            {"edits": [{"pick": [0, 0, 0], "band": 0.2, "stroke": [[0, 0], [1, 1]]}]},
+            "'pick' must be 2 numbers [x, y] (edits[0])",
+        ),
+        ({"edits": [[0, 0]]}, "each edit must be an object"),
+        ({"edits": [{"pick": [0, 0], "band": 0.2, "stroke": [[0, 0], [1, 1]]}] * 17}, "at most 16 isophotes"),
+    ],
+)
 def test_a_bad_journal_entry_is_one_line_naming_the_edit(real_host, edit, words):
     with pytest.raises(DocumentFormatError) as info:
         real_host.commands.from_dict({"command": "sculpt_isophotes", "layer": "a", **edit})

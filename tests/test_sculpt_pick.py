@@ -10,9 +10,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 import shapely
+from test_sculpt_tool import PICK, RING, ellipse_doc, make_tool
 
 from sketchforge_isophote_tool.tool import NOT_ON_A_SHAPE, _rings
-from test_sculpt_tool import PICK, RING, ellipse_doc, make_tool
 
 SMALL = [[0.5 + 0.2 * x, 0.2 * y] for x, y in RING]  # a small ellipse inside the body, at x = 0.5
 

@@ -5,8 +5,8 @@ change heights by more than 60% of the peak."""
 
 import numpy as np
 import pytest
-
 from sculpt_helpers import isophote_stroke, stroke_moving_only_in_the_margin
+
 from sketchforge.errors import NothingToDoError, SculptError
 from sketchforge.geometry.reflectance import LAMBERTIAN
 from sketchforge_isophote_tool import sculpt

@@ -7,8 +7,8 @@ import time
 
 import numpy as np
 import pytest
-
 from sculpt_helpers import isophote_stroke
+
 from sketchforge.errors import ParameterError
 from sketchforge_isophote_tool import sculpt
 from sketchforge_isophote_tool.testing import LIGHT, inflated

@@ -12,9 +12,9 @@ import re
 
 import numpy as np
 import pytest
+from test_sculpt_tool import PICK, STROKE, ellipse_doc, make_tool
 
 from sketchforge.errors import SculptError
-from test_sculpt_tool import PICK, STROKE, ellipse_doc, make_tool
 
 
 def test_the_preview_is_the_edit_the_stroke_will_push(real_host):

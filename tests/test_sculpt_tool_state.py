@@ -12,12 +12,12 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from test_sculpt_tool import PICK, STROKE, ellipse_doc, make_tool
+from test_sculpt_tool_preview import _half_lambert_host
 
 from sketchforge.errors import SculptError
 from sketchforge_isophote_tool import isophote as isophote_module
 from sketchforge_isophote_tool.tool import NOT_ON_A_SHAPE, PICK_FIRST
-from test_sculpt_tool import PICK, STROKE, ellipse_doc, make_tool
-from test_sculpt_tool_preview import _half_lambert_host
 
 
 def _nothing_picked(tool) -> bool:

@@ -2,13 +2,13 @@
 
 import numpy as np
 import pytest
-
 from meshes import (
     gaussian_bump,
     gaussian_intensity_gradient,
     gaussian_normals,
     hemisphere,
 )
+
 from sketchforge.document.layer import Light
 from sketchforge.errors import ParameterError
 from sketchforge.geometry.intensity import face_gradient, vertex_gradient, vertex_intensity

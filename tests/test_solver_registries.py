@@ -9,6 +9,7 @@ import json
 
 import numpy as np
 import pytest
+from third_party_solvers import ThirdPartySolvers, probe_params, probe_solve
 
 from sketchforge import cli
 from sketchforge.document import Document
@@ -18,7 +19,6 @@ from sketchforge.errors import DocumentFormatError, ParameterError, PluginError,
 from sketchforge.plugin_api import Assembler, SculptSolver, hookimpl, validate_params
 from sketchforge.plugins import default_host, manager
 from sketchforge.plugins.testing import FanInflater, make_test_host
-from third_party_solvers import ThirdPartySolvers, probe_params, probe_solve
 
 ELLIPSE = [[float(np.cos(t)), float(0.7 * np.sin(t))] for t in np.linspace(0, 2 * np.pi, 120, endpoint=False)]
 PLUGIN = "plugin-0-ThirdPartySolvers"
@@ -134,7 +134,8 @@ def test_replay_check_explains_a_difference_by_the_solver_versions(third_party_d
     ({"command": "sculpt_isophote", "layer": "a", "pick": [0.2, 0.1], "band": 0.3, "stroke": [[0, 0], [0.1, 0.1]],
       "params": {"steps": 0}}, "sculpt solver 'gauss_newton': 'steps' must be an integer in 1..50, got 0"),
     ({"command": "set_assembly", "params": {"filet": 2}},
-     "assembler 'depth_qp': unknown assembly parameter 'filet' (known: fair, fillet, gap, margin, on_bad_junction, qp_solver, reg, stiffness)"),
+     "assembler 'depth_qp': unknown assembly parameter 'filet' "
+     "(known: fair, fillet, gap, margin, on_bad_junction, qp_solver, reg, stiffness)"),
     ({"command": "set_assembly", "solver": "monster"}, "no assembler named 'monster' is installed (installed: depth_qp)"),
 ])
 def test_a_solver_refuses_an_unknown_or_bad_parameter_in_one_line_and_nothing_changes(make_sketchforge_host, entry, message):

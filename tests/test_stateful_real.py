@@ -9,13 +9,13 @@ import numpy as np
 from hypothesis import HealthCheck, event, settings
 from hypothesis import strategies as st
 from hypothesis.stateful import RuleBasedStateMachine, initialize, invariant, precondition, rule
+from tests_support import assert_save_open_replay_agree, assert_undo_all_redo_all, examples
 
 from sketchforge.document import Document
 from sketchforge.document import fileformat as ff
 from sketchforge.document.commands import new_gesture_id
 from sketchforge.errors import SketchforgeError
 from sketchforge.plugins.manager import default_host
-from tests_support import assert_save_open_replay_agree, assert_undo_all_redo_all, examples
 
 COARSE = {"resolution": 0.09, "inflation": 1.0, "smoothing": 0.5}
 

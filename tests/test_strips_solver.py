@@ -12,8 +12,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 import shapely
-
 from sculpt_helpers import isophote_stroke
+
 from sketchforge.errors import NothingToDoError, ParameterError, SketchforgeError
 from sketchforge_isophote_tool import sculpt
 from sketchforge_isophote_tool.testing import LIGHT, inflated
@@ -219,7 +219,7 @@ def test_one_compiled_integration_serves_every_strip_count_and_layer(ellipse):
 def test_the_compiled_strips_are_kept_for_the_next_process(tmp_path):
     """JAX's persistent compilation cache under the user's cache directory: a second process
     (the app, `replay`) finds the strip integration compiled."""
-    code = ("import sys; sys.path.insert(0, %r)\n"
+    code = (f"import sys; sys.path.insert(0, {str(ROOT / 'tests')!r})\n"
             "from sculpt_helpers import isophote_stroke\n"
             "from sketchforge_isophote_tool import sculpt\n"
             "from sketchforge_isophote_tool.testing import LIGHT, inflated\n"
@@ -228,7 +228,7 @@ def test_the_compiled_strips_are_kept_for_the_next_process(tmp_path):
             "m = inflated('ellipse', 0.06)\n"
             "s, _, _ = isophote_stroke(m, [0.2, 0.1], offset=0.1)\n"
             "sculpt(m, LIGHT, [0.2, 0.1], 0.3, s, solver=STRIPS)\n"
-            "print(jax.config.jax_compilation_cache_dir)\n") % str(ROOT / "tests")
+            "print(jax.config.jax_compilation_cache_dir)\n")
     env = {**__import__("os").environ, "SKETCHFORGE_CACHE_DIR": str(tmp_path)}
     env.pop("JAX_COMPILATION_CACHE_DIR", None)
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=300, env=env)

@@ -5,13 +5,13 @@ import numpy as np
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
+from tests_support import examples
 
 from sketchforge.errors import SculptError, SketchforgeError
 from sketchforge.geometry.contour import segment_crossings
 from sketchforge.geometry.strokes import clean_open_stroke
 from sketchforge_isophote_tool import sculpt
 from sketchforge_isophote_tool.testing import LIGHT, inflated
-from tests_support import examples
 
 H = 0.03
 
@@ -81,7 +81,10 @@ def test_near_duplicates_and_collinear_runs_are_harmless():
     assert _simple(r.points, r.closed)
 
 
-@pytest.mark.parametrize("bad,msg", [([[0, 0]], "at least 2"), ([[0, 0], [np.inf, 0]], "finite"), ("abc", "pairs"), ([[1e300, 0], [0, 0]], "within")])
+@pytest.mark.parametrize(
+    "bad,msg",
+    [([[0, 0]], "at least 2"), ([[0, 0], [np.inf, 0]], "finite"), ("abc", "pairs"), ([[1e300, 0], [0, 0]], "within")],
+)
 def test_bad_strokes_raise_the_callers_error(bad, msg):
     with pytest.raises(SculptError, match=msg):
         clean_open_stroke(bad, H, error=SculptError)
@@ -143,7 +146,12 @@ def _band_ring(mesh, band):
     return np.asarray(poly.exterior.coords)
 
 
-@settings(max_examples=examples(60), deadline=None, derandomize=True, suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
+@settings(
+    max_examples=examples(60),
+    deadline=None,
+    derandomize=True,
+    suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture],
+)
 @given(st.data())
 def test_any_polyline_through_sculpt_gives_a_result_or_one_line(layer, data):
     """Random polylines placed over the layer (some on the band's edge, some off the layer):

@@ -17,11 +17,11 @@ invariance (scaling a stroke and its edge length together, re-sampling a straigh
 import numpy as np
 import pytest
 import shapely
+from test_strokes import _wave
 
 from sketchforge.errors import SculptError
 from sketchforge.geometry.contour import segment_crossings
 from sketchforge.geometry.strokes import HOOK_LENGTH, clean_open_stroke
-from test_strokes import _wave
 
 H = 0.03
 

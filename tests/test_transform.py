@@ -16,7 +16,7 @@ from sketchforge.document.commands import (
     rotate_about,
     scale_about,
 )
-from sketchforge.errors import ParameterError, DocumentFormatError
+from sketchforge.errors import DocumentFormatError, ParameterError
 
 BODY = [[np.cos(t), 0.7 * np.sin(t)] for t in np.linspace(0, 2 * np.pi, 160, endpoint=False)]
 

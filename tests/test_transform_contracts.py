@@ -42,7 +42,7 @@ def test_check_affine_accepts_what_keeps_a_part_and_refuses_the_rest():
         C.check_affine([[-1, 0, 0], [0, 1, 0]])
     with pytest.raises(ParameterError, match="negative determinant"):
         C.check_affine([[0, 1, 0], [1, 0, 0]])  # a swap of x and y mirrors
-    for det, m in ((0.9e-6, [[0.9e-3, 0, 0], [0, 1e-3, 0]]), (1.01e4, [[101.0, 0, 0], [0, 100.0, 0]]),
+    for _det, m in ((0.9e-6, [[0.9e-3, 0, 0], [0, 1e-3, 0]]), (1.01e4, [[101.0, 0, 0], [0, 100.0, 0]]),
                    (0.0, [[1, 1, 0], [1, 1, 0]])):
         with pytest.raises(ParameterError, match="scales the part's area by"):
             C.check_affine(m)

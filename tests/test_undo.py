@@ -122,10 +122,9 @@ def test_solver_producing_nan_rolls_back_and_says_so():
 
     from sketchforge.errors import PluginError
     from sketchforge.geometry.mesh import Mesh
+    from sketchforge.plugin_api import Inflater
     from sketchforge.plugins.hookspecs import hookimpl
     from sketchforge.plugins.testing import make_test_host
-
-    from sketchforge.plugin_api import Inflater
 
     def nan_mesh(points, closed, params, holes):
         P = np.asarray(points, float)

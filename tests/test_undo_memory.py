@@ -118,7 +118,7 @@ def test_two_hundred_moves_keep_two_hundred_vertex_arrays(fan_host):
     layer = doc.layer("a")
     per_step = layer.mesh.V.nbytes + layer.points.nbytes
     base = doc.undo_stack.history_bytes()
-    for i in range(200):
+    for _ in range(200):
         doc.execute({"command": "transform_layer", "layer": "a", "matrix": [[1, 0, 0.01], [0, 1, 0.0]]})
     assert doc.undo_stack.history_bytes() - base == 200 * per_step
     assert doc.undo_stack.count() == 202 and doc.undo_stack.dropped == 0

@@ -287,7 +287,7 @@ class Autosaver:
         write_bytes_atomic(self.pending_path, json.dumps(data, separators=(",", ":")).encode("utf-8"))
 
     # --- saved, replaced, closed ------------------------------------------------------------------
-    def hand_over(self, original_path=None, original_sha256: str | None = None) -> "Autosaver":
+    def hand_over(self, original_path=None, original_sha256: str | None = None) -> Autosaver:
         """The document was saved (to ``original_path``) or replaced (opened, new, recovered):
         returns its new Autosaver (a new file name) and removes this one's autosave. The solves
         still running keep their record until they end: the new Autosaver takes them over, in

@@ -32,7 +32,6 @@ from sketchforge.errors import LayerNotFoundError, LimitError, SketchforgeError,
 from sketchforge.geometry.merge import merge_meshes
 from sketchforge.solver_kinds import SolverChoice
 
-
 #: Layers a document may hold. A Monster Mash model has tens of parts; every layer costs
 #: the canvas a rasterisation and the assembly depth rows against every layer it overlaps
 #: (issue 30: 3 000 copies of one layer ran for hours).
@@ -254,7 +253,7 @@ class Document:
                 self._set_plugin_data(key, plugin_data.get(key))
 
     # --- comparison (tests, replay checks) --------------------------------------------------------
-    def differences(self, other: "Document") -> list[str]:
+    def differences(self, other: Document) -> list[str]:
         """What differs between the two states (empty when layers, meshes bit for bit, and
         light are equal)."""
         out = []
@@ -278,7 +277,7 @@ class Document:
             out.append(f"assembly differs: {a.to_dict()} vs {b.to_dict()}")
         return out
 
-    def same_state(self, other: "Document") -> bool:
+    def same_state(self, other: Document) -> bool:
         return not self.differences(other)
 
     def restore_state(
@@ -300,7 +299,7 @@ class Document:
             self.plugin_data_changed.emit(key)
         self.undo_stack.clear()
 
-    def adopt(self, other: "Document") -> None:
+    def adopt(self, other: Document) -> None:
         """Take over another document's state (the app opening a file into its window)."""
         self.restore_state(other.layers, other.light, other.initial_light, other.base_journal, other._plugin_data,
                            other._assembly)

@@ -7,7 +7,7 @@ never depends on dict or set ordering.
 
 from __future__ import annotations
 
-from typing import Callable
+from collections.abc import Callable
 
 
 class Signal:

@@ -10,7 +10,8 @@ test may hand over anything else that does.
 
 from __future__ import annotations
 
-from typing import Any, Mapping, Protocol, Sequence
+from collections.abc import Mapping, Sequence
+from typing import Any, Protocol
 
 
 class DocumentHost(Protocol):

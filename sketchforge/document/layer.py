@@ -8,9 +8,10 @@ freely between the document, the undo history and views.
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
 from types import MappingProxyType
-from typing import Any, Mapping
+from typing import Any
 
 import numpy as np
 
@@ -92,11 +93,11 @@ class Layer:
         object.__setattr__(self, "params", MappingProxyType(dict(self.params)))
         object.__setattr__(self, "edits", tuple(self.edits))
 
-    def evolve(self, **changes: Any) -> "Layer":
+    def evolve(self, **changes: Any) -> Layer:
         """A copy with some fields changed."""
         return replace(self, **changes)
 
-    def same_state(self, other: "Layer") -> bool:
+    def same_state(self, other: Layer) -> bool:
         """Exact equality of every field, meshes compared bit for bit."""
         if not isinstance(other, Layer):
             return False
@@ -166,7 +167,7 @@ class Light:
         object.__setattr__(self, "z", z)
 
     @classmethod
-    def from_vector(cls, v) -> "Light":
+    def from_vector(cls, v) -> Light:
         """From a (2,) vector (a light in the drawing plane) or a (3,) one (z >= 0)."""
         v = list(v)
         if len(v) not in (2, 3):
@@ -182,7 +183,7 @@ class Light:
         return cls(*comps)
 
     @classmethod
-    def from_angle(cls, degrees: float, elevation: float = 0.0) -> "Light":
+    def from_angle(cls, degrees: float, elevation: float = 0.0) -> Light:
         """Azimuth ``degrees`` counter-clockwise from +x in the drawing plane, ``elevation``
         degrees above it (0: in the plane, 90: straight overhead, whatever the azimuth)."""
         e = float(elevation)
@@ -197,7 +198,7 @@ class Light:
         return cls(math.cos(er) * math.cos(a), math.cos(er) * math.sin(a), math.sin(er))
 
     @classmethod
-    def from_drag(cls, center, point, elevation: float = 0.0) -> "Light":
+    def from_drag(cls, center, point, elevation: float = 0.0) -> Light:
         """From a drag in the drawing plane (thesis 4.1): the azimuth points from ``center``
         (2,) towards ``point`` (2,); ``elevation`` degrees above the plane (0: the thesis'
         in-plane light). Raises ParameterError for non-finite input or a drag of no length

@@ -14,7 +14,8 @@ the first unknown entry's error or a "mesh differs".
 
 from __future__ import annotations
 
-from typing import Any, Iterable, Iterator
+from collections.abc import Iterable, Iterator
+from typing import Any
 
 from sketchforge.errors import DocumentFormatError, quote, shorten
 
@@ -111,6 +112,11 @@ def record(doc) -> dict:
     return out
 
 
+def _as_dict(value) -> dict:
+    """``value`` if it is a dict, else an empty one (a file's malformed parts are ignored)."""
+    return value if isinstance(value, dict) else {}
+
+
 def _who(host, item) -> dict:
     plugin = host.provider_of(item) if hasattr(host, "provider_of") else None
     version = host.provider_version(plugin) if hasattr(host, "provider_version") else None
@@ -119,7 +125,7 @@ def _who(host, item) -> dict:
 
 def _recorded_solvers(providers: dict) -> dict:
     """{kind: {name: info}} from a file's ``providers`` (malformed parts ignored)."""
-    table = providers.get("solvers") if isinstance(providers.get("solvers"), dict) else {}
+    table = _as_dict(providers.get("solvers"))
     return {k: v for k, v in table.items() if isinstance(k, str) and isinstance(v, dict)}
 
 
@@ -139,9 +145,9 @@ def missing_solvers(data: dict, host) -> list[str]:
     if not hasattr(host, "solvers"):
         return []
     journal = data.get("journal", [])
-    snap = data.get("snapshot") if isinstance(data.get("snapshot"), dict) else {}
+    snap = _as_dict(data.get("snapshot"))
     layers = snap.get("layers", []) if isinstance(snap.get("layers"), list) else []
-    providers = data.get("providers") if isinstance(data.get("providers"), dict) else {}
+    providers = _as_dict(data.get("providers"))
     recorded = _recorded_solvers(providers)
     used = used_solvers(host, journal if isinstance(journal, list) else [], [l for l in layers if isinstance(l, dict)],
                         snap.get("assembly"), defaults=False)
@@ -165,7 +171,7 @@ def version_notes(data: dict, host) -> list[str]:
     1 of plugin 'strips' 0.1.0; installed: version 2 of 0.2.0")."""
     from sketchforge.solver_kinds import SOLVER_KINDS
 
-    providers = data.get("providers") if isinstance(data.get("providers"), dict) else {}
+    providers = _as_dict(data.get("providers"))
     notes = []
     for kind, table in sorted(_recorded_solvers(providers).items()):
         if kind not in SOLVER_KINDS:
@@ -201,7 +207,7 @@ def missing_plugins(data: dict, host) -> list[str]:
     for kind, names, what in (("commands", sorted(commands - set(host.commands.names())), "command"),
                               ("reflectance_models", sorted(models - set(host.reflectance_models)) if models else [],
                                "reflectance model")):
-        table = providers.get(kind) if isinstance(providers.get(kind), dict) else {}
+        table = _as_dict(providers.get(kind))
         out += [f"the {what} {quote(name)} ({_from(table.get(name))})" for name in names]
     return out + missing_solvers(data, host)
 
@@ -228,9 +234,9 @@ def check_available(data: dict, host, source: str) -> None:
     providers = providers if isinstance(providers, dict) else {}
     needs: dict[str, list[str]] = {}
     for kind, names, what in (("commands", missing_cmds, "command"), ("reflectance_models", missing_models, "reflectance model")):
-        table = providers.get(kind) if isinstance(providers.get(kind), dict) else {}
+        table = _as_dict(providers.get(kind))
         for name in names:
-            info = table.get(name) if isinstance(table.get(name), dict) else {}
+            info = _as_dict(table.get(name))
             plugin, version = info.get("plugin"), info.get("version")
             if isinstance(plugin, str):
                 key = f"from plugin {quote(plugin)}" + (f" version {shorten(version, 60)}" if isinstance(version, str) else "")

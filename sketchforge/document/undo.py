@@ -76,14 +76,14 @@ class UndoStack:
     def count(self) -> int:
         return len(self._commands)
 
-    def command(self, i: int) -> "Command":
+    def command(self, i: int) -> Command:
         return self._commands[i]
 
-    def commands(self) -> list["Command"]:
+    def commands(self) -> list[Command]:
         """All commands, done ones first (``commands()[:index]``)."""
         return list(self._commands)
 
-    def done_commands(self) -> list["Command"]:
+    def done_commands(self) -> list[Command]:
         return self._commands[: self._index]
 
     def can_undo(self) -> bool:
@@ -125,7 +125,7 @@ class UndoStack:
             self._doc.history_changed.emit()
 
     # --- mutation -----------------------------------------------------------------------------
-    def _run(self, command: "Command", method: str) -> None:
+    def _run(self, command: Command, method: str) -> None:
         """Call ``command.do``/``undo`` all-or-nothing: if it raises, whatever it changed is
         put back from a snapshot taken before (layers are immutable values, so this is a few
         references), whatever the command's code did. A :class:`SketchforgeError` (the
@@ -145,7 +145,7 @@ class UndoStack:
                 f"command {command.name!r}{by} failed in {method}: {type(exc).__name__}: {exc}; the document is unchanged"
             ) from exc
 
-    def push(self, command: "Command") -> "Command":
+    def push(self, command: Command) -> Command:
         """Run ``command`` and record it. If it raises, nothing is recorded, the document is
         restored to its state before (see :meth:`_run`) and the error propagates."""
         before = self._state()
@@ -220,7 +220,7 @@ class UndoStack:
 
         self._macros.append(MacroCommand(text=text, children=[]))
 
-    def end_macro(self) -> "Command | None":
+    def end_macro(self) -> Command | None:
         """Close the innermost macro; an empty macro is dropped."""
         if not self._macros:
             raise RuntimeError("end_macro without begin_macro")

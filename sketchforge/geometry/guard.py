@@ -580,7 +580,7 @@ def constraints(A, l, u, n: int, what: str = "the quadratic program", *, fmt: st
     if A.shape[1] != n:
         raise GeometryError(f"{what}: the constraint matrix has {A.shape[1]} columns for {n} unknowns")
     m = A.shape[0]
-    bounds = []
+    bounds: list[np.ndarray | None] = []
     for name, x in (("lower", l), ("upper", u)):
         if x is None:
             bounds.append(None)

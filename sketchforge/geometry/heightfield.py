@@ -45,7 +45,6 @@ from sketchforge.cache import LRUCache, array_key
 from sketchforge.geometry.intensity import gradient_operators
 from sketchforge.geometry.normals import NZ_MIN, normals_from_slopes, vertex_normals
 
-
 #: A rim vertex is vertical (the w-form's in-plane normal) where |∇w| there is at least this
 #: fraction of its inner neighbours' (w ~ distance: ratio 1.0 measured on unfaired layers at
 #: any resolution), tilted (the z-form's one-sided slope) where it is at most RIM_FAIRED (w ~
@@ -152,7 +151,7 @@ class SlopeLinearisation:
         hit = self.rows[pos] == self.cols
         self._diag_row, self._diag_col = pos[hit], np.nonzero(hit)[0]
 
-    def at(self, z: np.ndarray) -> "Linearised":
+    def at(self, z: np.ndarray) -> Linearised:
         """The slopes (p, q at ``rows``, bit for bit :func:`slopes_from_heights` there) and
         their Jacobians at heights z (n,)."""
         z = np.asarray(z, dtype=np.float64)

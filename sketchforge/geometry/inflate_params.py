@@ -5,8 +5,8 @@ from __future__ import annotations
 
 import math
 import numbers
+from collections.abc import Mapping
 from types import MappingProxyType
-from typing import Mapping
 
 from sketchforge.errors import ParameterError
 

@@ -13,8 +13,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from sketchforge.geometry.laplacian import laplacian_and_mass
 from sketchforge.geometry.dirichlet import DirichletSolver
+from sketchforge.geometry.laplacian import laplacian_and_mass
 
 
 def inflation_potential(L, M, boundary) -> np.ndarray:

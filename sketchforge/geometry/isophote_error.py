@@ -68,10 +68,9 @@ class InflatedEllipse:
         -------
         Mesh
         """
+        from sketchforge.geometry.contour import prepare_outline, resample_outline
         from sketchforge.geometry.mesh import Mesh
         from sketchforge.geometry.triangulate import MIN_ANGLE, triangulate_polygon
-
-        from sketchforge.geometry.contour import prepare_outline, resample_outline
 
         t = 2 * np.pi * np.arange(outline_points) / outline_points
         pts = np.column_stack([self.a * np.cos(t), self.b * np.sin(t)])

@@ -97,14 +97,14 @@ class Mesh:
     def n_faces(self) -> int:
         return int(len(self.F))
 
-    def with_heights(self, z: np.ndarray) -> "Mesh":
+    def with_heights(self, z: np.ndarray) -> Mesh:
         """Same connectivity, new z (n,) float64."""
         V = np.array(self.V)
         V[:, 2] = np.asarray(z, dtype=np.float64)
         V.setflags(write=False)  # frozen here: the Mesh takes it without another copy
         return Mesh(V, self.F, self.boundary, self.junction, self.holes)
 
-    def identical(self, other: "Mesh | None") -> bool:
+    def identical(self, other: Mesh | None) -> bool:
         """Bit-identical comparison (positions compared as raw bytes, so -0.0 != 0.0, NaN == NaN)."""
         if other is None:
             return False

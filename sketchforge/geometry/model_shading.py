@@ -19,7 +19,7 @@ the same ``R`` at n(p, q); on a buffer's float32 normals they agree within 1e-6
 
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import cache, lru_cache
 
 import numpy as np
 
@@ -30,7 +30,7 @@ from sketchforge.geometry.shaders import AMBIENT, CLAY
 CHUNK = 1 << 16
 
 
-@lru_cache(maxsize=None)
+@cache
 def _compiled(model: ReflectanceModel):
     """R over a chunk of normals, compiled once per model."""
     from sketchforge.geometry.reflectance import jax  # x64 switched on there

@@ -8,7 +8,7 @@ alone, so a journal replays the same decisions.
 
 from __future__ import annotations
 
-from typing import Sequence
+from collections.abc import Sequence
 
 import numpy as np
 import shapely

@@ -10,8 +10,8 @@ does. Everything here runs in float64 (:func:`sketchforge.numerics.enable_x64`).
 
 from __future__ import annotations
 
-from functools import lru_cache
-from typing import Callable
+from collections.abc import Callable
+from functools import cache
 
 import numpy as np
 
@@ -61,7 +61,7 @@ def _pq_form(R: Callable) -> Callable:
     return r_pq
 
 
-@lru_cache(maxsize=None)
+@cache
 def reflectance_pq(model: ReflectanceModel) -> Callable:
     """R(p, q, l) for a model, jit-compiled.
 
@@ -78,7 +78,7 @@ def reflectance_pq(model: ReflectanceModel) -> Callable:
     return jax.jit(_pq_form(model.R))
 
 
-@lru_cache(maxsize=None)
+@cache
 def reflectance_pq_grad(model: ReflectanceModel) -> Callable:
     """R and its slope gradient (R_p, R_q) for a model, by ``jax.grad``, jit-compiled.
 
@@ -100,12 +100,12 @@ def reflectance_pq_grad(model: ReflectanceModel) -> Callable:
 EVAL_CHUNK = 4096
 
 
-@lru_cache(maxsize=None)
+@cache
 def _batched_pq_grad(model: ReflectanceModel) -> Callable:
     return jax.jit(jax.vmap(reflectance_pq_grad(model), in_axes=(0, 0, None)))
 
 
-@lru_cache(maxsize=None)
+@cache
 def _batched_R(model: ReflectanceModel) -> Callable:
     return jax.jit(jax.vmap(model.R, in_axes=(0, None)))
 

@@ -109,7 +109,10 @@ def check_reflectance_model(model, plugin: str) -> None:
                     f"(write R(n, l) with jax.numpy, not numpy): {type(exc).__name__} (ignored)",
                 )
             if not all(np.isfinite(v) for v in (r, rp, rq)):
-                _fail(plugin, f"reflectance model {model.name!r} gives a non-finite value or gradient at n·l = {-k / np.hypot(1, k):.2f} (ignored)")
+                _fail(
+                    plugin,
+                    f"reflectance model {model.name!r} gives a non-finite value or gradient at n·l = {-k / np.hypot(1, k):.2f} (ignored)",
+                )
             if abs(rp) + abs(rq) < 1e-12:
                 _fail(
                     plugin,

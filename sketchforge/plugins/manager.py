@@ -16,10 +16,10 @@ from __future__ import annotations
 
 import logging
 import os
+from collections.abc import Iterable
 from functools import cached_property
 from importlib import metadata
 from importlib.metadata import entry_points
-from typing import Iterable
 
 import pluggy
 
@@ -48,7 +48,22 @@ LEGACY_HOOKS = {
 }
 
 
-def add_problem(pm: pluggy.PluginManager, text: str, *plugins: str) -> None:
+class HostPluginManager(pluggy.PluginManager):
+    """pluggy's manager with what the host keeps about its plugins beside it."""
+
+    def __init__(self, project_name: str) -> None:
+        super().__init__(project_name)
+        #: {plugin name: one line} of the plugins left out
+        self.skipped: dict[str, str] = {}
+        self.problems: list[str] = []
+        #: {problem line: [plugin names it concerns]}
+        self.problem_owners: dict[str, list[str]] = {}
+        self.versions: dict[str, str | None] = {}
+        #: {plugin name: distribution name} of the entry points loaded
+        self.distributions: dict[str, str] = {}
+
+
+def add_problem(pm: HostPluginManager, text: str, *plugins: str) -> None:
     """Record one problem line naming ``plugins`` (once: the same line twice is one problem)."""
     owners = pm.problem_owners.setdefault(text, [])
     if text not in pm.problems:
@@ -57,7 +72,7 @@ def add_problem(pm: pluggy.PluginManager, text: str, *plugins: str) -> None:
     owners.extend(p for p in plugins if p not in owners)
 
 
-def _hook_problem(pm: pluggy.PluginManager, plugin, name: str) -> str | None:
+def _hook_problem(pm: HostPluginManager, plugin, name: str) -> str | None:
     """Why a registered plugin's hooks cannot be used (None: they can): a hook the
     specification does not know (a typo, or a legacy hook), or a pluggy wrapper, which the
     host would never call since it calls each plugin's hook on its own."""
@@ -78,7 +93,7 @@ def _hook_problem(pm: pluggy.PluginManager, plugin, name: str) -> str | None:
 
 def make_plugin_manager(
     plugins: Iterable = (), load_entry_points: bool = True, allowlist=None, skip_broken: bool = False
-) -> pluggy.PluginManager:
+) -> HostPluginManager:
     """Build a manager: core plugin, then ``plugins`` (objects or modules, in order), then
     installed entry points (filtered by ``allowlist`` or the environment variable).
 
@@ -90,16 +105,9 @@ def make_plugin_manager(
     plugins it concerns in ``pm.problem_owners``."""
     from sketchforge.plugins import builtin
 
-    pm = pluggy.PluginManager("sketchforge")
+    pm = HostPluginManager("sketchforge")
     pm.add_hookspecs(hookspecs)
     pm.register(builtin, name=CORE)
-    pm.skipped = {}
-    pm.problems = []
-    #: {problem line: [plugin names it concerns]}
-    pm.problem_owners = {}
-    pm.versions = {}
-    #: {plugin name: distribution name} of the entry points loaded
-    pm.distributions = {}
 
     def register(plugin, name: str, explicit: bool) -> bool:
         pm.register(plugin, name=name)
@@ -146,11 +154,11 @@ def make_plugin_manager(
 class PluginHost:
     """Typed access to the hooks (what the document, CLI and app call)."""
 
-    def __init__(self, pm: pluggy.PluginManager) -> None:
+    def __init__(self, pm: HostPluginManager) -> None:
         self.pm = pm
 
     @classmethod
-    def create(cls, plugins: Iterable = (), load_entry_points: bool = True, allowlist=None, skip_broken: bool = False) -> "PluginHost":
+    def create(cls, plugins: Iterable = (), load_entry_points: bool = True, allowlist=None, skip_broken: bool = False) -> PluginHost:
         return cls(make_plugin_manager(plugins, load_entry_points, allowlist, skip_broken))
 
     @property
@@ -590,7 +598,7 @@ class PluginHost:
         no animation plugin is installed)."""
         return self._solve("sketchforge_pose", doc=doc, frame=int(frame))
 
-    def exporter_for(self, path, doc=None) -> "object":
+    def exporter_for(self, path, doc=None) -> object:
         """The exporter for ``path``'s suffix. With ``doc``, the document exporter of that
         suffix (an animation) if it handles ``doc``, else the suffix's mesh exporter.
 

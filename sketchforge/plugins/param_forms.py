@@ -26,8 +26,9 @@ import contextvars
 import functools
 import math
 import numbers
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import Any, Callable, Mapping
+from typing import Any
 
 #: Kinds of field: a real number, a whole number, one of options, a switch, free text, or a
 #: value the form cannot edit (a list or an object: shown, kept as it is).

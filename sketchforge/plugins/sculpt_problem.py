@@ -15,8 +15,9 @@ solver evaluates candidate heights exactly as the app will shade them.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 

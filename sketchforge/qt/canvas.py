@@ -34,6 +34,7 @@ wheel changes the band radius; Ctrl+wheel still zooms).
 from __future__ import annotations
 
 import threading
+from typing import Any
 
 import numpy as np
 import pyqtgraph as pg
@@ -75,7 +76,7 @@ LAYER_TINTS = np.array(
 class CanvasViewBox(pg.ViewBox):
     """A ViewBox that offers left drags, clicks and wheel turns to the canvas first."""
 
-    def __init__(self, canvas: "Canvas") -> None:
+    def __init__(self, canvas: Canvas) -> None:
         super().__init__(lockAspect=True, enableMenu=False, invertY=False)
         self._canvas = canvas
 
@@ -140,7 +141,7 @@ class Canvas(pg.GraphicsView):
         self.isoline_count = 0
         self.current_layer: str | None = None
         self._layer_items: dict[str, it.ShadedLayerItem] = {}
-        self._tool = None
+        self._tool: Any = None  # a Tool, or the sculpt controller: both take press/move/release
         self._stroke_kind = "front"
         self._reference: pg.ImageItem | None = None
         self._light_center = np.zeros(2)
@@ -151,7 +152,7 @@ class Canvas(pg.GraphicsView):
         # it is stale. A light change re-shades it; a view or mesh change rasterises again.
         self._gbuf: gb.GBuffer | None = None
         self._gbuf_meshes: list = []
-        self._shaded_gbuf = None  # the buffer the picture's pixels were shaded from
+        self._shaded_gbuf: gb.GBuffer | None = None  # the buffer the picture's pixels were shaded from
         self._raster_thread: threading.Thread | None = None
         self._raster_again = False
         self._raster_generation = 0  # requests made
@@ -266,7 +267,7 @@ class Canvas(pg.GraphicsView):
 
     def _shown_meshes(self) -> list:
         """Per layer (back to front) the mesh drawn now: the preview's, the layer's, or None."""
-        out = []
+        out: list = []
         for layer in self.doc.layers:
             item = self._layer_items.get(layer.id)
             out.append(item._mesh if (item is not None and layer.visible) else None)
@@ -511,7 +512,7 @@ class Canvas(pg.GraphicsView):
         self._refresh_handles()
         cursor = Qt.CursorShape.CrossCursor if name in ("draw", "sculpt", "light") else Qt.CursorShape.ArrowCursor
         self.viewport().setCursor(cursor)
-        for key, item in self.overlays.items():
+        for item in self.overlays.values():
             item.setVisible(name == "sculpt")
         self._update_light_indicator()
 

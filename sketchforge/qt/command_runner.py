@@ -22,12 +22,11 @@ JobRunner (the OBSERVATION view's assembly).
 from __future__ import annotations
 
 import functools
-from typing import Callable
+from collections.abc import Callable
 
 from PySide6.QtCore import QObject, QThreadPool, Signal
 
-from sketchforge.qt.workers import JobRunner
-
+from sketchforge.qt.workers import Job, JobRunner
 
 #: ``run``'s default ``guard_token``: the runner starts its own crash record.
 _NO_TOKEN = object()
@@ -61,7 +60,7 @@ class CommandRunner(QObject):
         # (issue 38: two hung inflations stopped every computation). Idle threads expire.
         self.pool = QThreadPool(self)
         self.pool.setMaxThreadCount(max(4, QThreadPool.globalInstance().maxThreadCount()))
-        self._job = None
+        self._job: Job | None = None
         self._macro_open = False
         self._on_cancel: Callable | None = None
         self._prepare_returned.connect(self._guard_after)

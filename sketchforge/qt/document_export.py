@@ -23,9 +23,9 @@ def export_document_in_background(window, exporter, path) -> bool:
     """Run ``exporter.write_document`` on the window's job runner with the progress indicator,
     through the host (temp file, atomic rename, one-line errors naming the plugin). Raises a
     SketchforgeError before starting if the document cannot be read (the caller shows it)."""
-    from sketchforge.qt.errors_ui import show_error
-
     from pathlib import Path
+
+    from sketchforge.qt.errors_ui import show_error
 
     values = DocumentValues(window.doc)
 

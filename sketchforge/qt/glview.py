@@ -18,10 +18,15 @@ signal after each repaint), so plugins drawing in the view need no change.
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from pyqtgraph.opengl.GLViewWidget import GLViewMixin  # this module is imported when a view is made
 from PySide6.QtCore import QSize, Qt, Signal
 from PySide6.QtGui import QImage, QOffscreenSurface, QOpenGLContext, QPainter, QSurfaceFormat
 from PySide6.QtWidgets import QWidget
+
+if TYPE_CHECKING:  # imported when the first frame is rendered
+    from PySide6.QtOpenGL import QOpenGLFramebufferObject
 
 
 class GLView(GLViewMixin, QWidget):
@@ -36,7 +41,7 @@ class GLView(GLViewMixin, QWidget):
         self.setAttribute(Qt.WidgetAttribute.WA_OpaquePaintEvent)  # every pixel is painted
         self._context: QOpenGLContext | None = None
         self._surface: QOffscreenSurface | None = None
-        self._fbo = None
+        self._fbo: QOpenGLFramebufferObject | None = None
 
     def create_context(self) -> str | None:
         """Create the OpenGL context; None when it works, else why not (one sentence)."""

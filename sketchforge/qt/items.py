@@ -75,7 +75,7 @@ class ShadedSceneItem(pg.GraphicsObject):
     def __init__(self) -> None:
         super().__init__()
         self._image: QImage | None = None
-        self._pixels = None  # keeps the buffer the QImage reads alive
+        self._pixels: np.ndarray | None = None  # keeps the buffer the QImage reads alive
         self._x0 = 0.0
         self._y1 = 0.0
         self._scale = 1.0

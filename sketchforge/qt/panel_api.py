@@ -20,18 +20,21 @@ Rules the rest of the app keeps too: a panel changes the document only through c
 
 from __future__ import annotations
 
-from typing import Any, Callable
+from collections.abc import Callable
+from typing import Any
 
 from PySide6.QtCore import QObject, Signal
+
+# An exception as one status-bar line: a SketchforgeError's message, anything else with its type.
+from sketchforge.qt.errors_ui import error_text
+
+# The parameter form of a solver, generated from what it declares: a panel that lets the person
+# choose a solver shows its parameters with it (the isophote tool's sculpt solver choice).
+from sketchforge.qt.param_form import SolverForm
 
 # The band radius range of the sculpt controller (drawing units): a panel with a band radius
 # control offers exactly this range.
 from sketchforge.qt.sculpt import MAX_RADIUS, MIN_RADIUS
-# An exception as one status-bar line: a SketchforgeError's message, anything else with its type.
-from sketchforge.qt.errors_ui import error_text
-# The parameter form of a solver, generated from what it declares: a panel that lets the person
-# choose a solver shows its parameters with it (the isophote tool's sculpt solver choice).
-from sketchforge.qt.param_form import SolverForm
 
 __all__ = ["AppContext", "MAX_RADIUS", "MIN_RADIUS", "SolverForm", "error_text"]
 

@@ -112,49 +112,49 @@ class ParamForm(QWidget):
     # --- widgets ------------------------------------------------------------------------------
     def _editor(self, f) -> QWidget:
         if f.kind == "choice":
-            w = QComboBox()
-            w.addItems([str(o) for o in f.options])
-            w.currentIndexChanged.connect(lambda i, k=f.key: self._commit(k, self.fields[k].options[i] if i >= 0 else None))
-            return w
+            combo = QComboBox()
+            combo.addItems([str(o) for o in f.options])
+            combo.currentIndexChanged.connect(lambda i, k=f.key: self._commit(k, self.fields[k].options[i] if i >= 0 else None))
+            return combo
         if f.kind == "flag":
-            w = QCheckBox()
-            w.clicked.connect(lambda on, k=f.key: self._commit(k, bool(on)))
-            return w
+            check = QCheckBox()
+            check.clicked.connect(lambda on, k=f.key: self._commit(k, bool(on)))
+            return check
         if f.kind == "integer":
-            w = QSpinBox()
+            spin = QSpinBox()
             lo = -INT_LIMIT if f.lo is None else max(-INT_LIMIT, math.ceil(f.lo + (1 if f.lo_open and f.lo == int(f.lo) else 0)))
             hi = INT_LIMIT if f.hi is None else min(INT_LIMIT, math.floor(f.hi - (1 if f.hi_open and f.hi == int(f.hi) else 0)))
-            w.setRange(int(lo), int(hi))
-            w.setKeyboardTracking(False)
-            w.valueChanged.connect(lambda v, k=f.key: self._commit(k, int(v)))
-            return w
+            spin.setRange(int(lo), int(hi))
+            spin.setKeyboardTracking(False)
+            spin.valueChanged.connect(lambda v, k=f.key: self._commit(k, int(v)))
+            return spin
         if f.kind == "number" and scientific(f):
-            w = QLineEdit()
-            v = QDoubleValidator(w)
+            line = QLineEdit()
+            v = QDoubleValidator(line)
             v.setNotation(QDoubleValidator.Notation.ScientificNotation)
-            w.setValidator(v)
-            w.editingFinished.connect(lambda k=f.key, e=w: self._text_number(k, e))
-            return w
+            line.setValidator(v)
+            line.editingFinished.connect(lambda k=f.key, e=line: self._text_number(k, e))
+            return line
         if f.kind == "number":
-            w = QDoubleSpinBox()
+            dspin = QDoubleSpinBox()
             step = _step(f.default, f.lo, f.hi)
             decimals = min(12, max(2, -math.floor(math.log10(step)) if step < 1 else 2))
             eps = 10.0 ** -decimals
             lo = -UNBOUNDED if f.lo is None else f.lo + (eps if f.lo_open else 0.0)
             hi = UNBOUNDED if f.hi is None else f.hi - (eps if f.hi_open else 0.0)
-            w.setDecimals(decimals)
-            w.setRange(max(lo, -UNBOUNDED), min(hi, UNBOUNDED))
-            w.setSingleStep(step)
-            w.setKeyboardTracking(False)
-            w.valueChanged.connect(lambda v, k=f.key: self._commit(k, float(v)))
-            return w
+            dspin.setDecimals(decimals)
+            dspin.setRange(max(lo, -UNBOUNDED), min(hi, UNBOUNDED))
+            dspin.setSingleStep(step)
+            dspin.setKeyboardTracking(False)
+            dspin.valueChanged.connect(lambda v, k=f.key: self._commit(k, float(v)))
+            return dspin
         if f.kind == "text":
-            w = QLineEdit()
-            w.editingFinished.connect(lambda k=f.key, e=w: self._commit(k, e.text()))
-            return w
-        w = QLabel()  # a list or an object: shown, kept as it is
-        w.setWordWrap(True)
-        return w
+            edit = QLineEdit()
+            edit.editingFinished.connect(lambda k=f.key, e=edit: self._commit(k, e.text()))
+            return edit
+        label = QLabel()  # a list or an object: shown, kept as it is
+        label.setWordWrap(True)
+        return label
 
     def _text_number(self, key: str, edit: QLineEdit) -> None:
         try:

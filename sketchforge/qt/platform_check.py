@@ -14,7 +14,7 @@ from __future__ import annotations
 import ctypes.util
 import os
 import sys
-from typing import Callable, Mapping
+from collections.abc import Callable, Mapping
 
 #: Libraries Qt 6's xcb platform plugin (and libQt6XcbQpa) loads, as ``find_library`` names
 #: them, with the Debian package that ships each (read off ``ldd libqxcb.so``; the xcb-util

@@ -18,6 +18,7 @@ pool thread) or each visible layer's own mesh.
 from __future__ import annotations
 
 import functools
+from typing import TYPE_CHECKING
 
 import numpy as np
 from PySide6.QtCore import Qt, Signal
@@ -25,6 +26,9 @@ from PySide6.QtGui import QGuiApplication
 from PySide6.QtWidgets import QLabel, QStackedLayout, QWidget
 
 from sketchforge.qt.errors_ui import error_text
+
+if TYPE_CHECKING:  # imported when the first 3D view is made (OpenGL)
+    from sketchforge.qt.glview import GLView
 
 #: Platforms where QOpenGLWidget cannot work.
 NO_GL_PLATFORMS = ("offscreen", "minimal")
@@ -203,7 +207,7 @@ class View3D(QWidget):
         self.doc = doc
         self.jobs = jobs
         self.source = "assembled"
-        self.gl = None
+        self.gl: GLView | None = None
         self.model_item = None
         self._items: list = []
         self._job = None

@@ -14,7 +14,8 @@ from __future__ import annotations
 
 import inspect
 import traceback
-from typing import Any, Callable
+from collections.abc import Callable
+from typing import Any
 
 from PySide6.QtCore import QObject, QRunnable, QThreadPool, Signal
 
@@ -32,6 +33,7 @@ class Job(QRunnable):
         self.setAutoDelete(False)  # the runner keeps a reference until the signal arrives
         self.fn = fn
         self.label = label
+        self.background = False  # a job no progress is shown for (JobRunner.start)
         self.cancelled = False
         self.done = False
         self.signals = _JobSignals()

@@ -120,7 +120,7 @@ class StrokePlan:
 def layer_outlines(doc) -> list:
     """Each layer's outline, back to front, as it is drawn: the mesh boundary (m, 2) float64,
     else the stroke, None for an empty or hidden layer."""
-    out = []
+    out: list[np.ndarray | None] = []
     for layer in doc.layers:
         if not layer.visible:
             out.append(None)

@@ -5,7 +5,6 @@ exit status 2 and exactly one ``sketchforge: error: ...`` line, or the correct r
 
 from __future__ import annotations
 
-import copy
 import io
 import json
 import os
@@ -15,8 +14,6 @@ import time
 from contextlib import redirect_stderr, redirect_stdout
 from dataclasses import dataclass
 from pathlib import Path
-
-import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(ROOT / "tests"))

@@ -5,8 +5,6 @@ refuses new files shows a dialog and the title keeps its unsaved mark."""
 
 from __future__ import annotations
 
-import os
-
 import pytest
 
 pytest.importorskip("PySide6")
@@ -73,7 +71,17 @@ def window(qtbot, host, tmp_path, dialogs, monkeypatch):
         w.close_now()
 
 
-@pytest.mark.parametrize("setting, seconds, poll_ms", [(1, 1.0, 1000), (2.5, 2.5, 2500), (0.2, 0.2, MIN_INTERVAL_S * 1000), (60, 60.0, 5000), ("junk", 60.0, 5000), (float("nan"), 60.0, 5000)])
+@pytest.mark.parametrize(
+    "setting, seconds, poll_ms",
+    [
+        (1, 1.0, 1000),
+        (2.5, 2.5, 2500),
+        (0.2, 0.2, MIN_INTERVAL_S * 1000),
+        (60, 60.0, 5000),
+        ("junk", 60.0, 5000),
+        (float("nan"), 60.0, 5000),
+    ],
+)
 def test_interval_is_honoured_down_to_one_second(monkeypatch, setting, seconds, poll_ms):
     monkeypatch.delenv("SKETCHFORGE_AUTOSAVE_INTERVAL", raising=False)
     assert autosave_interval(setting) == seconds
@@ -138,7 +146,7 @@ def test_declined_recovery_keeps_the_autosave_across_ticks_and_offers_it_again(w
     left = Autosaver(crashed, original_path=mine)
     assert left.save_now()  # ...and that session ended abnormally
     content = left.path.read_bytes()
-    for attempt in range(2):  # two starts, both answered No
+    for _attempt in range(2):  # two starts, both answered No
         w = window(interval=1)
         assert w.open_path(mine, ask=False)
         answers.append(QMessageBox.StandardButton.No)

@@ -10,10 +10,9 @@ import copy
 import json
 import os
 
+from attack_helpers import SMALL_DOC, run_cli
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-
-from attack_helpers import SMALL_DOC, run_cli
 
 IN_CI = os.environ.get("CI", "").lower() in ("1", "true", "yes")
 EXAMPLES = int(os.environ.get("SKETCHFORGE_FUZZ_EXAMPLES", 12 if IN_CI else 150))
@@ -21,7 +20,9 @@ FUZZ = settings(max_examples=EXAMPLES, deadline=None, suppress_health_check=list
 
 BIG_NUMBERS = st.sampled_from(["1" + "0" * 400, "7" * 5000, "1e308", "-1e308", "1e-300", "NaN", "Infinity", "-0"])
 json_scalars = st.none() | st.booleans() | st.integers(-10**30, 10**30) | st.floats(allow_nan=False) | st.text(max_size=10)
-json_values = st.recursive(json_scalars, lambda c: st.lists(c, max_size=4) | st.dictionaries(st.text(max_size=6), c, max_size=4), max_leaves=12)
+json_values = st.recursive(
+    json_scalars, lambda c: st.lists(c, max_size=4) | st.dictionaries(st.text(max_size=6), c, max_size=4), max_leaves=12
+)
 
 
 #: What a successful step may print before a later step fails (each its own single line).

@@ -18,8 +18,8 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
 from attack_helpers import SMALL_DOC, assert_one_line_error, run_cli, write_doc
+
 from sketchforge.document import Document
 from sketchforge.document.document import MAX_LAYERS
 from sketchforge.errors import MAX_MESSAGE_CHARS, LimitError, SketchforgeError, quote, shorten

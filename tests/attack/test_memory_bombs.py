@@ -11,10 +11,9 @@ import subprocess
 import sys
 
 import pytest
+from attack_helpers import assert_one_line_error, run_cli
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
-
-from attack_helpers import assert_one_line_error, run_cli
 
 from sketchforge.document import fileformat as ff
 
@@ -110,7 +109,9 @@ def _items(v) -> tuple[int, int]:
     return 1, 0
 
 
-_text = st.text(st.characters(blacklist_categories=("Cs",)), max_size=12) | st.sampled_from(['",:[{', "\\", '\\"', "a,b", "\U0001F600", "ā"])
+_text = st.text(st.characters(blacklist_categories=("Cs",)), max_size=12) | st.sampled_from(
+    ['",:[{', "\\", '\\"', "a,b", "\U0001f600", "ā"]
+)
 _json = st.recursive(
     st.none() | st.booleans() | st.integers(-10**20, 10**20) | st.floats(allow_nan=False, allow_infinity=False) | _text,
     lambda kids: st.lists(kids, max_size=5) | st.dictionaries(_text, kids, max_size=5),

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import pytest
-
 from attack_helpers import assert_one_line_error, run_cli, write_doc
 
 

@@ -4,7 +4,6 @@ ValueError for a 4300+ digit integer, ZeroDivisionError, a GEOS exception)."""
 from __future__ import annotations
 
 import pytest
-
 from attack_helpers import assert_one_line_error, run_cli, write_doc
 
 HUGE = 10**400  # JSON integer too large for any float
@@ -28,8 +27,10 @@ CASES = {
     "set_light": (lambda d: d["journal"].append({"command": "set_light", "direction": ["@N", 1, 0]}), "integer of 401 digits"),
     "contour point": (lambda d: d["journal"][1]["points"][0].__setitem__(0, "@N"), "integer of 401 digits"),
     "resolution": (lambda d: d["journal"][2]["params"].__setitem__("resolution", "@N"), "integer of 401 digits"),
-    "band": (lambda d: d["journal"].append({"command": "sculpt_isophote", "layer": "a", "pick": [0.5, 0.5], "band": "@N", "stroke": [[0.2, 0.5], [0.8, 0.5]]}), "integer of 401 digits"),
-    "pick": (lambda d: d["journal"].append({"command": "sculpt_isophote", "layer": "a", "pick": [0.5, "@N"], "band": 0.3, "stroke": [[0.2, 0.5], [0.8, 0.5]]}), "integer of 401 digits"),
+    "band": (lambda d: d["journal"].append({"command": "sculpt_isophote", "layer": "a", "pick": [0.5, 0.5], "band": "@N",
+                                            "stroke": [[0.2, 0.5], [0.8, 0.5]]}), "integer of 401 digits"),
+    "pick": (lambda d: d["journal"].append({"command": "sculpt_isophote", "layer": "a", "pick": [0.5, "@N"], "band": 0.3,
+                                            "stroke": [[0.2, 0.5], [0.8, 0.5]]}), "integer of 401 digits"),
 }
 
 

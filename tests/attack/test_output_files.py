@@ -11,7 +11,6 @@ import sys
 import time
 
 import pytest
-
 from attack_helpers import assert_one_line_error, refuse_new_files, run_cli, write_doc
 
 

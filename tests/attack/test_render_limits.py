@@ -7,7 +7,6 @@ import base64
 
 import numpy as np
 import pytest
-
 from attack_helpers import MAX_RSS_GROWTH, assert_one_line_error, peak_rss_bytes, run_cli, write_doc
 
 

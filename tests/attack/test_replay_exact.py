@@ -9,8 +9,7 @@ import json
 import math
 
 import numpy as np
-
-from attack_helpers import run_cli, write_doc
+from attack_helpers import run_cli
 
 
 def _random_directions(n, seed=14):
@@ -66,7 +65,13 @@ def test_save_load_replay_check_loop(tmp_path, fan_host):
         res = run_cli("replay", path, "--check")
         assert res.rc == 0 and "replay matches the snapshot" in res.err, res.err
         data = json.loads(path.read_text())
-        assert ff.compare(ff.document_from_dict(data, "s", host=fan_host), ff.replay_journal(*ff.validate_header(data, "r"), host=fan_host)) == []
+        assert (
+            ff.compare(
+                ff.document_from_dict(data, "s", host=fan_host),
+                ff.replay_journal(*ff.validate_header(data, "r"), host=fan_host),
+            )
+            == []
+        )
         assert ff.load(path, host=fan_host).light == doc.light
 
 

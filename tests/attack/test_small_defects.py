@@ -13,7 +13,6 @@ import subprocess
 import sys
 
 import pytest
-
 from attack_helpers import SMALL_DOC, assert_one_line_error, run_cli, write_doc
 
 

@@ -8,8 +8,8 @@ import base64
 
 import numpy as np
 import pytest
-
 from attack_helpers import assert_one_line_error, run_cli, write_doc
+
 from sketchforge.plugins import default_host
 
 
@@ -24,7 +24,8 @@ def _arr(a, dtype):
 
 def _set_shape(shape):
     def f(doc):
-        _mesh(doc)["V"] = {"dtype": "float64", "shape": shape, "data": base64.b64encode(b"\0" * 8 * int(np.prod(shape) if max(shape) < 10**6 else 0)).decode()}
+        nbytes = 8 * int(np.prod(shape) if max(shape) < 10**6 else 0)
+        _mesh(doc)["V"] = {"dtype": "float64", "shape": shape, "data": base64.b64encode(b"\0" * nbytes).decode()}
     return f
 
 
@@ -70,10 +71,12 @@ CASES = {
     "boundary lists a vertex twice": (_boundary_repeat, "lists a vertex twice"),
     "base64 longer than the shape": (lambda d: _mesh(d)["junction"].__setitem__("data", "A" * 4000), "base64 characters"),
     "garbage edit": (lambda d: d["snapshot"]["layers"][0].__setitem__("edits", [{"command": "sculpt_isophote", "junk": 1}]), "edits[0]"),
-    "edit that is not a sculpt edit": (lambda d: d["snapshot"]["layers"][0].__setitem__("edits", [{"command": "add_layer"}]), "is not a sculpt edit"),
+    "edit that is not a sculpt edit": (lambda d: d["snapshot"]["layers"][0].__setitem__("edits", [{"command": "add_layer"}]),
+                                       "is not a sculpt edit"),
     "edit with a bad light": (
         lambda d: d["snapshot"]["layers"][0].__setitem__(
-            "edits", [{"command": "sculpt_isophote", "layer": "a", "pick": [0.5, 0.5], "band": 0.3, "stroke": [[0.2, 0.5], [0.8, 0.5]], "light": [0.0, 0.0, "x"]}]
+            "edits", [{"command": "sculpt_isophote", "layer": "a", "pick": [0.5, 0.5], "band": 0.3,
+                       "stroke": [[0.2, 0.5], [0.8, 0.5]], "light": [0.0, 0.0, "x"]}]
         ),
         "light: must be a unit direction",
     ),

@@ -8,7 +8,6 @@ import subprocess
 import sys
 
 import pytest
-
 from attack_helpers import MAX_RSS_GROWTH, assert_one_line_error, peak_rss_bytes, run_cli
 
 

@@ -10,9 +10,10 @@ from sketchforge.document.document import Document
 
 pytest.importorskip("sketchforge_animate")
 
+from qt_helpers import GL_WINDOW_PRELUDE  # noqa: E402
+
 from sketchforge_animate import Animation  # noqa: E402
 from sketchforge_animate.picking import pick_vertex, project, unproject_at_depth  # noqa: E402
-from qt_helpers import GL_WINDOW_PRELUDE  # noqa: E402
 
 BLOB = [[np.cos(t), 0.5 * np.sin(t)] for t in np.linspace(0, 2 * np.pi, 40, endpoint=False)]
 

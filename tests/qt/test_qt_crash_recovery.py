@@ -10,10 +10,10 @@ from dataclasses import dataclass
 from typing import ClassVar
 
 import pytest
-from PySide6.QtWidgets import QApplication, QMessageBox
-
 from crash_plugin import live_session
+from PySide6.QtWidgets import QApplication, QMessageBox
 from qt_helpers import wait_idle
+
 from sketchforge.document import commands as C
 from sketchforge.document import fileformat as ff
 from sketchforge.document.autosave import Autosaver, find_recoverable

@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from qt_helpers import wait_idle
 from scipy import ndimage
 
-from qt_helpers import wait_idle
 from sketchforge.geometry.raster import render_top
 
 

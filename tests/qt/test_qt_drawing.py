@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from PySide6.QtCore import Qt
 from PySide6.QtWidgets import QApplication
-
 from qt_helpers import circle, wait_idle
+
 from sketchforge.document.document import Document
 
 K = Qt.Key

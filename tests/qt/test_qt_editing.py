@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 from PySide6.QtCore import Qt
 from PySide6.QtGui import QColor
-
 from qt_helpers import circle, wait_idle
+
 from sketchforge.document import commands as C
 
 

@@ -9,10 +9,9 @@ import threading
 import numpy as np
 import pytest
 from PySide6.QtCore import Qt
-from PySide6.QtGui import QKeySequence
 from PySide6.QtWidgets import QMessageBox
-
 from qt_helpers import wait_idle
+
 from sketchforge.document import commands as C
 from sketchforge.document import fileformat as ff
 from sketchforge.document.document import Document
@@ -97,7 +96,13 @@ def test_a_part_that_will_be_free_is_named_at_once_and_the_model_still_assembles
     v = w.view3d
     v._active = True  # offscreen there is no OpenGL: the view's logic runs all the same
     started = []
-    monkeypatch.setattr(v.jobs, "start", lambda *a, **k: started.append(a) or type("J", (), {"done": False, "cancelled": False, "cancel": lambda s: None})())
+    monkeypatch.setattr(
+        v.jobs,
+        "start",
+        lambda *a, **k: (
+            started.append(a) or type("J", (), {"done": False, "cancelled": False, "cancel": lambda s: None})()
+        ),
+    )
     v.refresh()
     assert started, "the assembly is run"
     assert v.failure is None and v.notice and "free part" in v.notice[0] and "Tail copy" in v.notice[0]
@@ -135,10 +140,10 @@ def test_the_assemblers_own_failure_names_the_part_and_a_success_clears_it(creat
 
 
 def test_the_app_inflates_in_a_child_process_with_the_same_result(make_window, host, qtbot, monkeypatch):
-    from sketchforge.offload import OffloadedInflation
-
-    from sketchforge.qt.main_window import MainWindow
     from PySide6.QtCore import QSettings
+
+    from sketchforge.offload import OffloadedInflation
+    from sketchforge.qt.main_window import MainWindow
 
     doc = Document(host=host)
     w = MainWindow(doc, host=host, settings=QSettings(), offload_inflation=True)

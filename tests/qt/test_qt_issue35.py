@@ -14,8 +14,8 @@ import pytest
 from PySide6.QtCore import QEvent, QPointF, Qt
 from PySide6.QtGui import QMouseEvent
 from PySide6.QtWidgets import QApplication
-
 from qt_helpers import wait_idle
+
 from sketchforge.document import fileformat as ff
 from sketchforge.document.layer import Light
 

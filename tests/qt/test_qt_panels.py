@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 from PySide6.QtCore import QSettings
 from PySide6.QtWidgets import QLabel
-
 from qt_helpers import wait_idle
+
 from sketchforge.document import commands as C
 from sketchforge.document.document import Document
 from sketchforge.plugin_api import Panel, SculptSolver, hookimpl

@@ -7,14 +7,13 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from PySide6.QtCore import Qt
 from PySide6.QtWidgets import QApplication, QComboBox, QDoubleSpinBox, QLineEdit, QSpinBox
-
 from qt_helpers import circle, wait_idle
+from third_party_solvers import ThirdPartySolvers
+
 from sketchforge.document.document import Document
 from sketchforge.plugin_api import Exporter, hookimpl
 from sketchforge.plugins.testing import make_host
-from third_party_solvers import ThirdPartySolvers
 
 
 @pytest.fixture(scope="module")

@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 from PySide6.QtCore import QSettings, QThreadPool
 from PySide6.QtWidgets import QMessageBox
-
 from qt_helpers import wait_idle
+
 from sketchforge.document import commands as C
 from sketchforge.document import fileformat as ff
 from sketchforge.document.autosave import Autosaver, find_recoverable

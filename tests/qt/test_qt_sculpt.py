@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 from PySide6.QtCore import Qt
 from PySide6.QtWidgets import QApplication
-
 from qt_helpers import wait_idle
+
 from sketchforge.document import fileformat as ff
 from sketchforge.document.document import Document
 

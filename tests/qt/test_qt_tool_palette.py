@@ -7,10 +7,10 @@ from __future__ import annotations
 
 import numpy as np
 from PySide6.QtWidgets import QApplication
-
 from qt_helpers import wait_idle
-from sketchforge.document import fileformat as ff
 from test_qt_sculpt import ellipse_doc
+
+from sketchforge.document import fileformat as ff
 
 
 def test_palette_lists_every_registered_tool(make_window, host):

@@ -7,8 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 from PySide6.QtCore import Qt
-
 from qt_helpers import circle, wait_idle
+
 from sketchforge.document.document import Document
 from sketchforge.tools import transform as tr
 

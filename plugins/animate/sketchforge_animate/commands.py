@@ -16,8 +16,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from sketchforge.plugin_api import Command, parse_field
-from sketchforge.plugin_api import DocumentFormatError, ParameterError
+from sketchforge.plugin_api import Command, DocumentFormatError, ParameterError, parse_field
 
 from .state import KEY, MAX_LOOP_FRAMES, Animation, Pin, _triples, _vec, check_range, fit_recording
 
@@ -85,7 +84,7 @@ class AddPin(AnimationCommand):
         return {"command": self.name, "id": self.id, "at": [float(v) for v in self.at]}
 
     @classmethod
-    def from_dict(cls, d: dict) -> "AddPin":
+    def from_dict(cls, d: dict) -> AddPin:
         return cls(id=parse_field(d, "id", str, cls.name, None), at=_parse_vec(d, "at", cls.name))
 
 
@@ -122,7 +121,7 @@ class MovePin(AnimationCommand):
         return {"command": self.name, "pin": self.pin, "to": [float(v) for v in self.to]}
 
     @classmethod
-    def from_dict(cls, d: dict) -> "MovePin":
+    def from_dict(cls, d: dict) -> MovePin:
         return cls(pin=parse_field(d, "pin", str, cls.name), to=_parse_vec(d, "to", cls.name))
 
 
@@ -141,7 +140,7 @@ class RemovePin(AnimationCommand):
         return {"command": self.name, "pin": self.pin}
 
     @classmethod
-    def from_dict(cls, d: dict) -> "RemovePin":
+    def from_dict(cls, d: dict) -> RemovePin:
         return cls(pin=parse_field(d, "pin", str, cls.name))
 
 
@@ -165,7 +164,7 @@ class HoldPin(AnimationCommand):
         return {"command": self.name, "pin": self.pin}
 
     @classmethod
-    def from_dict(cls, d: dict) -> "HoldPin":
+    def from_dict(cls, d: dict) -> HoldPin:
         return cls(pin=parse_field(d, "pin", str, cls.name))
 
 
@@ -203,7 +202,7 @@ class RecordMotion(AnimationCommand):
         return {"command": self.name, "pin": self.pin, "start": int(self.start), "samples": self.samples.tolist()}
 
     @classmethod
-    def from_dict(cls, d: dict) -> "RecordMotion":
+    def from_dict(cls, d: dict) -> RecordMotion:
         raw = parse_field(d, "samples", list, cls.name)
         if len(raw) > 4 * MAX_LOOP_FRAMES:
             raise DocumentFormatError(f"command {cls.name!r}: at most {4 * MAX_LOOP_FRAMES} samples")
@@ -240,7 +239,7 @@ class CopyMotion(AnimationCommand):
         return {"command": self.name, "source": self.source, "pin": self.pin}
 
     @classmethod
-    def from_dict(cls, d: dict) -> "CopyMotion":
+    def from_dict(cls, d: dict) -> CopyMotion:
         return cls(source=parse_field(d, "source", str, cls.name), pin=parse_field(d, "pin", str, cls.name))
 
 

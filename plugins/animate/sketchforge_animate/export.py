@@ -2,9 +2,7 @@
 
 from __future__ import annotations
 
-from sketchforge.plugin_api import write_bytes_atomic
-from sketchforge.plugin_api import ParameterError
-from sketchforge.plugin_api import write_gltf
+from sketchforge.plugin_api import ParameterError, write_bytes_atomic, write_gltf
 
 from .gltf import animated_glb_bytes
 from .pose import animator_for, posed_mesh

@@ -56,7 +56,12 @@ def animated_glb_bytes(F: np.ndarray, frames: list[np.ndarray], fps: int = FPS) 
     n = len(base)
     blob = _Blob()
     idx_type = np.dtype("<u2") if n <= 65535 else np.dtype("<u4")
-    indices = blob.add(F.astype(idx_type).ravel(), UNSIGNED_SHORT if idx_type.itemsize == 2 else UNSIGNED_INT, "SCALAR", ELEMENT_ARRAY_BUFFER)
+    indices = blob.add(
+        F.astype(idx_type).ravel(),
+        UNSIGNED_SHORT if idx_type.itemsize == 2 else UNSIGNED_INT,
+        "SCALAR",
+        ELEMENT_ARRAY_BUFFER,
+    )
     base_n = vertex_normals(base, F)
     pos = blob.add(base.astype("<f4"), FLOAT, "VEC3", ARRAY_BUFFER, minmax=True)
     nrm = blob.add(base_n.astype("<f4"), FLOAT, "VEC3", ARRAY_BUFFER)
@@ -65,7 +70,12 @@ def animated_glb_bytes(F: np.ndarray, frames: list[np.ndarray], fps: int = FPS) 
         P = np.asarray(P, dtype=np.float64)
         dp = (P - base).astype("<f4")
         dn = (vertex_normals(P, F) - base_n).astype("<f4")
-        targets.append({"POSITION": blob.add(dp, FLOAT, "VEC3", ARRAY_BUFFER, minmax=True), "NORMAL": blob.add(dn, FLOAT, "VEC3", ARRAY_BUFFER)})
+        targets.append(
+            {
+                "POSITION": blob.add(dp, FLOAT, "VEC3", ARRAY_BUFFER, minmax=True),
+                "NORMAL": blob.add(dn, FLOAT, "VEC3", ARRAY_BUFFER),
+            }
+        )
     primitive = {"attributes": {"POSITION": pos, "NORMAL": nrm}, "indices": indices, "mode": 4}
     mesh: dict = {"name": "sketchforge model", "primitives": [primitive]}
     gltf: dict = {

@@ -15,8 +15,7 @@ import atexit
 import numpy as np
 from scipy.spatial import cKDTree
 
-from sketchforge.plugin_api import ParameterError
-from sketchforge.plugin_api import Mesh
+from sketchforge.plugin_api import Mesh, ParameterError
 
 from .arap import ArapSolver
 from .state import Animation
@@ -76,7 +75,7 @@ class Animator:
         if frame < 0:
             raise ParameterError(f"a frame number must be 0 or more, got {frame}")
         P = None
-        for P in self.frames(anim, frame + 1):
+        for P in self.frames(anim, frame + 1):  # noqa: B007 - run to the last frame, keep it
             pass
         return P
 

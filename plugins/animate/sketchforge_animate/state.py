@@ -106,7 +106,7 @@ class Animation:
         return {"loop": int(self.loop), "pins": [p.to_json() for p in self.pins]}
 
     @classmethod
-    def from_json(cls, d) -> "Animation":
+    def from_json(cls, d) -> Animation:
         """The animation of a stored value, checked with the limits the commands keep (at
         most MAX_PINS pins with distinct string ids, a loop of 0..MAX_LOOP_FRAMES frames, one
         finite [x, y, z] per loop frame in a motion, and a motion only with a loop). Raises
@@ -142,15 +142,24 @@ class Animation:
                         raise ParameterError(f"pin {quote(pid)}: its motion must have one [x, y, z] per loop frame ({loop})")
                     motion = _triples(motion, f"pin {quote(pid)}: its motion (one [x, y, z] per loop frame ({loop}))")
                     motion.setflags(write=False)
-                pins.append(Pin(pid, _vec(p["rest"], f"the rest of pin {quote(pid)}"), _vec(p["target"], f"the target of pin {quote(pid)}"), motion))
+                pins.append(
+                    Pin(
+                        pid,
+                        _vec(p["rest"], f"the rest of pin {quote(pid)}"),
+                        _vec(p["target"], f"the target of pin {quote(pid)}"),
+                        motion,
+                    )
+                )
         except KeyError as exc:
-            raise DocumentFormatError(f"the animation data is malformed: a pin or the animation lacks the field {quote(exc.args[0], 40)}") from None
+            raise DocumentFormatError(
+                f"the animation data is malformed: a pin or the animation lacks the field {quote(exc.args[0], 40)}"
+            ) from None
         except (TypeError, AttributeError, ValueError, ParameterError, OverflowError) as exc:
             raise DocumentFormatError(f"the animation data is malformed: {exc}") from None
         return cls(tuple(pins), loop)
 
     @classmethod
-    def of(cls, doc) -> "Animation":
+    def of(cls, doc) -> Animation:
         return cls.from_json(doc.plugin_data(KEY))
 
     # --- queries ------------------------------------------------------------------------------
@@ -179,7 +188,7 @@ class Animation:
         return out
 
     # --- edits (return new values) ------------------------------------------------------------
-    def with_pin(self, pin: Pin) -> "Animation":
+    def with_pin(self, pin: Pin) -> Animation:
         pins = [pin if p.id == pin.id else p for p in self.pins]
         if pin.id not in {p.id for p in self.pins}:
             if len(pins) >= MAX_PINS:
@@ -187,12 +196,12 @@ class Animation:
             pins.append(pin)
         return replace(self, pins=tuple(pins))
 
-    def without_pin(self, pin_id: str) -> "Animation":
+    def without_pin(self, pin_id: str) -> Animation:
         self.pin(pin_id)
         out = replace(self, pins=tuple(p for p in self.pins if p.id != pin_id))
         return out._loop_checked()
 
-    def _loop_checked(self) -> "Animation":
+    def _loop_checked(self) -> Animation:
         # the loop is defined by the recordings: with none left, the next one starts afresh
         if not any(p.motion is not None for p in self.pins):
             return replace(self, loop=0)

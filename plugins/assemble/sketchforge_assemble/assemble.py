@@ -12,21 +12,18 @@ from __future__ import annotations
 import math
 import numbers
 import time
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Mapping, Sequence
 
 import numpy as np
 
-from sketchforge.plugin_api import GeometryError, LimitError, ParameterError, quote
-from sketchforge.plugin_api import number
-from sketchforge.plugin_api import laplacian_and_mass
-from sketchforge.plugin_api import Mesh
+from sketchforge.plugin_api import GeometryError, LimitError, Mesh, ParameterError, laplacian_and_mass, number, quote
 
 from .attach import Attachment, find_attachments
 from .blend import blend_junctions
 from .cache import AssemblyCache, memo
-from .errors import AttachmentError, DepthOrderError
 from .depth import build_problem, settle_free_parts, solve_without_free_parts
+from .errors import AttachmentError, DepthOrderError
 from .fair import fair_clear, hold_weights, interior_edges, ring_region, seam_zone, supports, wide_zone
 from .remesh import insert_chains
 from .sheet import THIN_HEIGHT_EDGES, refine_thin, sheet_from_mesh, taper
@@ -242,47 +239,83 @@ def assemble_detailed(meshes: Sequence[Mesh | None], closed: Sequence[bool] | No
     """
     p = _params(params)
     t0 = time.perf_counter()
+    closed, names, present = _inputs(meshes, closed, names)
+    run = _Run(present)
+    while True:
+        sheets = [_sheet(cache, k, names[i], meshes[i], bool(closed[i])) for k, i in enumerate(run.keep)]
+        try:
+            res = _assemble(list(sheets), run.names(names), p, cache, run.freed_by_sheet())
+        except _PartsFailed as failure:
+            if p["on_bad_junction"] == "raise":
+                raise failure.error from None
+            run.blame(failure, sheets, names)
+            continue
+        if res.faired is False:
+            # The blended junction would cross itself (or flatten a triangle): the plain
+            # sleeve never does, so the model is still handed out, with its folds, and why.
+            p = {**p, "fillet": 0.0}
+            run.fell_back.append("a junction could not be blended without the surface crossing itself; "
+                                 "its parts are glued with a plain fold (assembly parameter 'fillet')")
+            continue
+        return _result(res, run, sheets, t0)
+
+
+def _inputs(meshes, closed, names) -> tuple[list, list[str], list[int]]:
+    """(closed, names, present): the flags and names with their defaults, and the input
+    indices of the layers with a mesh to assemble; refuses an empty or too costly input
+    before any work, so that a refusal is quick."""
     n_in = len(meshes)
     closed = [False] * n_in if closed is None else list(closed)
     names = [f"layer {i}" for i in range(n_in)] if names is None else list(names)
     present = [i for i, m in enumerate(meshes) if m is not None and m.n_faces > 0]
     if not present:
         raise ParameterError("there is no layer with a mesh to assemble")
-    _check_overlap_work([meshes[i] for i in present])  # before any work, so a refusal is quick
-    freed: dict[int, str] = {}  # input index -> why it is assembled free
-    left_out: dict[int, str] = {}  # input index -> why it is not in the model (a free part with no room)
-    fell_back = []
-    while True:
-        keep = [i for i in present if i not in left_out]
-        knames = [names[i] for i in keep]
-        sheets = [_sheet(cache, k, knames[k], meshes[i], bool(closed[i])) for k, i in enumerate(keep)]
-        try:
-            res = _assemble(list(sheets), knames, p, cache, {keep.index(i): why for i, why in freed.items()})
-        except _PartsFailed as failure:
-            if p["on_bad_junction"] == "raise":
-                raise failure.error from None
-            blamed = [keep[k] for k in failure.parts]
-            if failure.leave_out:
-                for i in blamed:
-                    left_out[i] = failure.reason(names[i], left_out=True)
-                continue
-            fresh = [i for i in blamed if i not in freed]
-            if not fresh:  # nothing left to blame: every part free, which always assembles
-                fresh = [keep[k] for k in range(len(sheets)) if len(sheets[k].junction) and keep[k] not in freed]
-                if not fresh:
-                    raise failure.error from None
-            for i in fresh:
-                freed[i] = failure.reason(names[i])
-            continue
-        if res.faired is False:
-            # The blended junction would cross itself (or flatten a triangle): the plain
-            # sleeve never does, so the model is still handed out, with its folds, and why.
-            p = {**p, "fillet": 0.0}
-            fell_back.append("a junction could not be blended without the surface crossing itself; "
-                             "its parts are glued with a plain fold (assembly parameter 'fillet')")
-            continue
-        break
-    warnings = [left_out[i] for i in sorted(left_out)] + res.warnings + fell_back
+    _check_overlap_work([meshes[i] for i in present])
+    return closed, names, present
+
+
+class _Run:
+    """What the passes of :func:`assemble_detailed` have learnt so far (input indices): the
+    parts assembled free and those left out, each with why, and the fallbacks taken."""
+
+    def __init__(self, present: list[int]):
+        self.present = present
+        self.freed: dict[int, str] = {}  # input index -> why it is assembled free
+        self.left_out: dict[int, str] = {}  # input index -> why it is not in the model (a free part with no room)
+        self.fell_back: list[str] = []
+        self.keep = list(present)
+
+    def names(self, names: list[str]) -> list[str]:
+        return [names[i] for i in self.keep]
+
+    def freed_by_sheet(self) -> dict[int, str]:
+        return {self.keep.index(i): why for i, why in self.freed.items()}
+
+    def blame(self, failure: _PartsFailed, sheets: list, names: list[str]) -> None:
+        """Free the parts ``failure`` names (or leave them out), so that the next pass gets
+        round it; raises its error when there is nothing left to free."""
+        blamed = [self.keep[k] for k in failure.parts]
+        if failure.leave_out:
+            for i in blamed:
+                self.left_out[i] = failure.reason(names[i], left_out=True)
+            self.keep = [i for i in self.present if i not in self.left_out]
+            return
+        fresh = [i for i in blamed if i not in self.freed] or self._glued_parts(sheets)
+        if not fresh:
+            raise failure.error from None
+        for i in fresh:
+            self.freed[i] = failure.reason(names[i])
+
+    def _glued_parts(self, sheets: list) -> list[int]:
+        """Every part with a junction not yet free: what is left to free when the parts a
+        failure names are free already (every part free always assembles)."""
+        return [i for k, i in enumerate(self.keep) if len(sheets[k].junction) and i not in self.freed]
+
+
+def _result(res: _Stages, run: _Run, sheets: list, t0: float) -> AssemblyResult:
+    """The final pass's result in input indices, with every warning of the passes."""
+    keep = run.keep
+    warnings = [run.left_out[i] for i in sorted(run.left_out)] + res.warnings + run.fell_back
     timings = res.timings
     timings["total"] = time.perf_counter() - t0
     keep_arr = np.array(keep)
@@ -300,7 +333,7 @@ def assemble_detailed(meshes: Sequence[Mesh | None], closed: Sequence[bool] | No
         max_violation=res.max_violation,
         glue_error=res.glue_error,
         free=[keep[u] for u in range(len(sheets)) if len(sheets[u].junction) and u not in glued],
-        left_out=sorted(left_out),
+        left_out=sorted(run.left_out),
         warnings=warnings,
         notes=res.notes,
         timings=timings,
@@ -353,26 +386,7 @@ def _assemble(sheets: list, knames: list[str], p: dict, cache, freed: dict[int, 
     attachments, warnings, notes = find_attachments(sheets, knames, p["on_bad_junction"], exclude=set(freed))
     warnings = [freed[k] for k in sorted(freed)] + warnings
     attached = {a.upper for a in attachments}
-    for u in range(len(sheets)):
-        if u not in attached and len(sheets[u].junction):
-            # junction over empty space, or a bad one: a free part whose whole outline is a rim
-            sheets[u] = sheets[u].evolve(junction=np.zeros(0, np.int64), marks=None)
-    for a in attachments:
-        if a.keep is not None:
-            # only this stretch of the junction is glued; the rest is outline like any other
-            sheets[a.upper] = sheets[a.upper].evolve(junction=sheets[a.upper].glue_stretch(*a.keep), marks=None)
-    for a in attachments:
-        # a part meets its host at its own thickness (thickness.full_thickness)
-        s = sheets[a.upper]
-        host = sheets[a.lower]
-
-        def thick(s=s, host=host):
-            ops = memo(cache, "laplacian", (s.xy, s.F, s.Fb), lambda: laplacian_and_mass(s.xy, s.F, checked=True))
-            return full_thickness(s, host.polygon(), ops)
-
-        z = memo(cache, "thickness", (s.xy, s.F, s.z, s.boundary, s.holes, s.junction, host.xy, host.boundary,
-                                      host.holes), thick)
-        sheets[a.upper] = s.evolve(z=z)
+    _attach_sheets(sheets, attachments, attached, cache)
     timings["attach"] = time.perf_counter() - t
 
     t = time.perf_counter()
@@ -415,6 +429,31 @@ def _assemble(sheets: list, knames: list[str], p: dict, cache, freed: dict[int, 
                    int(len(bin_)), viol, glue_error, warnings, notes, timings, sinfo, faired)
 
 
+def _attach_sheets(sheets: list, attachments: list, attached: set, cache) -> None:
+    """Shape every sheet for its attachment, in place: a part that is not glued loses its
+    junction, a glued part keeps only the stretch that is glued, and meets its host at its
+    own thickness (:func:`.thickness.full_thickness`)."""
+    for u in range(len(sheets)):
+        if u not in attached and len(sheets[u].junction):
+            # junction over empty space, or a bad one: a free part whose whole outline is a rim
+            sheets[u] = sheets[u].evolve(junction=np.zeros(0, np.int64), marks=None)
+    for a in attachments:
+        if a.keep is not None:
+            # only this stretch of the junction is glued; the rest is outline like any other
+            sheets[a.upper] = sheets[a.upper].evolve(junction=sheets[a.upper].glue_stretch(*a.keep), marks=None)
+    for a in attachments:
+        s = sheets[a.upper]
+        host = sheets[a.lower]
+
+        def thick(s=s, host=host):
+            ops = memo(cache, "laplacian", (s.xy, s.F, s.Fb), lambda: laplacian_and_mass(s.xy, s.F, checked=True))
+            return full_thickness(s, host.polygon(), ops)
+
+        z = memo(cache, "thickness", (s.xy, s.F, s.z, s.boundary, s.holes, s.junction, host.xy, host.boundary,
+                                      host.holes), thick)
+        sheets[a.upper] = s.evolve(z=z)
+
+
 def _cut_junctions(sheets: list, attachments: list, knames: list[str], cache) -> None:
     """Cut every glued junction into its host's face (:func:`.remesh.insert_chains`), in place;
     a junction the host cannot take fails the pass naming its part."""
@@ -425,7 +464,7 @@ def _cut_junctions(sheets: list, attachments: list, knames: list[str], cache) ->
         s = sheets[lo]
         try:
             cut = memo(cache, "remesh", (s.xy, s.z, s.F, s.boundary, s.junction, s.holes, s.h, chains, sides),
-                       lambda: insert_chains(s, chains, knames, [a.upper for a in mine], sides))
+                       lambda: insert_chains(s, chains, knames, [a.upper for a in mine], sides))  # noqa: B023 - called in this iteration
         except AttachmentError as exc:
             raise _PartsFailed(exc, exc.parts or [a.upper for a in mine]) from None
         except GeometryError as exc:  # a degenerate re-triangulation: every part glued here

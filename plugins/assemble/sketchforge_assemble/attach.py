@@ -14,9 +14,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from sketchforge.plugin_api import GeometryError
-from sketchforge.plugin_api import guard
-from sketchforge.plugin_api import BACK, FRONT, plan_attachments
+from sketchforge.plugin_api import BACK, FRONT, GeometryError, guard, plan_attachments
 
 from .errors import AttachmentError
 from .sheet import Sheet
@@ -83,7 +81,7 @@ def find_attachments(sheets: list[Sheet], names: list[str], on_bad_junction: str
             raise AttachmentError(problem[0].upper() + problem[1:] + ".")
         warnings.append(problem if "free part" in problem else problem + " (assembled as a free part)")
 
-    junctions = []
+    junctions: list = []  # per sheet: its drawn junction (k, 2), or None
     for u, s in enumerate(sheets):
         if len(s.junction) == 0 or u in exclude:
             junctions.append(None)

@@ -18,9 +18,12 @@ from __future__ import annotations
 import hashlib
 import threading
 from collections import Counter, OrderedDict
-from typing import Callable
+from collections.abc import Callable
+from typing import Any, TypeVar
 
 import numpy as np
+
+T = TypeVar("T")
 
 
 def digest(*parts) -> bytes:
@@ -88,7 +91,7 @@ class AssemblyCache:
         self.max_bytes = int(max_bytes)
         self.bytes = 0
         self._size: dict[tuple, int] = {}
-        self._memo: OrderedDict[tuple, object] = OrderedDict()
+        self._memo: OrderedDict[tuple, Any] = OrderedDict()
         self._lock = threading.Lock()  # the app assembles on a worker thread
         self.hits = 0
         self.misses = 0
@@ -97,7 +100,7 @@ class AssemblyCache:
     def __len__(self) -> int:
         return len(self._memo)
 
-    def get(self, kind: str, key: bytes, make: Callable[[], object]):
+    def get(self, kind: str, key: bytes, make: Callable[[], T]) -> T:
         """The value stored under (kind, key), or ``make()`` stored there (an exception in
         ``make`` stores nothing)."""
         k = (kind, key)
@@ -130,7 +133,7 @@ class AssemblyCache:
             self.counts.clear()
 
 
-def memo(cache: AssemblyCache | None, kind: str, key_parts: tuple, make: Callable[[], object]):
+def memo(cache: AssemblyCache | None, kind: str, key_parts: tuple, make: Callable[[], T]) -> T:
     """``make()`` through ``cache`` (keyed by the digest of ``key_parts``), or directly without one."""
     if cache is None:
         return make()

@@ -44,7 +44,7 @@ class _Drawing:
             hit = np.flatnonzero(overlapped(P, self.outlines))
             index = int(hit[0]) if len(hit) else 0
         closed = bool(stroke_closes(P, self.resolution))
-        add = {"command": "add_layer", "id": lid, "name": lid.replace("_", " ")}
+        add: dict[str, object] = {"command": "add_layer", "id": lid, "name": lid.replace("_", " ")}
         if index is not None:
             add["index"] = index
         self.journal.append(add)

@@ -14,8 +14,7 @@ import shapely
 import triangle
 from scipy.interpolate import RBFInterpolator
 
-from sketchforge.plugin_api import guard
-from sketchforge.plugin_api import format_point
+from sketchforge.plugin_api import format_point, guard
 
 from .errors import AttachmentError
 from .sheet import Sheet, ccw_triangles, has_directed_edge, oriented_loop

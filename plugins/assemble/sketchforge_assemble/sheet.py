@@ -15,9 +15,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 import shapely
 
-from sketchforge.plugin_api import SketchforgeError
-from sketchforge.plugin_api import guard
-from sketchforge.plugin_api import Mesh
+from sketchforge.plugin_api import Mesh, SketchforgeError, guard
 
 
 @dataclass(frozen=True, eq=False)
@@ -119,7 +117,7 @@ class Sheet:
             return self.junction[first:last + 1]
         return self.junction[self.marks[first]:self.marks[last] + 1]
 
-    def evolve(self, **changes) -> "Sheet":
+    def evolve(self, **changes) -> Sheet:
         return replace(self, **changes)
 
 
@@ -245,8 +243,7 @@ def refine_thin(sheet: Sheet, min_height_edges: float = THIN_HEIGHT_EDGES) -> Sh
     near the rim is not), z = √u. The junction is the same stretch of outline, with its new
     points. A sheet that is not thin, or has no junction, is returned as it is.
     """
-    from sketchforge.plugin_api import TriangleLocator
-    from sketchforge.plugin_api import triangulate_polygon
+    from sketchforge.plugin_api import TriangleLocator, triangulate_polygon
 
     if len(sheet.junction) < 2 or sheet.chains or sheet.Fb is not None:
         return sheet

@@ -23,17 +23,26 @@ smoothing : the fairing weight α of thesis 4.2.1, in [0, 1). The squared-Laplac
 
 from __future__ import annotations
 
-from typing import Mapping
+from collections.abc import Mapping
 
 import numpy as np
 
-from sketchforge.plugin_api import prepare_holes, prepare_outline, resample_outline, signed_area
-from sketchforge.plugin_api import FairingSolver
-from sketchforge.plugin_api import DEFAULT_INFLATE_PARAMS, check_inflate_params
-from sketchforge.plugin_api import inflate_heights
-from sketchforge.plugin_api import laplacian_and_mass
-from sketchforge.plugin_api import Mesh
-from sketchforge.plugin_api import MAX_VERTICES, MIN_ANGLE, check_vertex_budget, triangulate_polygon
+from sketchforge.plugin_api import (
+    DEFAULT_INFLATE_PARAMS,
+    MAX_VERTICES,
+    MIN_ANGLE,
+    FairingSolver,
+    Mesh,
+    check_inflate_params,
+    check_vertex_budget,
+    inflate_heights,
+    laplacian_and_mass,
+    prepare_holes,
+    prepare_outline,
+    resample_outline,
+    signed_area,
+    triangulate_polygon,
+)
 
 #: Default parameters (the same object as the document's defaults).
 DEFAULT_PARAMS = DEFAULT_INFLATE_PARAMS

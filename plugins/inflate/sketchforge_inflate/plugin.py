@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 from sketchforge.plugin_api import MAX_COORDINATE, Inflater, declare_params, hookimpl, number
-
 from sketchforge_inflate.inflate import DEFAULT_PARAMS, inflate_stroke, validate_params
 
 #: Bumped when the same stroke and parameters would inflate differently.

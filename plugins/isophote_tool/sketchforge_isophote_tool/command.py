@@ -13,21 +13,23 @@ the light it used.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import ClassVar
+from typing import Any, ClassVar
 
 import numpy as np
 
 from sketchforge.plugin_api import (
+    MAX_COORDINATE,
+    DocumentFormatError,
+    Layer,
+    NothingToDoError,
     ReplaceLayerCommand,
+    SculptError,
     parse_field,
     parse_params,
     parse_points,
     parse_vector,
     transform_points,
 )
-from sketchforge.plugin_api import Layer
-from sketchforge.plugin_api import DocumentFormatError, NothingToDoError, SculptError
-from sketchforge.plugin_api import MAX_COORDINATE
 
 
 def _model(doc, name: str):
@@ -114,7 +116,7 @@ class SculptIsophote(ReplaceLayerCommand):
     solver: str | None = None
     params: dict = field(default_factory=dict)
     #: The last SculptResult (edit zone, fidelity, timings) for display; not saved.
-    result: object = field(default=None, repr=False, compare=False)
+    result: Any = field(default=None, repr=False, compare=False)
 
     def text(self) -> str:
         return "Sculpt isophote"
@@ -146,7 +148,7 @@ class SculptIsophote(ReplaceLayerCommand):
         return d
 
     @classmethod
-    def from_dict(cls, d: dict) -> "SculptIsophote":
+    def from_dict(cls, d: dict) -> SculptIsophote:
         pick = parse_vector(d, "pick", cls.name)
         if len(pick) != 2:
             raise DocumentFormatError(f"command {cls.name!r}: 'pick' must be 2 numbers [x, y]")
@@ -241,7 +243,7 @@ class SculptIsophotes(ReplaceLayerCommand):
     solver: str | None = None
     params: dict = field(default_factory=dict)
     #: The last JointSculptResult, for display; not saved.
-    result: object = field(default=None, repr=False, compare=False)
+    result: Any = field(default=None, repr=False, compare=False)
 
     def text(self) -> str:
         return f"Sculpt {len(self.edits)} isophotes" if len(self.edits) != 1 else "Sculpt isophote"
@@ -274,7 +276,7 @@ class SculptIsophotes(ReplaceLayerCommand):
         return d
 
     @classmethod
-    def from_dict(cls, d: dict) -> "SculptIsophotes":
+    def from_dict(cls, d: dict) -> SculptIsophotes:
         raw = parse_field(d, "edits", list, cls.name)
         if not raw:
             raise DocumentFormatError(f"command {cls.name!r}: 'edits' must list at least one edit")

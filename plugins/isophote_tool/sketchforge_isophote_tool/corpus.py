@@ -357,8 +357,7 @@ def run_edit(mesh, light, e: Edit, solver=None, params=None) -> Outcome:
 
     import shapely
 
-    from sketchforge.plugin_api import SketchforgeError
-    from sketchforge.plugin_api import LAMBERTIAN
+    from sketchforge.plugin_api import LAMBERTIAN, SketchforgeError
 
     from .fidelity import beside_distance, isophote_lines
     from .layerdata import layer_data, vertex_shading
@@ -553,8 +552,7 @@ def run_pair(mesh, light, pair, solver=None, params=None) -> tuple[PairOutcome, 
     (``sculpt`` twice, the second on the first's result); measure both the same way."""
     import time
 
-    from sketchforge.plugin_api import SketchforgeError
-    from sketchforge.plugin_api import LAMBERTIAN
+    from sketchforge.plugin_api import LAMBERTIAN, SketchforgeError
 
     from .joint import sculpt_many
     from .layerdata import layer_data

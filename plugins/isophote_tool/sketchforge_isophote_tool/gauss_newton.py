@@ -19,9 +19,16 @@ import time
 
 import numpy as np
 
-from sketchforge.plugin_api import ParameterError, quote
-from sketchforge.plugin_api import SculptProblem, SculptSolution
-from sketchforge.plugin_api import SculptSolver, declare_params, number, validate_params
+from sketchforge.plugin_api import (
+    ParameterError,
+    SculptProblem,
+    SculptSolution,
+    SculptSolver,
+    declare_params,
+    number,
+    quote,
+    validate_params,
+)
 
 from .heights import GN_STEPS, solve_heights
 

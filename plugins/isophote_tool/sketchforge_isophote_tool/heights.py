@@ -37,10 +37,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from sketchforge.plugin_api import SolverError
-from sketchforge.plugin_api import DirichletSolver
-from sketchforge.plugin_api import SlopeLinearisation
-from sketchforge.plugin_api import evaluate_pq
+from sketchforge.plugin_api import DirichletSolver, SlopeLinearisation, SolverError, evaluate_pq
 
 from .layerdata import LayerData
 
@@ -138,7 +135,7 @@ def solve_heights(
     x = np.zeros(len(u))
     z = ld.z.copy()
     solver = None
-    for step in range(steps):
+    for _step in range(steps):
         z[u] = ld.z[u] + x
         # The slopes are not linear in z (p = Gp z² / 2z): linearised at this surface.
         lin = slopes.at(z)

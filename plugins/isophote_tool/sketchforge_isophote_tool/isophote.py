@@ -13,9 +13,7 @@ from __future__ import annotations
 import numpy as np
 import shapely
 
-from sketchforge.plugin_api import guard
-from sketchforge.plugin_api import band
-from sketchforge.plugin_api import isophotes, isovalue_at, select_isophote
+from sketchforge.plugin_api import band, guard, isophotes, isovalue_at, select_isophote
 
 from .layerdata import LayerData
 

@@ -39,9 +39,16 @@ import numpy as np
 import scipy.sparse as sp
 import shapely
 
-from sketchforge.plugin_api import band_radius
-from sketchforge.plugin_api import LAMBERTIAN
-from sketchforge.plugin_api import Mesh, NothingToDoError, ReflectanceModel, SculptError, SculptProblem, SolverError
+from sketchforge.plugin_api import (
+    LAMBERTIAN,
+    Mesh,
+    NothingToDoError,
+    ReflectanceModel,
+    SculptError,
+    SculptProblem,
+    SolverError,
+    band_radius,
+)
 
 from .layerdata import layer_data
 from .pipeline import (

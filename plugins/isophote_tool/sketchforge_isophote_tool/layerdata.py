@@ -14,6 +14,7 @@ the shading E at every vertex.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import scipy.ndimage as ndi
@@ -21,16 +22,19 @@ import scipy.sparse as sp
 import shapely
 from scipy.spatial import cKDTree
 
-from sketchforge.plugin_api import guard
-from sketchforge.plugin_api import squared_laplacian_matrix
-from sketchforge.plugin_api import slopes_from_heights
-from sketchforge.plugin_api import gradient_operators
-from sketchforge.plugin_api import laplacian_and_mass
-from sketchforge.plugin_api import TriangleLocator
-from sketchforge.plugin_api import Mesh
-from sketchforge.plugin_api import evaluate_pq
-from sketchforge.plugin_api import ReflectanceModel
-from sketchforge.plugin_api import LRUCache, array_key
+from sketchforge.plugin_api import (
+    LRUCache,
+    Mesh,
+    ReflectanceModel,
+    TriangleLocator,
+    array_key,
+    evaluate_pq,
+    gradient_operators,
+    guard,
+    laplacian_and_mass,
+    slopes_from_heights,
+    squared_laplacian_matrix,
+)
 
 #: Default rim margin: max(RIM_EDGES · h, RIM_SIZE · size), size = 2·area/perimeter.
 RIM_EDGES = 3.0
@@ -80,7 +84,7 @@ class PlanarData:
     Gq: sp.csr_matrix
     Q: sp.csr_matrix
     mass: np.ndarray
-    outline: object
+    outline: Any  # a shapely polygon (untyped)
     locator: TriangleLocator
     is_contour: np.ndarray
     d_rim: np.ndarray

@@ -25,18 +25,27 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import shapely
 from scipy.spatial import cKDTree
 
-from sketchforge.plugin_api import NothingToDoError, ParameterError, PluginError, SculptError, SketchforgeError, SolverError
-from sketchforge.plugin_api import band_radius
-from sketchforge.plugin_api import Mesh
-from sketchforge.plugin_api import LAMBERTIAN
-from sketchforge.plugin_api import ReflectanceModel
-from sketchforge.plugin_api import SculptProblem, SculptSolution
-from sketchforge.plugin_api import LRUCache
+from sketchforge.plugin_api import (
+    LAMBERTIAN,
+    LRUCache,
+    Mesh,
+    NothingToDoError,
+    ParameterError,
+    PluginError,
+    ReflectanceModel,
+    SculptError,
+    SculptProblem,
+    SculptSolution,
+    SketchforgeError,
+    SolverError,
+    band_radius,
+)
 
 from .fidelity import honoured_samples, isophote_lines, mean_distance
 from .isophote import band_around, picked_isophote
@@ -106,20 +115,20 @@ class SculptResult:
     mesh: Mesh
     changed: np.ndarray
     c: float
-    isophote: object
-    band: object
-    stroke: object
+    isophote: Any  # shapely geometries (untyped)
+    band: Any
+    stroke: Any
     dE: np.ndarray
     before: float
     after: float
     fraction: float = 1.0
     timings: dict = field(default_factory=dict)
     params: dict = field(default_factory=dict)
-    layer: object = field(default=None, repr=False)
+    layer: Any = field(default=None, repr=False)  # the LayerData it was solved on
     band_radius: float = 0.0
     reach: float = 0.0
     solver: str = "gauss_newton"
-    solution: object = field(default=None, repr=False)
+    solution: Any = field(default=None, repr=False)  # the solver's SculptSolution
     ignored_length: float = 0.0
     ignored_fraction: float = 0.0
     bounded_from: float = 0.0
@@ -243,8 +252,7 @@ def _slopes(ld: LayerData):
     """(p, q, E, R_p, R_q) at the vertices of a layer, once per LayerData."""
     got = getattr(ld, "_slopes_cache", None)
     if got is None:
-        from sketchforge.plugin_api import slopes_from_heights
-        from sketchforge.plugin_api import evaluate_pq
+        from sketchforge.plugin_api import evaluate_pq, slopes_from_heights
 
         pd = ld.planar
         p, q = slopes_from_heights(pd.Gp, pd.Gq, ld.z)
@@ -289,7 +297,8 @@ def build_problem(ld: LayerData, c: float, pick, iso, band_geom, in_band: np.nda
         return mean_distance(honoured, isophote_lines(pd, E, c))
 
     return SculptProblem(
-        V=ld.mesh.V, F=pd.F, is_rim=pd.is_contour, light=ld.light, model=ld.model, E=ld.E, h=h, c=float(c), pick=np.asarray(pick, np.float64).reshape(2), isophote=np.asarray(iso.coords, np.float64)[:, :2],
+        V=ld.mesh.V, F=pd.F, is_rim=pd.is_contour, light=ld.light, model=ld.model, E=ld.E, h=h, c=float(c),
+        pick=np.asarray(pick, np.float64).reshape(2), isophote=np.asarray(iso.coords, np.float64)[:, :2],
         band=band_geom, band_radius=r, in_band=in_band,
         stroke=pieces, samples=samples.P, sample_weights=samples.w * w_rim, d_rim=pd.d_rim,
         rim_margin=np.minimum(pd.margin_v, pd.margin), outline=pd.outline, Q=pd.Q, before=before,
@@ -308,8 +317,8 @@ class PreparedStroke:
     of the drawn stroke was left out (``ignored`` of ``drawn``, drawing units)."""
 
     c: float
-    iso: object
-    band: object
+    iso: Any  # shapely geometries (untyped)
+    band: Any
     in_band: np.ndarray
     radius: float
     pieces: list

@@ -23,8 +23,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from sketchforge.plugin_api import SolverError
-from sketchforge.plugin_api import DirichletSolver
+from sketchforge.plugin_api import DirichletSolver, SolverError
 
 from .layerdata import PlanarData
 

@@ -7,10 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sketchforge.plugin_api import SculptError
-from sketchforge.plugin_api import guard
-from sketchforge.plugin_api import validate_stroke
-from sketchforge.plugin_api import clean_open_stroke
+from sketchforge.plugin_api import SculptError, clean_open_stroke, guard, validate_stroke
 
 #: Most points of a resampled stroke (spacing h/2): ~50 000 edge lengths, far beyond any drawn
 #: stroke. A journal entry with a far-off point would otherwise allocate without bound (a point

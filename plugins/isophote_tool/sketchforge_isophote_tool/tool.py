@@ -73,8 +73,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from sketchforge.plugin_api import SculptError, SketchforgeError
-from sketchforge.plugin_api import Tool
+from sketchforge.plugin_api import SculptError, SketchforgeError, Tool
 
 from .command import SculptIsophote, SculptIsophotes
 
@@ -437,9 +436,8 @@ class SculptIsophoteTool(Tool):
         docstring). Raises SculptError without a pick."""
         if self.pick is None or self.layer_id not in self.doc.layer_ids():
             raise SculptError(PICK_FIRST)
-        from .pipeline import sculpt
-
         from .command import _solver
+        from .pipeline import sculpt
 
         mesh = self.doc.layer(self.layer_id).mesh if mesh is None else mesh
         light = np.array(self.doc.light.direction, dtype=np.float64)

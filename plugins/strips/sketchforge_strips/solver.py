@@ -604,7 +604,7 @@ def _distance_to_polyline(P: np.ndarray, line: np.ndarray) -> np.ndarray:
 def _curves(strips: list, most: int = 40) -> list:
     """Up to ``most`` of the integrated strips as polylines (for "show characteristics")."""
     k = len(strips)
-    pick = np.unique(np.linspace(0, k - 1, min(k, most)).round().astype(int)) if k else []
+    pick = np.unique(np.linspace(0, k - 1, min(k, most)).round().astype(int)) if k else np.zeros(0, int)
     out = []
     for i in pick:
         line = strips[i]

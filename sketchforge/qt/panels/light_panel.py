@@ -37,7 +37,7 @@ class LightDisc(QWidget):
                         f"dashed rings at {RINGS[0]:g}° and {RINGS[1]:g}° of elevation")
         self._light = Light()
         self._image: QImage | None = None
-        self._pixels = None  # keeps the QImage's buffer alive
+        self._pixels: np.ndarray | None = None  # keeps the QImage's buffer alive
         self._dragging = False
 
     # --- geometry -------------------------------------------------------------------------------

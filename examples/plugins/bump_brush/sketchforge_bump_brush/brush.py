@@ -104,7 +104,7 @@ class BumpBrush(ReplaceLayerCommand):
         }
 
     @classmethod
-    def from_dict(cls, d: dict) -> "BumpBrush":
+    def from_dict(cls, d: dict) -> BumpBrush:
         # Every field of a saved file is user-writable: checked, one-line errors.
         center = parse_vector(d, "center", cls.name)
         radius = parse_field(d, "radius", float, cls.name)

@@ -10,7 +10,6 @@ from __future__ import annotations
 import numpy as np
 
 from sketchforge.plugin_api import SculptError, Tool, layer_at
-
 from sketchforge_bump_brush.brush import BumpBrush
 
 

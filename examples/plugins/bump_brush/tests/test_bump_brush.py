@@ -3,7 +3,6 @@
 
 import numpy as np
 import pytest
-
 import sketchforge_bump_brush.plugin as plugin
 from sketchforge_bump_brush import BumpTool
 

@@ -2,8 +2,8 @@
 
 import numpy as np
 import pytest
-
 import sketchforge_off_exporter as plugin
+
 from sketchforge.plugin_api import ExportError
 
 

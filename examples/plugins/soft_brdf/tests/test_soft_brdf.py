@@ -3,7 +3,6 @@ from JAX matches finite differences where the height solve uses it."""
 
 import numpy as np
 import pytest
-
 import sketchforge_soft_brdf as plugin
 
 

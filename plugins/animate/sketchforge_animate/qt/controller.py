@@ -13,8 +13,7 @@ import threading
 import numpy as np
 from PySide6.QtCore import QObject, QTimer, Signal
 
-from sketchforge.plugin_api import new_gesture_id
-from sketchforge.plugin_api import SketchforgeError
+from sketchforge.plugin_api import SketchforgeError, new_gesture_id
 from sketchforge.qt.panel_api import error_text
 
 from ..commands import AddPin, CopyMotion, HoldPin, MovePin, RecordMotion, RemovePin
@@ -185,7 +184,11 @@ class AnimationController(QObject):
     def _anim_changed(self) -> None:
         if self.loop and self.frame >= self.loop:
             self.frame %= self.loop
-        self._request(restart=self._animator is None or not self._animator.fits(self.mesh, self.animation()) if self.mesh is not None else True)
+        self._request(
+            restart=self._animator is None or not self._animator.fits(self.mesh, self.animation())
+            if self.mesh is not None
+            else True
+        )
         self.changed.emit()
 
     # --- timeline ---------------------------------------------------------------------------------

@@ -7,7 +7,8 @@ isophotes picked (Shift+click), a button that applies the strokes drawn so far.
 The panel drives the app's sculpt controller (``app.sculpt``) and shows its state; the model
 and solver become the tool's options (:meth:`SculptIsophoteTool.set_options`), always set
 together, so the next ``sculpt_isophote`` command carries ``"model"``, ``"solver"`` and the
-parameters changed from the solver's defaults, ``"params"`` (each absent for the default). It is enabled while the isophote tool is the chosen tool.
+parameters changed from the solver's defaults, ``"params"`` (each absent for the default). It is enabled while the isophote
+tool is the chosen tool.
 """
 
 from __future__ import annotations
@@ -64,7 +65,9 @@ class IsophoteSculptPanel(QWidget):
         self.preview = QCheckBox("live preview")
         self.preview.setToolTip("Recompute the edit while the stroke is drawn (the surface shown is not applied until release)")
         self.strips = QCheckBox("show characteristics")
-        self.strips.setToolTip("The characteristic directions (thesis 3.1) through the stroke: along them a shading change becomes a height change")
+        self.strips.setToolTip(
+            "The characteristic directions (thesis 3.1) through the stroke: along them a shading change becomes a height change"
+        )
         self.regions = QCheckBox("show edit region")
         self.regions.setToolTip("Where the shading changed (the band near the stroke) and where heights may change (its ring)")
         form.addRow(self.preview)
