@@ -16,6 +16,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from sketchforge.document import fileformat as ff
+from sketchforge.document import jsonfile
 
 #: The child prints its own peak resident memory after ``sketchforge info``: in a fresh process,
 #: so the figure is the parse's, not this test session's.
@@ -65,7 +66,7 @@ def test_one_wide_character_cannot_quadruple_the_text(tmp_path, monkeypatch):
     """A string of ASCII with one emoji (or one escaped surrogate pair) is stored 4 bytes a
     character, the parsed copy too: 128 MB of it took 1.1 GB. The text's memory is bounded
     by the byte cap (shown here with a cap of 64 KiB)."""
-    monkeypatch.setattr(ff, "MAX_FILE_BYTES", 64 * 1024)
+    monkeypatch.setattr(jsonfile, "MAX_FILE_BYTES", 64 * 1024)  # where the file is read
     head = b'{"format":"sketchforge","version":1,"name":"'
     for wide in ("\U0001F600".encode(), b"\\ud83d\\ude00", "\u4e00".encode(), b"\\u4e00"):
         doc = tmp_path / "wide.json"
@@ -81,7 +82,7 @@ def test_one_wide_character_cannot_quadruple_the_text(tmp_path, monkeypatch):
 def test_items_inside_strings_do_not_count(tmp_path, monkeypatch):
     """A real document whose names are full of commas, colons and brackets opens: only marks
     outside strings count (escaped quotes included)."""
-    monkeypatch.setattr(ff, "MAX_JSON_ITEMS", 2_000)
+    monkeypatch.setattr(jsonfile, "MAX_JSON_ITEMS", 2_000)
     from attack_helpers import SMALL_DOC
 
     data = json.loads(json.dumps(SMALL_DOC))

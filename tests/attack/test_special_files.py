@@ -41,10 +41,11 @@ def test_directory_is_refused(tmp_path):
 
 def test_size_cap_is_checked_before_reading(tmp_path, monkeypatch):
     from sketchforge.document import fileformat as ff
+    from sketchforge.document import jsonfile
 
     big = tmp_path / "big.json"
     big.write_bytes(b" " * 5000)
-    monkeypatch.setattr(ff, "MAX_FILE_BYTES", 4096)
+    monkeypatch.setattr(jsonfile, "MAX_FILE_BYTES", 4096)  # where the file is read
     read = []
     real_read = os.read
     monkeypatch.setattr(ff.os, "read", lambda fd, n: read.append(n) or real_read(fd, n))

@@ -108,7 +108,7 @@ def test_autosave_is_offered_back_after_a_crash(tmp_path, monkeypatch, qtbot):
     from sketchforge.document import fileformat as ff
     from sketchforge.document.autosave import find_recoverable
     from sketchforge.plugins.testing import FanInflater, make_test_host
-    from sketchforge.qt import main_window
+    from sketchforge.qt import window_files
     from sketchforge.qt.main_window import MainWindow
 
     monkeypatch.setenv("SKETCHFORGE_DATA_DIR", str(tmp_path / "data"))
@@ -121,7 +121,7 @@ def test_autosave_is_offered_back_after_a_crash(tmp_path, monkeypatch, qtbot):
     first._autosave()
     assert len(find_recoverable()) == 1
     # The "crash": the first window never closes normally.
-    monkeypatch.setattr(main_window, "ask_yes_no", lambda *a, **k: True)
+    monkeypatch.setattr(window_files, "ask_yes_no", lambda *a, **k: True)  # offer_recovery asks
     second = MainWindow(Document(host=host), host=host)
     qtbot.addWidget(second)
     assert second.offer_recovery() is True

@@ -56,7 +56,7 @@ def test_two_windows_on_one_file_never_lose_either_ones_work_without_a_question(
     assert b.save()
     assert _names(path, host) == ["by B"]
     other = tmp_path / "a-copy.json"
-    import sketchforge.qt.main_window as mw
+    import sketchforge.qt.window_files as mw  # the window's file actions
 
     saved_as = []
     monkeypatch.setattr(mw.QFileDialog, "getSaveFileName", staticmethod(lambda *a_, **k: saved_as.append(1) or (str(other), "")))
