@@ -55,7 +55,7 @@ def _check_depth(data: Any, limit: int = MAX_JSON_DEPTH) -> None:
     # check is for, and a stack of (value, depth) pairs cost 70 bytes per container.
     level, depth = [data], 1
     while level:
-        nested = []
+        nested: list = []
         for v in level:
             if isinstance(v, dict):
                 nested.extend(x for x in v.values() if isinstance(x, (dict, list)))

@@ -29,6 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from sketchforge.cache import LRUCache
+
 # shading lives in composite; re-exported here, where the canvas and the renderer find it
 from sketchforge.geometry.composite import _dot, _model_coverage, _pack, isophote_coverage, shade  # noqa: F401
 from sketchforge.geometry.heightfield import layer_normals
@@ -71,7 +72,7 @@ class View:
             raise ValueError(f"a view needs at least one pixel, got {self.width}x{self.height}")
 
     @classmethod
-    def framing(cls, meshes, width: int, height: int, margin: float = 0.05) -> "View":
+    def framing(cls, meshes, width: int, height: int, margin: float = 0.05) -> View:
         """The view that shows every mesh, centred, equal aspect, ``margin`` empty on each side."""
         pts = np.concatenate([np.asarray(m.V)[:, :2] for m in meshes])
         lo, hi = pts.min(axis=0), pts.max(axis=0)

@@ -12,7 +12,6 @@ from scipy.spatial import cKDTree
 from sketchforge.errors import ContourError
 from sketchforge.geometry.polyline import _arclength, format_point, signed_area
 
-
 #: Two stretches of an outline far apart along it but closer than SLIT_WIDTH_EDGES edge
 #: lengths, or than SLIT_WIDTH_FRACTION of the size (square root of the area) of the loop they
 #: cut off, pinch it; a pinch that cuts the ring into one loop inside the other is a candidate

@@ -38,12 +38,12 @@ from PySide6.QtWidgets import (
 )
 
 from sketchforge.document import commands as C
-from sketchforge.document.autosave import Autosaver, autosave_interval
-from sketchforge.document.autosave import poll_interval_ms
+from sketchforge.document.autosave import Autosaver, autosave_interval, poll_interval_ms
 from sketchforge.errors import SketchforgeError
 from sketchforge.qt.canvas import Canvas
 from sketchforge.qt.command_runner import CommandRunner, GuardedJobs
 from sketchforge.qt.errors_ui import show_error
+from sketchforge.qt.panel_api import AppContext
 from sketchforge.qt.panels.assembly_panel import AssemblyPanel
 from sketchforge.qt.panels.creation_panel import CreationPanel
 from sketchforge.qt.panels.history_panel import HistoryPanel
@@ -51,18 +51,17 @@ from sketchforge.qt.panels.layers_panel import LayersPanel
 from sketchforge.qt.panels.light_panel import LightPanel
 from sketchforge.qt.panels.mode_panel import ModePanel
 from sketchforge.qt.panels.sculpt_panel import SculptPanel
-from sketchforge.qt.panel_api import AppContext
 from sketchforge.qt.plugins_dialog import PluginsDialog, ProblemsButton
 from sketchforge.qt.sculpt import SculptController
 from sketchforge.qt.shortcuts import HelpOverlay
 from sketchforge.qt.view3d import View3D
-from sketchforge.qt.workers import JobRunner
 from sketchforge.qt.window_drawing import SPLICE_PIXELS, DrawingController
 from sketchforge.qt.window_files import FILE_FILTER, MAX_RECENT, AutosaveGuard, FileActions
 from sketchforge.qt.window_layers import DUPLICATE_OFFSET, NUDGE_PIXELS, LayerActions
 from sketchforge.qt.window_light import LightControl
 from sketchforge.qt.window_menus import WindowMenus
 from sketchforge.qt.window_modes import ModeController
+from sketchforge.qt.workers import JobRunner
 
 log = logging.getLogger("sketchforge.qt")
 
@@ -272,7 +271,9 @@ class MainWindow(QMainWindow):
         self.controls = QStackedWidget()
         self.controls.addWidget(self.creation_page)
         self.controls.addWidget(self.sculpt_panel)
-        self.observe_note = QLabel("OBSERVATION: drag to orbit, wheel to zoom.\nThe left menu switches between the assembled model and each layer's mesh.")
+        self.observe_note = QLabel(
+            "OBSERVATION: drag to orbit, wheel to zoom.\nThe left menu switches between the assembled model and each layer's mesh."
+        )
         self.observe_note.setWordWrap(True)
         self.observe_note.setAlignment(Qt.AlignmentFlag.AlignTop)
         self.observe_page = QWidget()

@@ -13,7 +13,6 @@ from sketchforge.qt.errors_ui import ask_yes_no, error_text
 from sketchforge.tools import DrawContourTool
 from sketchforge.tools.draw import closes, layer_outlines, plan_stroke
 
-
 #: A redraw stroke's ends must lie this close (screen pixels) to the selected outline.
 SPLICE_PIXELS = 10
 

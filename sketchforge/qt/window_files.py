@@ -10,12 +10,10 @@ from PySide6.QtWidgets import QFileDialog, QMessageBox
 
 from sketchforge.atomic import refuse_input_as_output, same_file
 from sketchforge.document import fileformat as ff
-from sketchforge.document.autosave import describe_stop, find_recoverable, forget, recover
-from sketchforge.document.autosave import set_aside
+from sketchforge.document.autosave import describe_stop, find_recoverable, forget, recover, set_aside
 from sketchforge.errors import SketchforgeError
 from sketchforge.qt import errors_ui
 from sketchforge.qt.errors_ui import ask_yes_no, error_text, show_error
-
 
 FILE_FILTER = "sketchforge documents (*.json *.sketchforge);;All files (*)"
 MAX_RECENT = 8
@@ -271,9 +269,11 @@ class FileActions:
             for r in reports:
                 name = r.original or "the untitled document"
                 if any(rec.get("unsaved") for rec in r.running):  # the autosave could not be written
-                    lines.append(f"{describe_stop(r)} The unsaved changes to {name} could not be autosaved before that step; the step was not applied.")
+                    lines.append(f"{describe_stop(r)} The unsaved changes to {name} could not be autosaved "
+                                 "before that step; the step was not applied.")
                 else:
-                    lines.append(f"{describe_stop(r)} There were no unsaved changes to {name}, so nothing was lost; that step was not applied.")
+                    lines.append(f"{describe_stop(r)} There were no unsaved changes to {name}, so nothing was "
+                                 "lost; that step was not applied.")
             QMessageBox.information(self.win, "sketchforge stopped during a computation", "\n\n".join(lines))
             for r in reports:
                 forget(r)

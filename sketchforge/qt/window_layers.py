@@ -11,7 +11,6 @@ from sketchforge.errors import SketchforgeError
 from sketchforge.geometry.parts import part_at
 from sketchforge.qt.errors_ui import error_text
 
-
 #: Ctrl+D moves the copy this many part widths to the right: beside it with a gap (a second
 #: eye, leg...), so the copy's junction does not lie across the original.
 DUPLICATE_OFFSET = 1.25
@@ -110,7 +109,13 @@ class LayerActions:
         self.win.runner.run(
             C.SetInflateParams(layer=layer_id, params=params),
             label=label,
-            on_done=(lambda *_: self.win.show_message(f"re-applied {edits} sculpt edit{'s' * (edits != 1)} to the rebuilt surface")) if edits else None,
+            on_done=(
+                lambda *_: self.win.show_message(
+                    f"re-applied {edits} sculpt edit{'s' * (edits != 1)} to the rebuilt surface"
+                )
+            )
+            if edits
+            else None,
             on_error=lambda exc: self.win._sync_current_layer() or False,
         )
 
@@ -196,4 +201,5 @@ class LayerActions:
             return
         if self.win.push(C.MoveLayer(layer=layer_id, index=target)):
             self.win.layers_panel.select(layer_id)
-            self.win.show_message(f"“{name}” is now {'the frontmost' if target == n - 1 else 'the backmost' if target == 0 else f'at depth {target + 1} of {n}'} part")
+            where = "the frontmost" if target == n - 1 else "the backmost" if target == 0 else f"at depth {target + 1} of {n}"
+            self.win.show_message(f"“{name}” is now {where} part")

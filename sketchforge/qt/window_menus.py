@@ -68,7 +68,12 @@ class WindowMenus:
         # Arrows move the selected part only while the drawing has the focus: elsewhere they
         # belong to the lists and fields.
         for text, key, step in (("left", "Left", (-1, 0)), ("right", "Right", (1, 0)), ("up", "Up", (0, 1)), ("down", "Down", (0, -1))):
-            act = self.win._action(lm, f"Move {text}", lambda _=False, s=step: self.win._on_current(lambda lid: self.win.nudge(lid, s)), key)
+            act = self.win._action(
+                lm,
+                f"Move {text}",
+                lambda _=False, s=step: self.win._on_current(lambda lid: self.win.nudge(lid, s)),
+                key,
+            )
             act.setShortcutContext(Qt.ShortcutContext.WidgetWithChildrenShortcut)
             self.win.canvas.addAction(act)
 
@@ -97,7 +102,7 @@ class WindowMenus:
         menu = QMenu("&Tools", self.win)
         help_menu = next((a for a in self.win.menuBar().actions() if a.text() == "&Help"), None)
         self.win.menuBar().insertMenu(help_menu, menu) if help_menu is not None else self.win.menuBar().addMenu(menu)
-        self.win.tool_actions: dict[str, QAction] = {}
+        self.win.tool_actions = {}
         usable = []
         icons = {}
         for name, label, shortcut in entries:

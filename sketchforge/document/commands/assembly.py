@@ -54,7 +54,7 @@ class SetAssembly(Command):
         return d
 
     @classmethod
-    def from_dict(cls, d: dict) -> "SetAssembly":
+    def from_dict(cls, d: dict) -> SetAssembly:
         return cls(solver=parse_field(d, "solver", str, cls.name, None), params=parse_params(d, cls.name))
 
 

@@ -15,7 +15,6 @@ import numpy as np
 from sketchforge.document.layer import Layer
 from sketchforge.errors import DocumentFormatError, EditNotMovableError
 
-
 _gesture_ids = itertools.count(1)
 
 
@@ -52,11 +51,11 @@ class Command:
     def undo(self, doc) -> None:
         raise NotImplementedError
 
-    def merge(self, other: "Command") -> bool:
+    def merge(self, other: Command) -> bool:
         """Absorb ``other`` (already done) into self; return True when merged."""
         return False
 
-    def try_merge(self, other: "Command") -> bool:
+    def try_merge(self, other: Command) -> bool:
         if self.merge_id is None or self.merge_id != other.merge_id or type(self) is not type(other):
             return False
         return self.merge(other)
@@ -65,7 +64,7 @@ class Command:
         raise NotImplementedError
 
     @classmethod
-    def from_dict(cls, d: dict) -> "Command":
+    def from_dict(cls, d: dict) -> Command:
         raise NotImplementedError
 
     @classmethod
@@ -230,7 +229,7 @@ class MacroCommand(Command):
         return {"command": self.name, "text": self.text_, "children": [c.to_dict() for c in self.children]}
 
     @classmethod
-    def from_dict(cls, d: dict, registry=None, depth: int = 1) -> "MacroCommand":
+    def from_dict(cls, d: dict, registry=None, depth: int = 1) -> MacroCommand:
         children = parse_field(d, "children", list, cls.name)
         if registry is None:
             raise DocumentFormatError("a macro needs a command registry to read its children")

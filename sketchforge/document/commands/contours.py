@@ -108,7 +108,7 @@ class SetContour(ReplaceLayerCommand):
         return d
 
     @classmethod
-    def from_dict(cls, d: dict) -> "SetContour":
+    def from_dict(cls, d: dict) -> SetContour:
         raw = parse_field(d, "holes", list, cls.name, [])
         holes = [parse_points({"hole": h}, cls.name, key="hole") for h in raw]
         return cls(
@@ -152,7 +152,7 @@ class SetInflateParams(ReplaceLayerCommand):
         return d
 
     @classmethod
-    def from_dict(cls, d: dict) -> "SetInflateParams":
+    def from_dict(cls, d: dict) -> SetInflateParams:
         params = parse_params(d, cls.name)
         return cls(layer=parse_field(d, "layer", str, cls.name), params=params,
                    solver=parse_field(d, "solver", str, cls.name, None))

@@ -43,13 +43,13 @@ class AddLayer(Command):
         doc._remove_layer(doc.index_of(self.id))
 
     def to_dict(self) -> dict:
-        d = {"command": self.name, "id": self.id, "name": self.layer_name}
+        d: dict = {"command": self.name, "id": self.id, "name": self.layer_name}
         if self.index is not None:
             d["index"] = self.index
         return d
 
     @classmethod
-    def from_dict(cls, d: dict) -> "AddLayer":
+    def from_dict(cls, d: dict) -> AddLayer:
         return cls(
             id=parse_field(d, "id", str, cls.name, None),
             layer_name=parse_field(d, "name", str, cls.name, None),
@@ -78,7 +78,7 @@ class RemoveLayer(Command):
         return {"command": self.name, "layer": self.layer}
 
     @classmethod
-    def from_dict(cls, d: dict) -> "RemoveLayer":
+    def from_dict(cls, d: dict) -> RemoveLayer:
         return cls(layer=parse_field(d, "layer", str, cls.name))
 
 
@@ -99,7 +99,7 @@ class RenameLayer(ReplaceLayerCommand):
         return {"command": self.name, "layer": self.layer, "name": self.new_name}
 
     @classmethod
-    def from_dict(cls, d: dict) -> "RenameLayer":
+    def from_dict(cls, d: dict) -> RenameLayer:
         return cls(layer=parse_field(d, "layer", str, cls.name), new_name=parse_field(d, "name", str, cls.name))
 
 
@@ -118,7 +118,7 @@ class SetLayerVisible(ReplaceLayerCommand):
         return {"command": self.name, "layer": self.layer, "visible": bool(self.visible)}
 
     @classmethod
-    def from_dict(cls, d: dict) -> "SetLayerVisible":
+    def from_dict(cls, d: dict) -> SetLayerVisible:
         return cls(layer=parse_field(d, "layer", str, cls.name), visible=parse_field(d, "visible", bool, cls.name))
 
 
@@ -148,5 +148,5 @@ class MoveLayer(Command):
         return {"command": self.name, "layer": self.layer, "index": self.index}
 
     @classmethod
-    def from_dict(cls, d: dict) -> "MoveLayer":
+    def from_dict(cls, d: dict) -> MoveLayer:
         return cls(layer=parse_field(d, "layer", str, cls.name), index=parse_field(d, "index", int, cls.name))

@@ -40,8 +40,8 @@ class SetLight(Command):
     def undo(self, doc) -> None:
         doc._set_light(self._old)
 
-    def merge(self, other: "Command") -> bool:
-        if self.gesture is None or other.gesture != self.gesture:
+    def merge(self, other: Command) -> bool:
+        if not isinstance(other, SetLight) or self.gesture is None or other.gesture != self.gesture:
             return False
         self._new = other._new
         self.direction = other.direction
@@ -51,7 +51,7 @@ class SetLight(Command):
         return {"command": self.name, "direction": [float(v) for v in self.direction]}
 
     @classmethod
-    def from_dict(cls, d: dict) -> "SetLight":
+    def from_dict(cls, d: dict) -> SetLight:
         try:
             return cls(direction=parse_vector(d, "direction", cls.name))
         except ParameterError as exc:

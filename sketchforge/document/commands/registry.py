@@ -11,7 +11,6 @@ from sketchforge.document.commands.light import SetLight
 from sketchforge.document.commands.transforms import DuplicateLayer, MirrorLayer, TransformLayer, TranslateLayer
 from sketchforge.errors import DocumentFormatError, PluginError, SketchforgeError, quote
 
-
 #: The document's own commands, registered by the built-in plugin.
 CORE_COMMANDS: tuple[type[Command], ...] = (
     AddLayer,

@@ -22,7 +22,6 @@ from sketchforge.errors import (
     quote,
 )
 
-
 #: Mirror axes: the host's vertical symmetry axis (the layer an attached part's junction lies
 #: on), or the part's own.
 MIRROR_AXES = ("host", "own")
@@ -140,7 +139,7 @@ class MirrorLayer(ReplaceLayerCommand):
         return d
 
     @classmethod
-    def from_dict(cls, d: dict) -> "MirrorLayer":
+    def from_dict(cls, d: dict) -> MirrorLayer:
         axis = d.get("axis", "own")  # files from before the option mirrored about the part's own axis
         if not (axis in MIRROR_AXES or (isinstance(axis, (int, float)) and not isinstance(axis, bool))):
             raise DocumentFormatError(f"command {cls.name!r}: 'axis' must be 'host', 'own' or a number")
@@ -199,7 +198,7 @@ class DuplicateLayer(Command):
         doc._remove_layer(doc.index_of(self.new_id))
 
     def to_dict(self) -> dict:
-        d = {"command": self.name, "layer": self.layer, "id": self.new_id, "name": self.new_name}
+        d: dict = {"command": self.name, "layer": self.layer, "id": self.new_id, "name": self.new_name}
         if self.index is not None:
             d["index"] = self.index
         if self.offset is not None:
@@ -207,7 +206,7 @@ class DuplicateLayer(Command):
         return d
 
     @classmethod
-    def from_dict(cls, d: dict) -> "DuplicateLayer":
+    def from_dict(cls, d: dict) -> DuplicateLayer:
         offset = parse_vector(d, "offset", cls.name) if "offset" in d else None
         if offset is not None and len(offset) != 2:
             raise DocumentFormatError(f"command {cls.name!r}: 'offset' must be 2 numbers")
@@ -387,7 +386,7 @@ class TransformLayer(ReplaceLayerCommand):
         return {"command": self.name, "layer": self.layer, "matrix": [list(map(float, r)) for r in self.matrix]}
 
     @classmethod
-    def from_dict(cls, d: dict) -> "TransformLayer":
+    def from_dict(cls, d: dict) -> TransformLayer:
         raw = parse_field(d, "matrix", list, cls.name)
         if len(raw) != 2 or not all(isinstance(r, list) and len(r) == 3 for r in raw) or not all(
             isinstance(x, (int, float)) and not isinstance(x, bool) for r in raw for x in r
@@ -422,7 +421,7 @@ class TranslateLayer(ReplaceLayerCommand):
         return {"command": self.name, "layer": self.layer, "offset": list(self.offset)}
 
     @classmethod
-    def from_dict(cls, d: dict) -> "TranslateLayer":
+    def from_dict(cls, d: dict) -> TranslateLayer:
         offset = parse_vector(d, "offset", cls.name)
         if len(offset) != 2:
             raise DocumentFormatError(f"command {cls.name!r}: 'offset' must be 2 numbers")
