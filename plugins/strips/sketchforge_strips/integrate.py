@@ -45,6 +45,7 @@ from __future__ import annotations
 import functools
 import hashlib
 import os
+import threading
 from pathlib import Path
 
 import numpy as np
@@ -214,7 +215,7 @@ def _store_exported(exported, path: Path) -> None:
     cannot be written, or a jax without serialization (flatbuffers), only costs the next
     process the tracing. Written beside its final name and renamed, so a process reading it
     never sees half a file."""
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.{threading.get_ident()}.tmp")  # one writer each
     try:
         body = bytes(exported.serialize())
         path.parent.mkdir(parents=True, exist_ok=True)
