@@ -913,6 +913,29 @@ def test_the_model_probe_reaches_the_shadow_of_each_probe_light():
     assert "must be signed, not clamped" in plugin_error(contracts.check_reflectance_model, flat_diag)
 
 
+def test_the_model_probe_reaches_the_deepest_shadow_it_names_for_every_probe_light():
+    """The refusal names n·l = -0.95 (slope 3 straight away from the light): the probe must
+    look there for each light, not at a slope merely somewhere in its shadow. A model clamped
+    only below n·l = -0.93, and only for one light, is refused whichever light that is; a probe
+    a component off (slope (k lx, 0) or (k lx, k lx)) reaches n·l = -0.73 and -0.93 at most
+    for the lights off the x axis and passes it."""
+    import jax.numpy as jnp
+
+    for light in contracts._PROBE_LIGHTS:
+        L = jnp.array(light)
+
+        def R(n, l, L=L):
+            this = jnp.all(jnp.abs(l - L) < 1e-9)
+            return jnp.where(this, jnp.maximum(jnp.dot(n, l), -0.93), jnp.dot(n, l))
+
+        msg = plugin_error(contracts.check_reflectance_model, _jax_model(R))
+        assert "must be signed, not clamped" in msg and "at n·l = -0.95" in msg, (light, msg)
+        # only the deepest probe is clamped: the same model with its floor at -0.96 passes
+        contracts.check_reflectance_model(
+            _jax_model(lambda n, l, L=L: jnp.where(jnp.all(jnp.abs(l - L) < 1e-9), jnp.maximum(jnp.dot(n, l), -0.96),
+                                                   jnp.dot(n, l))), "acme")
+
+
 class _EntryPoint:
     """A stand-in for an installed entry point of the group ``sketchforge``."""
 
