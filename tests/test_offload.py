@@ -299,3 +299,32 @@ def test_one_child_per_wrapper_restart_replaces_it_and_shutdown_ends_it(host):
     finally:
         off.shutdown()
     assert off.child_pid is None and pid not in _children() and not (_children() - before)
+
+
+class _BrokenPipe:
+    """A child's pipe that breaks when a job is sent (the child died between the check and
+    the send); everything else is the real pipe's."""
+
+    def __init__(self, conn):
+        self._conn = conn
+
+    def send(self, obj):
+        raise BrokenPipeError(32, "Broken pipe")
+
+    def __getattr__(self, name):
+        return getattr(self._conn, name)
+
+
+def test_a_job_that_cannot_be_sent_is_one_line_and_the_child_is_replaced(host):
+    off = OffloadedInflation(host)
+    try:
+        assert off.offloading()
+        pid = off.child_pid
+        off._child.conn = _BrokenPipe(off._child.conn)
+        with pytest.raises(SolverError) as info:
+            off.inflate(ELLIPSE, True, {"resolution": 0.1})
+        assert str(info.value) == "the solver process had stopped; a new one was started: try again"
+        assert pid not in _children() and off.child_pid not in (None, pid)  # as it says
+        assert off.inflate(ELLIPSE, True, {"resolution": 0.1}).identical(host.inflate(ELLIPSE, True, {"resolution": 0.1}))
+    finally:
+        off.shutdown()
