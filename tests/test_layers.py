@@ -96,7 +96,7 @@ def package_graph() -> dict[str, dict[str, list[str]]]:
 
 #: The layers, from the inside out; a unit may import only units of its own layer or below.
 LAYERS = [
-    {"errors", "numerics", "atomic", "solver_kinds"},
+    {"errors", "numerics", "atomic", "solver_kinds", "cache"},
     {"geometry", "exporters"},
     {"document"},
     {"tools"},
