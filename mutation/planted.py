@@ -299,11 +299,20 @@ def candidates(root: Path, module: str) -> list[dict]:
     return out
 
 
-def draw(root: Path, per_module: int, seed: int) -> list[dict]:
+def draw(root: Path, per_module: int, seed: int, modules: list[str] | None = None,
+         exclude: list[str] = ()) -> list[dict]:
+    """A seeded sample of ``per_module`` bugs in each module (``modules``: only these), never
+    one of the samples named in ``exclude`` (the same text planted at the same place)."""
     rng = random.Random(seed)
+    def key(m):  # the indentation may have changed since
+        return m["file"], m["old"].strip(), m["new"].strip(), m["occurrence"]
+
+    seen = {key(m) for name in exclude for m in json.loads((OUT / f"{name}.json").read_text())}
     sample = []
     for module in MODULES:
-        pool = candidates(root, module)
+        if modules and module not in modules:
+            continue
+        pool = [m for m in candidates(root, module) if key(m) not in seen]
         picked = rng.sample(pool, min(per_module, len(pool)))
         picked.sort(key=lambda m: (m["file"], m["line"]))
         for i, m in enumerate(picked):
@@ -478,12 +487,13 @@ def main(argv=None) -> int:
     ap.add_argument("--only", nargs="*", help="only these bug ids (fnmatch patterns)")
     ap.add_argument("--table", nargs="*", help="print the table of these labels")
     ap.add_argument("--sample", default="sample", help="the sample's name: mutation/planted/NAME.json")
+    ap.add_argument("--exclude", nargs="*", default=[], help="with --draw: never a bug of these samples")
     args = ap.parse_args(argv)
     global SAMPLE
     SAMPLE = args.sample
     OUT.mkdir(exist_ok=True)
     if args.draw:
-        sample = draw(args.root.resolve(), args.per_module, args.seed)
+        sample = draw(args.root.resolve(), args.per_module, args.seed, args.module, args.exclude)
         (OUT / f"{SAMPLE}.json").write_text(json.dumps(sample, indent=1))
     if args.label:
         run(args.root.resolve(), args.label, args.module, args.only)

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import copy
 import math
+import re
 
 import numpy as np
 import pytest
@@ -257,8 +258,12 @@ def test_a_motion_needs_a_loop_of_two_frames_and_one_position_per_frame():
     for loop in (0, 1):
         with pytest.raises(DocumentFormatError, match=f"has a motion but the loop has {loop} frames"):
             Animation.from_json(one(loop, [[0, 0, 0]] * loop))
-    for bad in ([[0, 0, 0]] * 3, [[0, 0]] * 2, [[0, 0, 0], [0, 0, float("nan")]], "xx"):
-        with pytest.raises(DocumentFormatError, match="its motion must have one"):
+    for bad in ([[0, 0, 0]] * 3, "xx"):  # not one position per frame
+        with pytest.raises(DocumentFormatError, match=re.escape("its motion must have one [x, y, z] per loop frame (2)")):
+            Animation.from_json(one(2, bad))
+    for bad in ([[0, 0]] * 2, [[0, 0, 0], [0, 0, float("nan")]]):  # a position that is no finite triple
+        with pytest.raises(DocumentFormatError, match=re.escape("its motion (one [x, y, z] per loop frame (2)) must be "
+                                                                "[x, y, z] triples of finite numbers")):
             Animation.from_json(one(2, bad))
     assert not Animation.from_json({"loop": 2, "pins": [{"id": "a", "rest": [0, 0, 0], "target": [0, 0, 0]}]}).has_motion()
     assert Animation.from_json(None) == Animation() and Animation().to_json() is None

@@ -109,3 +109,25 @@ def test_twin_source_needs_an_attached_original(fan_host):
     doc.execute({"command": "set_contour", "layer": "a", "points": sq, "closed": True})
     doc.execute({"command": "duplicate_layer", "layer": "a", "id": "b", "offset": [2.0, 0.0]})
     assert C.twin_source(doc, doc.layer("b")) is None  # a free part: mirrored about its own axis
+
+
+def test_a_copy_whose_hole_moved_on_its_own_is_no_twin(real_host):
+    """A twin is an unchanged copy moved aside: its holes moved by the same offset as its
+    stroke. A copy whose hole was redrawn elsewhere, or with another number of points, is
+    mirrored about its own place like any changed part (and the check never fails on it)."""
+    doc = _body_and_leg(real_host)
+    t = np.linspace(0.0, 2 * np.pi, 16, endpoint=False)
+    hole = np.column_stack([-0.375 + 0.06 * np.cos(t), -0.6 + 0.1 * np.sin(t)])
+    leg = np.asarray(doc.layer("leg").points)
+    doc.execute({"command": "set_contour", "layer": "leg", "points": leg.tolist(), "holes": [hole.tolist()]})
+    assert len(doc.layer("leg").holes) == 1 and C.host_of(doc, doc.layer("leg")).id == "body"
+    d = np.array([0.9, -0.05])
+    coarse = np.column_stack([-0.375 + 0.06 * np.cos(t[::2]), -0.6 + 0.1 * np.sin(t[::2])])
+    for name, copy_hole, twin in (("same", hole + d, "leg"), ("moved", hole + d + [0.0, -0.1], None),
+                                  ("redrawn", coarse + d, None)):
+        doc.execute({"command": "add_layer", "id": name})
+        doc.execute({"command": "set_inflate_params", "layer": name, "params": {"resolution": 0.06}})
+        doc.execute({"command": "set_contour", "layer": name, "points": (leg + d).tolist(), "holes": [copy_hole.tolist()]})
+        found = C.twin_source(doc, doc.layer(name))
+        assert (None if found is None else found.id) == twin, name
+        doc.execute({"command": "remove_layer", "layer": name})

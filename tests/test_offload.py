@@ -11,6 +11,9 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import signal
+import threading
+import time
 
 import numpy as np
 import pytest
@@ -169,5 +172,159 @@ def test_the_child_starts_when_the_wrapper_is_made_not_at_the_first_stroke(host)
         while not (_children() - before) and time.monotonic() < deadline:
             time.sleep(0.05)
         assert _children() - before  # already starting, before anything asked for it
+    finally:
+        off.shutdown()
+
+
+# --- the watchdog and the child's life (issue 39: bugs planted here changed only which processes
+# run, so every test below also says which child processes exist, by pid) ------------------------
+
+
+def _in_thread(fn):
+    box: dict = {}
+
+    def run():
+        try:
+            box["value"] = fn()
+        except BaseException as exc:  # noqa: BLE001 - handed to the test
+            box["error"] = exc
+
+    th = threading.Thread(target=run, daemon=True)
+    th.start()
+    return th, box
+
+
+def _cancel_when_running(off, th) -> None:
+    """Press Cancel as soon as the job is in flight (cancel() says True from then on)."""
+    deadline = time.monotonic() + 30.0
+    while not off.cancel():
+        assert th.is_alive() and time.monotonic() < deadline, "the job never started"
+        time.sleep(0.01)
+
+
+def test_a_hung_child_is_stopped_at_the_timeout_in_one_line_and_the_next_job_runs_in_a_new_one(host):
+    said = []
+    off = OffloadedInflation(host, notify=said.append, timeout_s=1.5)
+    try:
+        assert off.offloading()
+        pid = off.child_pid
+        os.kill(pid, signal.SIGSTOP)  # a hang in native code: the child never answers
+        t0 = time.monotonic()
+        with pytest.raises(SolverError) as info:
+            off.inflate(ELLIPSE, True, {"resolution": 0.1})
+        assert time.monotonic() - t0 >= 1.5  # never stopped before its time
+        assert str(info.value) == ("the inflation took longer than 1.5 s and was stopped (the solver process was "
+                                   "restarted); nothing was changed")
+        assert said == ["the inflation took longer than 1.5 s: the solver process was stopped and a new one started"]
+        assert pid not in _children() and off.child_pid not in (None, pid)  # the hung one is gone
+        assert off.inflate(ELLIPSE, True, {"resolution": 0.1}).identical(host.inflate(ELLIPSE, True, {"resolution": 0.1}))
+        assert len(said) == 1 and off.cancel() is False  # the job is over: nothing to cancel
+    finally:
+        off.shutdown()
+
+
+def test_cancel_ends_a_hung_job_at_once_whether_the_child_is_working_or_still_starting(host):
+    said = []
+    off = OffloadedInflation(host, notify=said.append)
+    try:
+        assert off.cancel() is False  # nothing running: nothing to cancel
+        for starting in (True, False):
+            if not starting:
+                assert off.offloading()
+            pid = off.child_pid
+            os.kill(pid, signal.SIGSTOP)  # stopped while importing, or while idle (then mid-job)
+            th, box = _in_thread(lambda: off.inflate(ELLIPSE, True, {"resolution": 0.1}))
+            _cancel_when_running(off, th)
+            th.join(30.0)
+            assert not th.is_alive(), "cancel did not end the wait"
+            assert str(box.get("error")) == "the inflation was cancelled; nothing was changed", (starting, box)
+            assert said == ["cancelled: the solver process was stopped and a new one started"], starting
+            assert pid not in _children() and off.child_pid not in (None, pid)
+            assert off.cancel() is False  # the cancelled job is over
+            said.clear()
+        assert off.inflate(ELLIPSE, True, {"resolution": 0.1}).identical(host.inflate(ELLIPSE, True, {"resolution": 0.1}))
+    finally:
+        off.shutdown()
+
+
+def test_a_child_killed_while_idle_is_replaced_before_the_next_job_and_said_once(host):
+    said = []
+
+    def notify(text):  # a message that fails never fails the job
+        said.append(text)
+        raise RuntimeError("the status bar is gone")
+
+    off = OffloadedInflation(host, notify=notify)
+    try:
+        assert off.offloading()
+        pid = off.child_pid
+        os.kill(pid, signal.SIGKILL)
+        deadline = time.monotonic() + 10.0
+        while pid in _children() and time.monotonic() < deadline:
+            time.sleep(0.02)
+        assert off.inflate(ELLIPSE, True, {"resolution": 0.1}).identical(host.inflate(ELLIPSE, True, {"resolution": 0.1}))
+        assert said == ["the solver process had stopped; a new one was started"]
+        assert off.child_pid not in (None, pid) and off.offloading()
+    finally:
+        off.shutdown()
+
+
+def test_a_child_that_dies_while_starting_leaves_the_job_here_at_once(host, monkeypatch):
+    import sketchforge.offload as offload
+
+    monkeypatch.setattr(offload, "START_TIMEOUT_S", 600.0)  # only a dead pipe ends the wait early
+    off = OffloadedInflation(host)
+    try:
+        os.kill(off.child_pid, signal.SIGKILL)  # long before it has imported anything
+        th, box = _in_thread(lambda: off.inflate(ELLIPSE, True, {"resolution": 0.1}))
+        th.join(60.0)
+        assert not th.is_alive(), "the job waited for a child that is dead"
+        assert box["value"].identical(host.inflate(ELLIPSE, True, {"resolution": 0.1}))
+    finally:
+        off.shutdown()
+
+
+def test_one_child_per_wrapper_restart_replaces_it_and_shutdown_ends_it(host):
+    before = _children()
+    off = OffloadedInflation(host)
+    try:
+        for _ in range(2):
+            off.inflate(ELLIPSE, True, {"resolution": 0.1})
+        assert _children() - before == {off.child_pid}  # one process does every job
+        old = off.child_pid
+        off.restart()
+        assert old not in _children() and off.child_pid in _children() - before
+        assert off.offloading() and _children() - before == {off.child_pid}
+        pid = off.child_pid
+    finally:
+        off.shutdown()
+    assert off.child_pid is None and pid not in _children() and not (_children() - before)
+
+
+class _BrokenPipe:
+    """A child's pipe that breaks when a job is sent (the child died between the check and
+    the send); everything else is the real pipe's."""
+
+    def __init__(self, conn):
+        self._conn = conn
+
+    def send(self, obj):
+        raise BrokenPipeError(32, "Broken pipe")
+
+    def __getattr__(self, name):
+        return getattr(self._conn, name)
+
+
+def test_a_job_that_cannot_be_sent_is_one_line_and_the_child_is_replaced(host):
+    off = OffloadedInflation(host)
+    try:
+        assert off.offloading()
+        pid = off.child_pid
+        off._child.conn = _BrokenPipe(off._child.conn)
+        with pytest.raises(SolverError) as info:
+            off.inflate(ELLIPSE, True, {"resolution": 0.1})
+        assert str(info.value) == "the solver process had stopped; a new one was started: try again"
+        assert pid not in _children() and off.child_pid not in (None, pid)  # as it says
+        assert off.inflate(ELLIPSE, True, {"resolution": 0.1}).identical(host.inflate(ELLIPSE, True, {"resolution": 0.1}))
     finally:
         off.shutdown()

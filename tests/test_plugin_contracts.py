@@ -681,8 +681,9 @@ def test_two_pose_plugins_are_an_error_naming_both_and_a_broken_one_names_itself
 
 
 def test_exporters_one_suffix_one_mesh_exporter_and_document_exporters_chosen_for_their_documents(tmp_path):
-    mesh_exp = Exporter("off", (".off",), lambda path, mesh: None)
-    clash = Exporter("off2", (".off", ".xyz"), lambda path, mesh: None)
+    # (suffixes no exporter of the core (obj, ply, stl, glTF) or of the off plugin claims)
+    mesh_exp = Exporter("pts", (".pts",), lambda path, mesh: None)
+    clash = Exporter("pts2", (".pts", ".xyz"), lambda path, mesh: None)
     calls = []
 
     def handles(doc):
@@ -691,20 +692,28 @@ def test_exporters_one_suffix_one_mesh_exporter_and_document_exporters_chosen_fo
 
     doc_exp = Exporter("anim", (".glb",), lambda path, mesh: None, write_document=lambda p, d: "ok", handles=handles)
     host = make_test_host(Solvers(exporters=[mesh_exp, doc_exp]), Other(exporters=[clash]))
-    # two exporters claiming '.off': neither writes it (issue 37: never load order), each its other suffixes
-    assert "off" in host.exporters and "anim" in host.exporters and "off2" in host.exporters
-    with pytest.raises(PluginError, match=r"'plugin-0-Solvers' and 'plugin-1-Other' both write '\.off'"):
-        host.exporter_for(tmp_path / "a.OFF")
-    assert host.exporter_for(tmp_path / "a.xyz") is clash
-    one = make_test_host(Solvers(exporters=[mesh_exp]))
-    assert one.exporter_for(tmp_path / "a.OFF") is mesh_exp
+    assert {"pts", "pts2", "anim"} <= set(host.exporters)
+    # two plugins claiming one suffix: an error naming both, never "the first one loaded wins"
+    with pytest.raises(PluginError, match=r"plugins 'plugin-0-Solvers' and 'plugin-1-Other' both write '\.pts' "
+                                          r"\(exporters 'pts' and 'pts2'\)"):
+        host.exporter_for(tmp_path / "a.PTS")
+    assert any("both write '.pts'" in p for p in host.problems)
+    assert host.exporter_for(tmp_path / "a.xyz") is clash  # its other suffix is its own
+    single = make_test_host(Solvers(exporters=[mesh_exp, doc_exp]))
+    assert single.exporter_for(tmp_path / "a.PTS") is mesh_exp
+    # a plugin never takes a suffix of the core's
+    taker = make_test_host(Solvers(exporters=[Exporter("myobj", (".obj",), lambda path, mesh: None)]))
+    assert "myobj" not in taker.exporters and taker.exporter_for(tmp_path / "a.obj").name == "obj"
+    assert any("exporter 'myobj' claims '.obj', already written by exporter 'obj' of plugin 'sketchforge-core'" in p
+               for p in taker.problems)
+    host = single
     assert host.exporter_for(tmp_path / "a.glb", doc="animated") is doc_exp
     assert host.exporter_for(tmp_path / "a.glb", doc="still").name == "gltf"  # the core's mesh exporter
     assert host.exporter_for(tmp_path / "a.glb").name == "gltf" and calls == ["animated", "still"]
     with pytest.raises(ExportError) as info:
         host.exporter_for(tmp_path / "a.doc")
     assert str(info.value).startswith("cannot export to '.doc': known formats are ")
-    assert ".glb" in str(info.value) and ".off" in str(info.value)
+    assert ".glb" in str(info.value) and ".pts" in str(info.value)
     with pytest.raises(ExportError, match="a file without suffix"):
         host.exporter_for(tmp_path / "noext")
     bad = Exporter("bad", (".bad",), lambda p, m: None, write_document=lambda p, d: "", handles=lambda d: 1 / 0)
@@ -915,6 +924,29 @@ def test_the_model_probe_reaches_the_shadow_of_each_probe_light():
     flat_diag = _jax_model(lambda n, l: jnp.where((l[0] > 0.5) & (l[1] > 0.5), jnp.maximum(jnp.dot(n, l), 0.0),
                                                   jnp.dot(n, l)))
     assert "must be signed, not clamped" in plugin_error(contracts.check_reflectance_model, flat_diag)
+
+
+def test_the_model_probe_reaches_the_deepest_shadow_it_names_for_every_probe_light():
+    """The refusal names n·l = -0.95 (slope 3 straight away from the light): the probe must
+    look there for each light, not at a slope merely somewhere in its shadow. A model clamped
+    only below n·l = -0.93, and only for one light, is refused whichever light that is; a probe
+    a component off (slope (k lx, 0) or (k lx, k lx)) reaches n·l = -0.73 and -0.93 at most
+    for the lights off the x axis and passes it."""
+    import jax.numpy as jnp
+
+    for light in contracts._PROBE_LIGHTS:
+        L = jnp.array(light)
+
+        def R(n, l, L=L):
+            this = jnp.all(jnp.abs(l - L) < 1e-9)
+            return jnp.where(this, jnp.maximum(jnp.dot(n, l), -0.93), jnp.dot(n, l))
+
+        msg = plugin_error(contracts.check_reflectance_model, _jax_model(R))
+        assert "must be signed, not clamped" in msg and "at n·l = -0.95" in msg, (light, msg)
+        # only the deepest probe is clamped: the same model with its floor at -0.96 passes
+        contracts.check_reflectance_model(
+            _jax_model(lambda n, l, L=L: jnp.where(jnp.all(jnp.abs(l - L) < 1e-9), jnp.maximum(jnp.dot(n, l), -0.96),
+                                                   jnp.dot(n, l))), "acme")
 
 
 class _EntryPoint:

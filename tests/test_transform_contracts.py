@@ -261,6 +261,24 @@ def test_a_copy_moved_aside_moves_its_stroke_mesh_and_holes(fan_host):
         C.DuplicateLayer.from_dict({"command": "duplicate_layer", "layer": "a", "offset": [1, 2, 3]})
 
 
+def test_redo_puts_back_the_very_copy_and_a_copy_follows_its_own_source(fan_host):
+    doc = doc_with(fan_host, "a")
+    cmd = doc.push(C.DuplicateLayer(layer="a", offset=(0.25, -0.5)))
+    made = doc.layer(cmd.new_id)
+    doc.undo_stack.undo()
+    assert cmd.new_id not in doc.layer_ids()
+    doc.undo_stack.redo()
+    assert doc.layer(cmd.new_id) is made  # redo rebuilds nothing: the moved mesh is made once
+    # The same command done on another document (a macro replayed on a fresh one) copies
+    # that document's layer, never the copy it made before.
+    other = doc_with(fan_host, "a", points=0.5 * BLOB)
+    cmd.do(other)
+    got = other.layer(cmd.new_id)
+    assert got.points.tobytes() == (0.5 * BLOB + [0.25, -0.5]).tobytes()
+    assert np.array_equal(got.mesh.V[:, :2], other.layer("a").mesh.V[:, :2] + [0.25, -0.5])
+    assert doc.layer(cmd.new_id) is made
+
+
 def test_a_copy_moved_aside_is_the_twin_a_mirror_places(fan_host):
     doc = Document(host=fan_host)
     doc.execute({"command": "add_layer", "id": "body", "name": "Body"})
