@@ -38,6 +38,9 @@ START_TIMEOUT_S = 60.0
 INFLATE_TIMEOUT_S = 180.0
 #: How often a waiting caller looks at Cancel, the deadline and the child's pulse.
 POLL_S = 0.05
+#: Children in a row that may fail to start before inflations stay in this process for good
+#: (a child that cannot import the plugins would fail every time, and each try costs a start).
+MAX_START_FAILURES = 3
 
 _CHILD_HOST = None
 
@@ -146,6 +149,7 @@ class OffloadedInflation:
         self._busy = threading.Lock()  # one job in the child at a time
         self._child: _Child | None = None
         self._cancel: threading.Event | None = None  # the running job's
+        self._start_failures = 0  # children in a row that could not start
         self.start()
 
     @property
@@ -192,7 +196,10 @@ class OffloadedInflation:
         try:
             self._revive_if_dead()
             child = self._current()
-            if not self._answers(self._wait_ready(child, cancel), solver):
+            key = self._wait_ready(child, cancel)
+            if key is not None:
+                self._start_failures = 0
+            if not self._answers(key, solver):
                 return self._host.inflate(points, closed, params, holes, solver=solver)
             holes = [] if holes is None else [np.asarray(h, dtype=np.float64) for h in holes]
             args = (np.asarray(points, dtype=np.float64), bool(closed), dict(params), holes, solver)
@@ -225,11 +232,25 @@ class OffloadedInflation:
 
     def _revive_if_dead(self) -> None:
         """A child that died while idle (killed, out of memory) is replaced before use: the next
-        job must not be the one that finds out."""
+        job must not be the one that finds out. A child that could not start (killed or crashed
+        while importing) is replaced too, up to :data:`MAX_START_FAILURES` in a row: the job that
+        found it ran here at once, and without a new child every later inflation would run here
+        as well, in the app's process, which is what the child is for (the window pauses on a
+        large part). Past that the inflations stay here and the user is told once."""
         child = self._child
-        if child is not None and child.key is not None and not child.alive():
+        if child is None:
+            return
+        if child.key is not None and not child.alive():
             self._replace(child)
             self._say("the solver process had stopped; a new one was started")
+        elif child.failed:
+            self._start_failures += 1
+            if self._start_failures < MAX_START_FAILURES:
+                self._replace(child)
+                self._say("the solver process could not start; a new one was started")
+            elif self._start_failures == MAX_START_FAILURES:
+                self._say(f"the solver process could not start {MAX_START_FAILURES} times in a row: inflations run "
+                          "in the app's process from now on (the window may pause on large parts)")
 
     def _run(self, child: _Child, args, cancel: threading.Event):
         """Send ``args`` to the child and wait for its answer, watching Cancel, the deadline and

@@ -284,6 +284,52 @@ def test_a_child_that_dies_while_starting_leaves_the_job_here_at_once(host, monk
         off.shutdown()
 
 
+def test_a_child_that_could_not_start_is_replaced_before_the_next_job_a_few_times_in_a_row(host, monkeypatch):
+    """The job that finds the child dead while starting runs here; the next one gets a new child
+    (else every later inflation would run in the app's process, the freeze the child is for).
+    Children that keep failing to start are replaced at most MAX_START_FAILURES - 1 times in a row,
+    then the inflations stay here and that is said once."""
+    import sketchforge.offload as offload
+
+    said = []
+    monkeypatch.setattr(offload, "START_TIMEOUT_S", 600.0)
+    off = OffloadedInflation(host, notify=said.append)
+    try:
+        want = host.inflate(ELLIPSE, True, {"resolution": 0.1})
+        dead = off.child_pid
+        os.kill(dead, signal.SIGKILL)
+        assert off.inflate(ELLIPSE, True, {"resolution": 0.1}).identical(want)  # here, at once
+        assert off.inflate(ELLIPSE, True, {"resolution": 0.1}).identical(want)  # in a new child
+        assert said == ["the solver process could not start; a new one was started"]
+        assert off.child_pid not in (None, dead) and off.offloading()
+        assert off._start_failures == 0  # it started: the count begins again
+        # children that never start (they exit at once): the job that finds each one runs here,
+        # the next replaces it, twice in a row; then the inflations stay here, said once
+        said.clear()
+
+        class NeverStarts(offload._Child):
+            def __init__(self) -> None:
+                ctx = multiprocessing.get_context("spawn")
+                self.conn, theirs = ctx.Pipe()
+                self.process = ctx.Process(target=os._exit, args=(3,), daemon=True)
+                self.process.start()
+                theirs.close()
+                self.key, self.failed = None, False
+
+        monkeypatch.setattr(offload, "_Child", NeverStarts)
+        off.restart()
+        pids = set()
+        for _ in range(offload.MAX_START_FAILURES + 2):
+            pids.add(off.child_pid)
+            assert off.inflate(ELLIPSE, True, {"resolution": 0.1}).identical(want)
+        again = "the solver process could not start; a new one was started"
+        assert said[:-1] == [again] * (offload.MAX_START_FAILURES - 1)
+        assert len(said) == offload.MAX_START_FAILURES and "in the app's process from now on" in said[-1]
+        assert len(pids) == offload.MAX_START_FAILURES  # the first one and its replacements, no more
+    finally:
+        off.shutdown()
+
+
 def test_one_child_per_wrapper_restart_replaces_it_and_shutdown_ends_it(host):
     before = _children()
     off = OffloadedInflation(host)
