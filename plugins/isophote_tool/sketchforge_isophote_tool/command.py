@@ -102,6 +102,25 @@ def _apply(doc, layer: Layer, pick, band, stroke, model_name: str, light=None, s
                   params=params, provider=provider)
 
 
+def _with_solver_fields(d: dict, cmd) -> dict:
+    """``d`` with the optional journal fields both sculpt commands share (``model`` when not
+    Lambertian, ``solver``, ``params``): written only when set, so older files stay as they were."""
+    if cmd.model != "lambertian":
+        d["model"] = cmd.model
+    if cmd.solver is not None:
+        d["solver"] = cmd.solver
+    if cmd.params:
+        d["params"] = dict(cmd.params)
+    return d
+
+
+def _solver_fields(d: dict, name: str) -> dict:
+    """The optional fields of :func:`_with_solver_fields` read back from a journal entry."""
+    return {"model": parse_field(d, "model", str, name, "lambertian"),
+            "solver": parse_field(d, "solver", str, name, None),
+            "params": parse_params(d, name)}
+
+
 @dataclass
 class SculptIsophote(ReplaceLayerCommand):
     """Redraw the isophote through ``pick`` as ``stroke`` (thesis 4.3-4.6)."""
@@ -139,13 +158,7 @@ class SculptIsophote(ReplaceLayerCommand):
             "band": float(self.band),
             "stroke": np.asarray(self.stroke, float).reshape(-1, 2).tolist(),
         }
-        if self.model != "lambertian":
-            d["model"] = self.model
-        if self.solver is not None:
-            d["solver"] = self.solver
-        if self.params:
-            d["params"] = dict(self.params)
-        return d
+        return _with_solver_fields(d, self)
 
     @classmethod
     def from_dict(cls, d: dict) -> SculptIsophote:
@@ -161,9 +174,7 @@ class SculptIsophote(ReplaceLayerCommand):
             pick=pick,
             band=band,
             stroke=parse_points(d, cls.name, "stroke").tolist(),
-            model=parse_field(d, "model", str, cls.name, "lambertian"),
-            solver=parse_field(d, "solver", str, cls.name, None),
-            params=parse_params(d, cls.name),
+            **_solver_fields(d, cls.name),
         )
 
     @classmethod
@@ -267,13 +278,7 @@ class SculptIsophotes(ReplaceLayerCommand):
                 for e in self.edits
             ],
         }
-        if self.model != "lambertian":
-            d["model"] = self.model
-        if self.solver is not None:
-            d["solver"] = self.solver
-        if self.params:
-            d["params"] = dict(self.params)
-        return d
+        return _with_solver_fields(d, self)
 
     @classmethod
     def from_dict(cls, d: dict) -> SculptIsophotes:
@@ -288,9 +293,7 @@ class SculptIsophotes(ReplaceLayerCommand):
         return cls(
             layer=parse_field(d, "layer", str, cls.name),
             edits=[_parse_edit(e, i, cls.name) for i, e in enumerate(raw)],
-            model=parse_field(d, "model", str, cls.name, "lambertian"),
-            solver=parse_field(d, "solver", str, cls.name, None),
-            params=parse_params(d, cls.name),
+            **_solver_fields(d, cls.name),
         )
 
     @classmethod
