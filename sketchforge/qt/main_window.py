@@ -425,7 +425,7 @@ class MainWindow(QMainWindow):
         self.creation_panel.isolines_changed.connect(self.canvas.set_isoline_count)
         # the 3D view's isophote style follows the same count, live (0 lines: keep its last count)
         self.creation_panel.isolines_changed.connect(
-            lambda k: self.view3d.set_style(self.view3d.style, k) if k > 0 else None
+            lambda k: self.view3d.set_style(self.view3d.shading_style, k) if k > 0 else None
         )
         self.sculpt_panel.tool_selected.connect(self.select_tool)
         self.light_panel.angle_edited.connect(self.set_light_angle)

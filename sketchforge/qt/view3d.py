@@ -214,7 +214,7 @@ class View3D(QWidget):
         #: (doc.geometry_revision, mesh) of the last assembly, so that switching modes or the
         #: source back does not assemble an unchanged document again
         self._assembled: tuple[int, object] | None = None
-        self.style = "shaded"
+        self.shading_style = "shaded"
         self.isophote_count = 8
         self._framed = False  # the camera was framed on a model: keep the user's orbit from now
         self._bounds = None  # (centre, radius) of a sphere around what is shown (document units)
@@ -276,7 +276,7 @@ class View3D(QWidget):
         """"shaded", "cel" or "isophotes" (with ``isophotes`` lines, default 8)."""
         if style not in STYLES:
             raise ValueError(f"unknown 3D display style {style!r}: one of {', '.join(STYLES)}")
-        self.style = style
+        self.shading_style = style
         if isophotes is not None:
             self.isophote_count = max(1, int(isophotes))
         self._apply_style()
@@ -292,7 +292,7 @@ class View3D(QWidget):
             shaders.getShaderProgram(shader_name(style))["u_light"] = light
         shaders.getShaderProgram(shader_name("isophotes"))["u_lines"] = [float(self.isophote_count)]
         for item in self._items:
-            item.setShader(shader_name(self.style))
+            item.setShader(shader_name(self.shading_style))
         self.gl.update()
 
     def reframe(self) -> None:
@@ -480,7 +480,7 @@ class View3D(QWidget):
         allv = []
         item_class = _mesh_item_class()
         for mesh, colour in meshes:
-            item = item_class(mesh.V, mesh.F, shader=shader_name(self.style), color=colour, glOptions="opaque")
+            item = item_class(mesh.V, mesh.F, shader=shader_name(self.shading_style), color=colour, glOptions="opaque")
             # The drawing stands upright: document (x, y, z) -> world (x, -z, y), so the grid is
             # the ground, y is up and the viewer of the drawing looks along world +y.
             item.rotate(90, 1, 0, 0)
