@@ -52,11 +52,8 @@ def bomb_journal_dicts(path: Path, size: int) -> None:
     _write_repeated(path, b'{"format":"sketchforge","version":1,"journal":[', b'{"a":0},', b'{"a":0}', b"]}", size)
 
 
-def wide_string(path: Path, size: int) -> None:
-    """A name of ASCII with one emoji at its end: Python stores the whole text, and the parsed
-    string, 4 bytes a character."""
-    head = b'{"format":"sketchforge","version":1,"name":"'
-    tail = "\U0001F600".encode() + b'"}'
+def _pad_between(path: Path, head: bytes, tail: bytes, size: int) -> None:
+    """Write ``head``, then ``x`` up to ``size`` bytes in all (8 MB at a time), then ``tail``."""
     with open(path, "wb") as fh:
         fh.write(head)
         left = size - len(head) - len(tail)
@@ -65,6 +62,14 @@ def wide_string(path: Path, size: int) -> None:
             fh.write(block[: min(left, len(block))])
             left -= len(block)
         fh.write(tail)
+
+
+def wide_string(path: Path, size: int) -> None:
+    """A name of ASCII with one emoji at its end: Python stores the whole text, and the parsed
+    string, 4 bytes a character."""
+    head = b'{"format":"sketchforge","version":1,"name":"'
+    tail = "\U0001F600".encode() + b'"}'
+    _pad_between(path, head, tail, size)
 
 
 def worst_accepted(path: Path, size: int) -> None:
@@ -78,14 +83,7 @@ def worst_accepted(path: Path, size: int) -> None:
     k = (ff.MAX_JSON_ITEMS - 100) // 3
     head = b'{"format":"sketchforge","version":1,"journal":[' + b'{"a":0},' * (k - 1) + b'{"a":0}],"name":"'
     tail = b'"}'
-    with open(path, "wb") as fh:
-        fh.write(head)
-        left = size - len(head) - len(tail)
-        block = b"x" * (8 << 20)
-        while left > 0:
-            fh.write(block[: min(left, len(block))])
-            left -= len(block)
-        fh.write(tail)
+    _pad_between(path, head, tail, size)
 
 
 def big_snapshot(path: Path, size: int) -> None:

@@ -89,13 +89,19 @@ def remove_stale_temps(path) -> list[Path]:
             except OSError:
                 stale = False
         if stale:
-            try:
-                if e.is_file(follow_symlinks=False):
-                    os.unlink(e.path)
-                    removed.append(Path(e.path))
-            except OSError:
-                pass
+            _remove_file(e, removed)
     return removed
+
+
+def _remove_file(e: os.DirEntry, removed: list[Path]) -> None:
+    """Unlink the plain file ``e`` (never a link or folder) and note it; a file that cannot
+    be removed is left as it is (the next start tries again)."""
+    try:
+        if e.is_file(follow_symlinks=False):
+            os.unlink(e.path)
+            removed.append(Path(e.path))
+    except OSError:
+        pass
 
 
 #: Any temp name this module makes: ``.<name>.<10 hex>.<pid>.<8 hex>.tmp``.
@@ -114,14 +120,8 @@ def remove_stale_temps_in(folder) -> list[Path]:
         return removed
     for e in entries:
         m = _TEMP_NAME.match(e.name)
-        if m is None or pid_alive(int(m.group(1))):
-            continue
-        try:
-            if e.is_file(follow_symlinks=False):
-                os.unlink(e.path)
-                removed.append(Path(e.path))
-        except OSError:
-            pass
+        if m is not None and not pid_alive(int(m.group(1))):
+            _remove_file(e, removed)
     return removed
 
 
