@@ -272,9 +272,11 @@ def test_narrow_fairing_keeps_the_parts_and_widens_only_where_a_fold_is_left(mon
         # junctions move by a hundredth of an edge length at most, nothing a person sees)
         assert len(far) > 50 and np.abs(wide.mesh.V[far] - narrow.mesh.V[far]).max() < 0.01 * h, part
     p_n, m_n = np.percentile(d_n[d_n > 0], 95) / h, d_n.max() / h
-    # measured on the creature: p95 3.7 edge lengths, max 12.5 (8.4 before issue 34's full-thickness
-    # joins: the fairing now rounds the turn of a limb that arrives at its own thickness)
-    assert p_n < 4.0 and m_n < 14.0, (p_n, m_n)
+    # measured on the creature: p95 3.5 edge lengths, max 14.3 (8.4 before issue 34's full-thickness
+    # joins: the fairing now rounds the turn of a limb that arrives at its own thickness; 12.5
+    # before the limb was held where it leaves its host: the head's seam over the body rises
+    # 0.06 more, as the head beyond the body's outline keeps its thickness)
+    assert p_n < 4.0 and m_n < 15.0, (p_n, m_n)
     # the widened fairing still meets the target
     top, over, flat = _folds(wide)
     assert top <= 90 and flat >= 0.999
@@ -282,3 +284,26 @@ def test_narrow_fairing_keeps_the_parts_and_widens_only_where_a_fold_is_left(mon
     t = np.linspace(0.0, 1.0, 101)
     w = hold_weights(t)
     assert np.all(w[t <= 0.3] == 0.0) and np.all(np.diff(w) >= 0.0) and w[-1] > 0 and w[-1] == w.max()
+
+
+def test_limb_hold_holds_a_limb_only_past_its_hosts_outline_and_away_from_the_seam():
+    # fair.limb_hold (issue 34, point 5): zero over the host and at the seam, LIMB_HOLD well past
+    # the outline, and rising without a jump in between (a decision continuous in the input)
+    import shapely
+
+    from sketchforge_assemble.fair import LIMB_HOLD, LIMB_RAMP, LIMB_SEAM_RINGS, limb_hold
+
+    h = 0.05
+    x = np.linspace(-0.5, 1.0, 301)
+    V = np.c_[x, np.zeros_like(x), np.zeros_like(x)]
+    F = np.c_[np.arange(len(x) - 2), np.arange(1, len(x) - 1), np.arange(2, len(x))]  # one layer's strip
+    host = shapely.box(-1.0, -1.0, 0.0, 1.0)  # its outline at x = 0
+    zone = np.ones(len(x), bool)
+    far = np.full(len(x), LIMB_SEAM_RINGS + 1)
+    w = limb_hold(V, F, np.zeros(len(F), np.int64), [(0, host, h)], zone, far)
+    assert np.all(w[x <= 0] == 0) and np.allclose(w[x >= LIMB_RAMP * h], LIMB_HOLD)
+    assert np.all(np.diff(w) >= 0) and np.max(np.diff(w)) < 0.1 * LIMB_HOLD  # smooth: 0.005 apart
+    # at the seam nothing is held, wherever the seam lies; a layer that is not a limb, nothing
+    assert np.all(limb_hold(V, F, np.zeros(len(F), np.int64), [(0, host, h)], zone, np.zeros(len(x), np.int64)) == 0)
+    assert np.all(limb_hold(V, F, np.ones(len(F), np.int64), [(0, host, h)], zone, far) == 0)
+    assert np.all(limb_hold(V, F, np.zeros(len(F), np.int64), [(0, host, h)], ~zone, far) == 0)

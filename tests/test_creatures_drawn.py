@@ -65,22 +65,46 @@ def test_near_and_far_legs_hang_on_the_two_faces_of_the_body_where_their_junctio
     assert any("ear 1" in n and "ear 0" in n for n in res.notes)
 
 
+def _limb_ratios(meshes, res):
+    """{part: (ratio in the assembled mesh, ratio of the part's own layer)}: the thickness
+    just outside the host's outline over the thickness at mid-limb (mesh_checks), for the
+    limbs that reach far enough past their host."""
+    V, F = res.mesh.V, res.mesh.F
+    out = {}
+    for a in res.attachments:
+        m = meshes[a.upper]
+        h = float(np.median(np.linalg.norm(m.V[m.F[:, 0], :2] - m.V[m.F[:, 1], :2], axis=1)))
+        part = guard.polygon(m.V[m.boundary, :2], "p")
+        host = guard.polygon(meshes[a.lower].V[meshes[a.lower].boundary, :2], "h")
+        r = mc.limb_depth_ratio(V, F, res.face_layer, res.face_kind, a.upper, part, host, h)
+        if np.isfinite(r):
+            # the layer alone: its front and its mirror image as the back
+            n = len(m.V)
+            own = mc.limb_depth_ratio(np.r_[m.V, m.V * [1, 1, -1]], np.r_[m.F, m.F[:, ::-1] + n],
+                                      np.zeros(2 * len(m.F), np.int64),
+                                      np.r_[np.zeros(len(m.F), np.int64), np.ones(len(m.F), np.int64)], 0, part, host, h)
+            out[a.upper] = (r, own)
+    return out
+
+
 @pytest.mark.parametrize("seed", [0, 2])
 def test_limbs_leave_their_hosts_without_a_thin_neck(seed):
     # issue 34, point 5, measured as the issue says: the thickness of a limb just outside its
     # host's outline against its thickness at mid-limb (the full corpus in the benchmark)
     layers, meshes, closed, names, res = _assembled(seed)
-    V, F = res.mesh.V, res.mesh.F
-    ratios = []
-    for a in res.attachments:
-        h = float(np.median(np.linalg.norm(meshes[a.upper].V[meshes[a.upper].F[:, 0], :2]
-                                           - meshes[a.upper].V[meshes[a.upper].F[:, 1], :2], axis=1)))
-        r = mc.limb_depth_ratio(V, F, res.face_layer, res.face_kind, a.upper,
-                                guard.polygon(meshes[a.upper].V[meshes[a.upper].boundary, :2], "p"),
-                                guard.polygon(meshes[a.lower].V[meshes[a.lower].boundary, :2], "h"), h)
-        if np.isfinite(r):
-            ratios.append(r)
-    assert len(ratios) >= 4 and np.median(ratios) >= 0.8 and min(ratios) >= 0.45, ratios
+    ratios = [r for r, _ in _limb_ratios(meshes, res).values()]
+    assert len(ratios) >= 4 and np.median(ratios) >= 0.9 and min(ratios) >= 0.8, ratios
+
+
+def test_a_tail_leaving_the_body_near_its_outline_keeps_its_own_thickness():
+    # seed 16: the tail's junction lies close to the body's outline, so the junction's fairing
+    # reached past the outline and pinched the tail into a neck (0.62 of its own thickness just
+    # outside the body; ratio 0.49). Held there (fair.limb_hold), it keeps its own shape: the
+    # tail is drawn narrower at its base (its own layer's ratio is 0.80), and the assembled
+    # tail keeps at least 0.9 of that.
+    layers, meshes, closed, names, res = _assembled(16)
+    r, own = _limb_ratios(meshes, res)[names.index("tail")]
+    assert own < 0.85 and r >= 0.9 * own, (r, own)
 
 
 def test_the_independent_checks_see_a_crossing_an_open_edge_and_a_fold():

@@ -24,7 +24,18 @@ from .blend import blend_junctions
 from .cache import AssemblyCache, memo
 from .depth import build_problem, settle_free_parts, solve_without_free_parts
 from .errors import AttachmentError, DepthOrderError
-from .fair import fair_clear, hold_weights, interior_edges, ring_region, seam_zone, supports, wide_zone
+from .fair import (
+    LIMB_SEAM_RINGS,
+    fair_clear,
+    hold_weights,
+    interior_edges,
+    limb_hold,
+    ring_region,
+    rings_from,
+    seam_zone,
+    supports,
+    wide_zone,
+)
 from .remesh import insert_chains
 from .sheet import THIN_HEIGHT_EDGES, refine_thin, sheet_from_mesh, taper
 from .stitch import build_mesh
@@ -386,7 +397,8 @@ def _assemble(sheets: list, knames: list[str], p: dict, cache, freed: dict[int, 
     attachments, warnings, notes = find_attachments(sheets, knames, p["on_bad_junction"], exclude=set(freed))
     warnings = [freed[k] for k in sorted(freed)] + warnings
     attached = {a.upper for a in attachments}
-    _attach_sheets(sheets, attachments, attached, cache)
+    operators: dict = {}
+    _attach_sheets(sheets, attachments, attached, cache, operators)
     timings["attach"] = time.perf_counter() - t
 
     t = time.perf_counter()
@@ -405,7 +417,7 @@ def _assemble(sheets: list, knames: list[str], p: dict, cache, freed: dict[int, 
     gap = p["gap"] * float(np.median([s.h for s in sheets]))
     P, q, Aeq, beq, Ain, bin_, pinfo = build_problem(sheets, offsets, front_off, back_off, attachments, gap,
                                                     p["reg"], p["stiffness"], glue, springs, cache=cache,
-                                                    locators=locators)
+                                                    locators=locators, operators=operators)
     timings["constraints"] = time.perf_counter() - t
 
     t = time.perf_counter()
@@ -424,15 +436,17 @@ def _assemble(sheets: list, knames: list[str], p: dict, cache, freed: dict[int, 
     sinfo["fair_zone"] = None
     if lips is not None and p["fair"] > 0:
         V, faired, sinfo["fair_zone"] = _fair(V, F, face_layer, face_kind, seam, ends, sheets, in_att, p, cache,
-                                              timings)
+                                              timings, attachments)
     return _Stages(V, F, face_layer, face_kind, attachments, _components(len(sheets), attachments), int(len(beq)),
                    int(len(bin_)), viol, glue_error, warnings, notes, timings, sinfo, faired)
 
 
-def _attach_sheets(sheets: list, attachments: list, attached: set, cache) -> None:
+def _attach_sheets(sheets: list, attachments: list, attached: set, cache, operators: dict) -> None:
     """Shape every sheet for its attachment, in place: a part that is not glued loses its
     junction, a glued part keeps only the stretch that is glued, and meets its host at its
-    own thickness (:func:`.thickness.full_thickness`)."""
+    own thickness (:func:`.thickness.full_thickness`). ``operators`` gets each glued part's
+    (L, M), keyed by its arrays' identity, for the depth problem (see
+    :func:`.depth_rows.build_problem`)."""
     for u in range(len(sheets)):
         if u not in attached and len(sheets[u].junction):
             # junction over empty space, or a bad one: a free part whose whole outline is a rim
@@ -446,8 +460,10 @@ def _attach_sheets(sheets: list, attachments: list, attached: set, cache) -> Non
         host = sheets[a.lower]
 
         def thick(s=s, host=host):
-            ops = memo(cache, "laplacian", (s.xy, s.F, s.Fb), lambda: laplacian_and_mass(s.xy, s.F, checked=True))
-            return full_thickness(s, host.polygon(), ops)
+            got = memo(cache, "laplacian", (s.xy, s.F, s.Fb), lambda: laplacian_and_mass(s.xy, s.F, checked=True))
+            if s.Fb is None:
+                operators[(id(s.xy), id(s.F))] = got
+            return full_thickness(s, host.polygon(), got)
 
         z = memo(cache, "thickness", (s.xy, s.F, s.z, s.boundary, s.holes, s.junction, host.xy, host.boundary,
                                       host.holes), thick)
@@ -497,7 +513,7 @@ def _solve_depth_order(P, q, Aeq, beq, Ain, bin_, offsets, free, pinfo, gap, p, 
     return x, sinfo
 
 
-def _fair(V, F, face_layer, face_kind, seam, ends, sheets, in_att, p, cache, timings):
+def _fair(V, F, face_layer, face_kind, seam, ends, sheets, in_att, p, cache, timings, attachments):
     """(V, safe, zone): the junctions faired (:mod:`.fair`) in the narrow zone, or the wide one
     where the narrow leaves a fold; ``safe`` False when even the wide one crosses itself."""
     t = time.perf_counter()
@@ -510,6 +526,7 @@ def _fair(V, F, face_layer, face_kind, seam, ends, sheets, in_att, p, cache, tim
     for k in sorted(set(range(len(sheets))) - in_att):
         held |= supports(V, F, face_layer, face_kind, k, sheets[k].polygon().buffer(sheets[k].h), wide)
     h_med = float(np.median([s.h for s in sheets]))
+    limbs = [(a.upper, sheets[a.lower].polygon(), sheets[a.upper].h) for a in attachments]
 
     def faired(V=V, A=A, reach=reach, wide=wide, held=held):
         t1 = time.perf_counter()
@@ -520,6 +537,8 @@ def _fair(V, F, face_layer, face_kind, seam, ends, sheets, in_att, p, cache, tim
         # only a crossing that cannot be cleared falls back to the plain sleeve.
         narrow = (reach < 1.0) & ~held
         hold = hold_weights(reach)
+        # where a limb has left its host it is held (fair.limb_hold), so it keeps its thickness
+        hold = np.maximum(hold, limb_hold(V, F, face_layer, limbs, narrow, rings_from(A, seam, LIMB_SEAM_RINGS)))
         edges = interior_edges(F)
         V2, clear, bent, _ = fair_clear(V, F, narrow, A, h_med, hold, MAX_BEND, edges)
         zone = "narrow"
@@ -546,7 +565,7 @@ def _fair(V, F, face_layer, face_kind, seam, ends, sheets, in_att, p, cache, tim
 
     # Through the cache by the stitched mesh itself: an undo, or an edit that leaves every
     # junction's rings as they were, skips the fairing's solves and checks.
-    V, safe, zone = memo(cache, "fair", (V, F, seam, ends, held, rings, h_med), faired)
+    V, safe, zone = memo(cache, "fair", (V, F, face_layer, seam, ends, held, rings, h_med), faired)
     timings.setdefault("fair", time.perf_counter() - t)
     timings.setdefault("fair_check", 0.0)
     return V.copy(), bool(safe), zone  # the cached array stays as it was, whatever the caller does

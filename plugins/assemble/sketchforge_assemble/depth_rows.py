@@ -66,7 +66,7 @@ class _Rows:
 
 def build_problem(sheets, offsets, front_off, back_off, attachments: list[Attachment], gap: float, reg: float,
                   stiffness: float = 20.0, glue_lift=None, springs=None, cache: AssemblyCache | None = None,
-                  locators: dict | None = None):
+                  locators: dict | None = None, operators: dict | None = None):
     """Assemble the QP of the module docstring.
 
     Parameters
@@ -104,6 +104,11 @@ def build_problem(sheets, offsets, front_off, back_off, attachments: list[Attach
     locators : dict of int -> TriangleLocator, optional
         Point location per sheet index, filled as needed; pass the one
         :func:`.blend.blend_junctions` filled to build each sheet's locator once.
+    operators : dict, optional
+        (L, M) of sheets with one triangulation (``Fb`` None) already made in this assembly,
+        keyed by ``(id(xy), id(F))`` of the live arrays (:func:`.assemble._attach_sheets`
+        makes a glued part's for its full thickness; a part that hosts nothing keeps its
+        arrays, so its operators are not made twice).
 
     Returns
     -------
@@ -118,7 +123,8 @@ def build_problem(sheets, offsets, front_off, back_off, attachments: list[Attach
     for s, mk in zip(sheets, mesh_keys):
         # Every sheet's xy and F passed guard.mesh in the plane once, where they were made
         # (sheet_from_mesh, or insert_chains for a sheet with junctions cut in): not again.
-        L, M = memo(cache, "laplacian", mk, lambda s=s: _sheet_operators(s))
+        known = operators.get((id(s.xy), id(s.F))) if operators and s.Fb is None else None
+        L, M = known if known is not None else memo(cache, "laplacian", mk, lambda s=s: _sheet_operators(s))
         k = 1.0 + (stiffness if s.chains else 0.0)
         blocks.append((k * (-L) + w * M).tocsc())
         blocks_m.append(M)
