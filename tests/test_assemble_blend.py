@@ -307,3 +307,28 @@ def test_limb_hold_holds_a_limb_only_past_its_hosts_outline_and_away_from_the_se
     assert np.all(limb_hold(V, F, np.zeros(len(F), np.int64), [(0, host, h)], zone, np.zeros(len(x), np.int64)) == 0)
     assert np.all(limb_hold(V, F, np.ones(len(F), np.int64), [(0, host, h)], zone, far) == 0)
     assert np.all(limb_hold(V, F, np.zeros(len(F), np.int64), [(0, host, h)], ~zone, far) == 0)
+
+
+def test_reseat_moves_a_free_part_with_the_faces_it_rests_on_and_refuses_a_crossing():
+    # fair.reseat: a free part resting on a faired face moves up by the most its support rose
+    # (down by the least its support above sank); a move that would cross anything is refused
+    from sketchforge_assemble.fair import reseat
+
+    # layer 0: a flat square at z = 0 (two triangles); layer 1: a small triangle at z = 0.1 above it
+    V = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0], [0.4, 0.4, 0.1], [0.6, 0.4, 0.1], [0.5, 0.6, 0.1]], float)
+    F = np.array([[0, 1, 2], [0, 2, 3], [4, 5, 6]])
+    layer = np.array([0, 0, 1])
+    below = np.array([1, 1, 1, 1, 0, 0, 0], bool)
+    none = np.zeros(7, bool)
+    V2 = V.copy()
+    V2[:4, 2] += [0.02, 0.05, 0.03, 0.01]  # the support rose, by 0.05 at most
+    out = reseat(V, V2, F, layer, [(1, below, none)])
+    assert np.allclose(out[4:, 2], 0.15) and np.array_equal(out[:4], V2[:4])
+    # faces above the part that rose by less (0.01) than those below it (0.05): pinched, refused
+    assert reseat(V, V2, F, layer, [(1, below, below)]) is None
+    # a part whose move would cross another face: refused
+    V4 = V.copy()
+    V4[:4, 2] += [0.0, 1.0, 0.0, 0.0]  # one corner (not under the part) lifted through its plane
+    assert reseat(V, V4, F, layer, [(1, np.array([1, 0, 1, 1, 0, 0, 0], bool), none)]) is None
+    # nothing to rest on: unchanged
+    assert np.array_equal(reseat(V, V2, F, layer, [(1, none, none)]), V2)
