@@ -139,11 +139,12 @@ def test_a_fold_the_wide_fairing_leaves_is_relieved(seed):
 def test_an_eye_beside_a_snouts_junction_moves_with_the_faired_head():
     # Seed 27: the faces under the eye were held out of the fairing, and the snout's junction
     # ends beside it: a 163 degree fold. Faired like the rest, with the eye moved up as far as
-    # its support rose (fair.reseat): the fold is gone, the eye neither sinks in nor floats off.
+    # its support rose (fair.reseat), and the snout's rings that would cross faired part of the
+    # way (fair._part_way): no fold left, the eye neither sinks in nor floats off.
     layers, meshes, closed, names, res = _assembled(27)
     V, F = res.mesh.V, res.mesh.F
     h = float(np.median([np.median(np.linalg.norm(m.V[m.F[:, 0], :2] - m.V[m.F[:, 1], :2], axis=1)) for m in meshes]))
-    assert mc.junction_angles(V, F, res.face_layer, 8 * h).max() < 130.0
+    assert mc.junction_angles(V, F, res.face_layer, 8 * h).max() <= 90.0
     assert mc.self_intersections(V, F) == 0 and mc.boundary_edges(F) == 0
     eyes = [k for k, layer in enumerate(layers) if layer.name in ("eye", "eye far")]
     assert len(eyes) == 2 and all(layers[k].closed for k in eyes)
