@@ -251,8 +251,8 @@ def test_narrow_fairing_keeps_the_parts_and_widens_only_where_a_fold_is_left(mon
     real = fair.fair_clear
     calls = []
 
-    def planted(V, F, moved, A, h, hold=None, bend_limit=180.0, edges=None):
-        out = real(V, F, moved, A, h, hold, bend_limit, edges)
+    def planted(V, F, moved, A, h, hold=None, bend_limit=180.0, edges=None, ignore=None):
+        out = real(V, F, moved, A, h, hold, bend_limit, edges, ignore)
         calls.append(bend_limit)
         return (out[0], out[1], np.array([seed]), out[3]) if len(calls) == 1 else out
 

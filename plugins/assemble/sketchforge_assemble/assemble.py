@@ -532,7 +532,7 @@ def _fair(V, F, face_layer, face_kind, seam, ends, sheets, in_att, p, cache, tim
     h_med = float(np.median([s.h for s in sheets]))
     limbs = [(a.upper, sheets[a.lower].polygon(), sheets[a.upper].h) for a in attachments]
 
-    def faired(V=V, A=A, reach=reach, wide=wide, held=held):
+    def faired(V=V, A=A, reach=reach, wide=wide, held=held, ignore=None):
         t1 = time.perf_counter()
         # The narrow zone, held softly. Where it leaves a fold, the junctions near the fold get
         # the wide zone (unheld), the others keep the narrow one: widening every junction for
@@ -549,13 +549,13 @@ def _fair(V, F, face_layer, face_kind, seam, ends, sheets, in_att, p, cache, tim
 
         hold = np.maximum(hold, limb(narrow))
         edges = interior_edges(F)
-        V2, clear, bent, _ = fair_clear(V, F, narrow, A, h_med, hold, MAX_BEND, edges)
+        V2, clear, bent, _ = fair_clear(V, F, narrow, A, h_med, hold, MAX_BEND, edges, ignore)
         zone, left = "narrow", bent
         if clear and len(bent):
             near_seam = seam[ring_region(A, bent, 2 * rings)[seam]]
             local = wide_zone(A, near_seam, rings) & ~held if len(near_seam) else np.zeros(len(V), bool)
             if local.any():
-                V3, clear3, bent3, _ = fair_clear(V, F, narrow | local, A, h_med, hold, MAX_BEND, edges)
+                V3, clear3, bent3, _ = fair_clear(V, F, narrow | local, A, h_med, hold, MAX_BEND, edges, ignore)
                 if clear3:
                     V2, zone, left = V3, "narrow+wide", bent3
                 if clear3 and len(bent3):
@@ -563,12 +563,12 @@ def _fair(V, F, face_layer, face_kind, seam, ends, sheets, in_att, p, cache, tim
                     # the limb keeps its thickness (the toucan's head over the body's rim)
                     loose = ring_region(A, bent3, FOLD_RINGS) & local
                     hold4 = np.where(loose, 0.0, hold)
-                    V4, clear4, bent4, _ = fair_clear(V, F, narrow | local, A, h_med, hold4, MAX_BEND, edges)
+                    V4, clear4, bent4, _ = fair_clear(V, F, narrow | local, A, h_med, hold4, MAX_BEND, edges, ignore)
                     if clear4 and len(bent4) < len(bent3):
                         V2, left, hold = V4, bent4, hold4
-                    V2, left = _relieve_folds(V, F, A, V2, left, narrow | local, hold, limb, held, h_med, edges)
+                    V2, left = _relieve_folds(V, F, A, V2, left, narrow | local, hold, limb, held, h_med, edges, ignore)
         if not clear:
-            V2, clear, _, _ = fair_clear(V, F, wide & ~held, A, h_med)
+            V2, clear, _, _ = fair_clear(V, F, wide & ~held, A, h_med, ignore=ignore)
             zone = "wide"
         timings["fair"] = time.perf_counter() - t1
         return V2, clear, zone, left
@@ -579,7 +579,8 @@ def _fair(V, F, face_layer, face_kind, seam, ends, sheets, in_att, p, cache, tim
         # (fair.reseat); kept when that leaves fewer folded vertices and crosses nothing.
         V2, clear, zone, left = faired()
         if held.any() and clear and len(left) and (ring_region(A, left, FOLD_RINGS) & held).any():
-            V3, clear3, zone3, left3 = faired(held=np.zeros(len(V), bool))
+            rested = np.isin(face_layer, [k for k, below, above in rests if below.any() or above.any()])
+            V3, clear3, zone3, left3 = faired(held=np.zeros(len(V), bool), ignore=rested)
             V3 = reseat(V, V3, F, face_layer, rests) if clear3 and len(left3) < len(left) else None
             if V3 is not None:
                 return V3, clear3, zone3
@@ -598,7 +599,7 @@ def _fair(V, F, face_layer, face_kind, seam, ends, sheets, in_att, p, cache, tim
 RELIEF_RINGS = (2, 3)
 
 
-def _relieve_folds(V, F, A, V2, bent, zone, hold, limb, held, h, edges):
+def _relieve_folds(V, F, A, V2, bent, zone, hold, limb, held, h, edges, ignore=None):
     """(V, bent): the faired mesh ``V2`` (from the stitched ``V``), with the folds it
     still has (``bent``: the vertices of edges over :data:`MAX_BEND`) faired again in widening
     rings around them, without the zone's soft hold there but with the limbs'
@@ -619,7 +620,7 @@ def _relieve_folds(V, F, A, V2, bent, zone, hold, limb, held, h, edges):
             break
         loose = ring_region(A, bent, FOLD_RINGS * k) & ~held
         hold_k = np.where(loose, limb(loose), hold)
-        Vk, clear, bent_k, _ = fair_clear(V, F, zone | loose, A, h, hold_k, MAX_BEND, edges)
+        Vk, clear, bent_k, _ = fair_clear(V, F, zone | loose, A, h, hold_k, MAX_BEND, edges, ignore)
         if not clear or len(bent_k) >= len(bent):
             continue
         # fewer folded edges, and none sharper than before (a round that cleared two folds

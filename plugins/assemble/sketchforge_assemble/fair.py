@@ -417,11 +417,14 @@ def fairing_is_safe(V: np.ndarray, F: np.ndarray, moved: np.ndarray, h: float) -
     return len(intersecting_pairs(V, F, among=touched)) == 0
 
 
-def fairing_faults(V: np.ndarray, F: np.ndarray, moved: np.ndarray, h: float) -> np.ndarray:
+def fairing_faults(V: np.ndarray, F: np.ndarray, moved: np.ndarray, h: float,
+                   ignore: np.ndarray | None = None) -> np.ndarray:
     """(k,) int64: the vertices of the triangles that make the faired mesh V (n, 3), F (m, 3)
     unfit to hand out (:func:`fairing_is_safe`): those with a moved vertex (``moved`` (n,)
     bool) and an area below 1e-6 h², and both triangles of every crossing pair among the
-    triangles with a moved vertex. Empty when it is fit."""
+    triangles with a moved vertex; a pair with a triangle in ``ignore`` ((m,) bool, optional: a
+    free part that :func:`reseat` moves and checks afterwards) does not count. Empty when it is
+    fit."""
     touched = np.flatnonzero(moved[F].any(axis=1))
     T = V[F[touched]]
     area = 0.5 * np.linalg.norm(np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0]), axis=1)
@@ -429,11 +432,13 @@ def fairing_faults(V: np.ndarray, F: np.ndarray, moved: np.ndarray, h: float) ->
     # In one thread: the split of intersecting_pairs saves wall time but costs CPU, and the
     # assembly's target is CPU time (issue 34: 0.3 s for a 12-part, 16k-vertex creature).
     pairs = intersecting_pairs(V, F, among=touched, split=False)
+    if ignore is not None and len(pairs):
+        pairs = pairs[~ignore[pairs].any(axis=1)]
     return np.unique(F[np.r_[bad, pairs.ravel()]].ravel())
 
 
 def _part_way(V: np.ndarray, V2: np.ndarray, full: np.ndarray, F: np.ndarray, kept: np.ndarray,
-              h: float) -> np.ndarray:
+              h: float, ignore: np.ndarray | None = None) -> np.ndarray:
     """(n, 3) float64: ``V2`` with the kept-back vertices (``kept`` (n,) bool, at their solved
     place ``V``) moved part of the way to where the whole fairing put them (``full``), the
     largest share of :data:`KEPT_SHARES` that crosses nothing; ``V2`` when none is clear.
@@ -446,7 +451,7 @@ def _part_way(V: np.ndarray, V2: np.ndarray, full: np.ndarray, F: np.ndarray, ke
     for share in KEPT_SHARES:
         Vt = V2.copy()
         Vt[kept] = V[kept] + share * (full[kept] - V[kept])
-        if len(fairing_faults(Vt, F, kept, h)) == 0:
+        if len(fairing_faults(Vt, F, kept, h, ignore)) == 0:
             return Vt
     return V2
 
@@ -498,7 +503,8 @@ def bent_vertices(V: np.ndarray, F: np.ndarray, moved: np.ndarray, A: sp.csr_mat
 
 
 def fair_clear(V: np.ndarray, F: np.ndarray, moved: np.ndarray, A: sp.csr_matrix, h: float,
-               hold: np.ndarray | None = None, bend_limit: float = 180.0, edges=None):
+               hold: np.ndarray | None = None, bend_limit: float = 180.0, edges=None,
+               ignore: np.ndarray | None = None):
     """(V2, clear, bent, kept back): :func:`fair_seams` of ``moved``, where it crosses itself
     again with the crossing's rings kept where they were, up to :data:`CLEAR_ROUNDS` times.
 
@@ -519,10 +525,10 @@ def fair_clear(V: np.ndarray, F: np.ndarray, moved: np.ndarray, A: sp.csr_matrix
         now = moved & ~kept
         V2 = fair_seams(V, F, now, A, hold=hold)
         first = V2 if first is None else first
-        faults = fairing_faults(V2, F, now, h)
+        faults = fairing_faults(V2, F, now, h, ignore)
         if len(faults) == 0:
             if kept.any():
-                V2 = _part_way(V, V2, first, F, kept, h)
+                V2 = _part_way(V, V2, first, F, kept, h, ignore)
             bent = bent_vertices(V2, F, now, A, bend_limit, edges) if bend_limit < 180.0 else np.zeros(0, np.int64)
             return V2, True, bent, kept
         grow = ring_region(A, faults, CLEAR_RINGS) & moved
