@@ -564,7 +564,7 @@ def _fair(V, F, face_layer, face_kind, seam, ends, sheets, in_att, p, cache, tim
                     loose = ring_region(A, bent3, FOLD_RINGS) & local
                     hold4 = np.where(loose, 0.0, hold)
                     V4, clear4, bent4, _ = fair_clear(V, F, narrow | local, A, h_med, hold4, MAX_BEND, edges, ignore)
-                    if clear4 and len(bent4) < len(bent3):
+                    if clear4 and _gentler(V4, bent4, V3, bent3, F, narrow | local, A):
                         V2, left, hold = V4, bent4, hold4
                     V2, left = _relieve_folds(V, F, A, V2, left, narrow | local, hold, limb, held, h_med, edges, ignore)
         if not clear:
@@ -594,6 +594,17 @@ def _fair(V, F, face_layer, face_kind, seam, ends, sheets, in_att, p, cache, tim
     return V.copy(), bool(safe), zone  # the cached array stays as it was, whatever the caller does
 
 
+def _gentler(Va, bent_a, Vb, bent_b, F, zone, A) -> bool:
+    """Whether the faired mesh ``Va`` (with ``bent_a`` the vertices of its edges over
+    :data:`MAX_BEND`) is better than ``Vb`` (``bent_b``) over the edges the (n,) bool ``zone``
+    reaches: no more folded vertices, no sharper bend, and one of the two fewer or gentler
+    (fewer folded vertices alone let a round through that sharpened a fold to 169 degrees)."""
+    if len(bent_a) > len(bent_b):
+        return False
+    a, b = largest_bend(Va, F, zone, A), largest_bend(Vb, F, zone, A)
+    return a <= b and (len(bent_a) < len(bent_b) or a < b)
+
+
 #: Rounds of :func:`_relieve_folds`, and the rings around a fold each one frees, as multiples of
 #: :data:`FOLD_RINGS`.
 RELIEF_RINGS = (2, 3)
@@ -621,11 +632,7 @@ def _relieve_folds(V, F, A, V2, bent, zone, hold, limb, held, h, edges, ignore=N
         loose = ring_region(A, bent, FOLD_RINGS * k) & ~held
         hold_k = np.where(loose, limb(loose), hold)
         Vk, clear, bent_k, _ = fair_clear(V, F, zone | loose, A, h, hold_k, MAX_BEND, edges, ignore)
-        if not clear or len(bent_k) >= len(bent):
-            continue
-        # fewer folded edges, and none sharper than before (a round that cleared two folds
-        # and sharpened a third to 169 degrees is not better)
-        if largest_bend(Vk, F, zone | loose, A) <= largest_bend(V2, F, zone | loose, A):
+        if clear and _gentler(Vk, bent_k, V2, bent, F, zone | loose, A):
             V2, bent, zone, hold = Vk, bent_k, zone | loose, hold_k
     return V2, bent
 

@@ -515,8 +515,8 @@ def fair_clear(V: np.ndarray, F: np.ndarray, moved: np.ndarray, A: sp.csr_matrix
     handed out with plain folds; the rest of the junction is still faired, and the rings kept
     back go part of the way where that is clear (:func:`_part_way`). ``edges``:
     :func:`interior_edges` of F, if made. ``clear``: no
-    crossing or flat triangle left; ``bent``: (k,) int64 the vertices of the edges the moved
-    vertices reach that bend by more than ``bend_limit`` degrees; ``kept back``: (n,) bool,
+    crossing or flat triangle left; ``bent``: (k,) int64 the vertices of the edges the vertices
+    of ``moved`` (kept back or not) reach that bend by more than ``bend_limit`` degrees; ``kept back``: (n,) bool,
     the vertices held back.
     """
     kept = np.zeros(len(V), bool)
@@ -529,7 +529,9 @@ def fair_clear(V: np.ndarray, F: np.ndarray, moved: np.ndarray, A: sp.csr_matrix
         if len(faults) == 0:
             if kept.any():
                 V2 = _part_way(V, V2, first, F, kept, h, ignore)
-            bent = bent_vertices(V2, F, now, A, bend_limit, edges) if bend_limit < 180.0 else np.zeros(0, np.int64)
+            # over every vertex asked to move, the kept-back rings too: a fold left there is a
+            # fold (seed 15's 106 degrees went unseen when only the moved ones were looked at)
+            bent = bent_vertices(V2, F, moved, A, bend_limit, edges) if bend_limit < 180.0 else np.zeros(0, np.int64)
             return V2, True, bent, kept
         grow = ring_region(A, faults, CLEAR_RINGS) & moved
         if not (grow & ~kept).any():
