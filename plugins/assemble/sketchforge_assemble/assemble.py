@@ -523,7 +523,8 @@ def _fair(V, F, face_layer, face_kind, seam, ends, sheets, in_att, p, cache, tim
     A, reach = seam_zone(F, len(V), seam, ends, rings)
     wide = wide_zone(A, seam, rings)
     # A free part resting on a face near a junction keeps the face under it as it was solved
-    # (fairing it away would leave the part floating, or sunk into it).
+    # (fairing it away would leave the part floating, or sunk into it), unless faired with the
+    # part moved along leaves fewer folds (faired_reseated below).
     rests = [(k, *supports(V, F, face_layer, face_kind, k, sheets[k].polygon().buffer(sheets[k].h), wide,
                            by_side=True)) for k in sorted(set(range(len(sheets))) - in_att)]
     held = np.zeros(len(V), bool)
@@ -615,14 +616,15 @@ def _relieve_folds(V, F, A, V2, bent, zone, hold, limb, held, h, edges, ignore=N
     still has (``bent``: the vertices of edges over :data:`MAX_BEND`) faired again in widening
     rings around them, without the zone's soft hold there but with the limbs'
     (:func:`.fair.limb_hold`; ``limb(mask)`` gives its (n,) weights over a (n,) bool mask):
-    each round is kept only when it is clear (no crossing, no flat triangle) and leaves fewer
-    bent vertices, none sharper; with the bent vertices it still has.
+    each round is kept only when it is clear (no crossing, no flat triangle) and gentler
+    (:func:`_gentler`); with the bent vertices it still has.
 
     Why. The wide zone of the junctions near a fold smooths most folds; what it leaves is a
     part's rim band turning by over 90 degrees next to a junction's end (a snout's back, a
-    head's slit end), held by the soft pull towards the solved surface. Freed in 6 rings around
-    it, then 12 and 18, 10 of 16 folded creatures of the benchmark's 60 lost every fold; with
-    the limbs unheld there too, tails thinned to 0.44 of mid-tail, so their hold stays.
+    head's slit end), held by the soft pull towards the solved surface. Freed in 12, then 18
+    rings around it (after the wide pass's 6 unheld rings), 10 of 16 folded creatures of the
+    benchmark's 60 lost every fold; with the limbs unheld there too, tails thinned to 0.44 of
+    mid-tail, so their hold stays.
     V (n, 3), F (m, 3), A the vertex adjacency, zone and held (n,) bool, hold (n,) float64,
     h the layers' edge length, edges :func:`.fair.interior_edges` of F.
     """
