@@ -65,7 +65,8 @@ def measure(seed: int):
         part, host, hp = region(meshes[a.upper]), region(meshes[a.lower]), guard_h(meshes[a.upper])
         ratio = mc.limb_depth_ratio(V, F, r.face_layer, r.face_kind, a.upper, part, host, hp)
         if np.isfinite(ratio):
-            ratios.append((ratio, names[a.upper], own_ratio(meshes[a.upper], part, host, hp)))
+            ratios.append((ratio, names[a.upper],
+                           mc.own_layer_depth_ratio(meshes[a.upper].V, meshes[a.upper].F, part, host, hp)))
     return {
         "seed": seed, "ok": True, "parts": parts, "glued": len(r.attachments), "free": len(r.warnings),
         "notes": len(r.notes), "components": mc.components(F, len(V)),
@@ -80,21 +81,8 @@ def measure(seed: int):
     }
 
 
-def own_ratio(mesh, part, host, h: float) -> float:
-    """The same ratio as ``mesh_checks.limb_depth_ratio``, of the part's own inflated layer
-    alone (its front and its mirror image as the back): below 0.8 where the part is drawn
-    narrower where it leaves its host, whatever the assembly does."""
-    n = len(mesh.V)
-    back = mesh.V * np.array([1.0, 1.0, -1.0])
-    Fb = mesh.F[:, ::-1] + n
-    kind = np.r_[np.zeros(len(mesh.F), np.int64), np.ones(len(mesh.F), np.int64)]
-    return mc.limb_depth_ratio(np.r_[mesh.V, back], np.r_[mesh.F, Fb], np.zeros(2 * len(mesh.F), np.int64), kind,
-                               0, part, host, h)
-
-
 def guard_h(mesh) -> float:
-    E = mesh.F[:, [0, 1]]
-    return float(np.median(np.linalg.norm(mesh.V[E[:, 0], :2] - mesh.V[E[:, 1], :2], axis=1)))
+    return mc.edge_length(mesh.V, mesh.F)
 
 
 def speed(seed: int = 0, resolution: float = 0.026, repeats: int = 5) -> None:

@@ -182,3 +182,18 @@ def limb_depth_ratio(V, F, face_layer, face_kind, layer: int, part_region, host_
     if not near.any() or not mid.any():
         return float("nan")
     return float(t[near].max() / t[mid].max())
+
+
+def own_layer_depth_ratio(V: np.ndarray, F: np.ndarray, part_region, host_region, h: float) -> float:
+    """:func:`limb_depth_ratio` of a layer's own front surface V (n, 3), F (m, 3) alone, with
+    its mirror image as the back: what the part's drawing gives, whatever the assembly does
+    (under 0.8 where the part is drawn narrower where it leaves its host)."""
+    m = len(F)
+    kind = np.r_[np.zeros(m, np.int64), np.ones(m, np.int64)]
+    return limb_depth_ratio(np.r_[V, V * np.array([1.0, 1.0, -1.0])], np.r_[F, F[:, ::-1] + len(V)],
+                            np.zeros(2 * m, np.int64), kind, 0, part_region, host_region, h)
+
+
+def edge_length(V: np.ndarray, F: np.ndarray) -> float:
+    """Median length in the drawing plane of the first edge of every triangle F (m, 3) of V (n, 3)."""
+    return float(np.median(np.linalg.norm(V[F[:, 0], :2] - V[F[:, 1], :2], axis=1)))

@@ -73,16 +73,12 @@ def _limb_ratios(meshes, res):
     out = {}
     for a in res.attachments:
         m = meshes[a.upper]
-        h = float(np.median(np.linalg.norm(m.V[m.F[:, 0], :2] - m.V[m.F[:, 1], :2], axis=1)))
+        h = mc.edge_length(m.V, m.F)
         part = guard.polygon(m.V[m.boundary, :2], "p")
         host = guard.polygon(meshes[a.lower].V[meshes[a.lower].boundary, :2], "h")
         r = mc.limb_depth_ratio(V, F, res.face_layer, res.face_kind, a.upper, part, host, h)
         if np.isfinite(r):
-            # the layer alone: its front and its mirror image as the back
-            n = len(m.V)
-            own = mc.limb_depth_ratio(np.r_[m.V, m.V * [1, 1, -1]], np.r_[m.F, m.F[:, ::-1] + n],
-                                      np.zeros(2 * len(m.F), np.int64),
-                                      np.r_[np.zeros(len(m.F), np.int64), np.ones(len(m.F), np.int64)], 0, part, host, h)
+            own = mc.own_layer_depth_ratio(m.V, m.F, part, host, h)
             out[a.upper] = (r, own)
     return out
 
@@ -130,7 +126,7 @@ def test_a_fold_the_wide_fairing_leaves_is_relieved(seed):
     # rings kept back from a crossing, where the fairing did not look for folds: now it does.
     layers, meshes, closed, names, res = _assembled(seed)
     V, F = res.mesh.V, res.mesh.F
-    h = float(np.median([np.median(np.linalg.norm(m.V[m.F[:, 0], :2] - m.V[m.F[:, 1], :2], axis=1)) for m in meshes]))
+    h = float(np.median([mc.edge_length(m.V, m.F) for m in meshes]))
     ang = mc.junction_angles(V, F, res.face_layer, 8 * h)
     assert ang.max() <= 90.0 and np.mean(ang <= 45) >= 0.999, (ang.max(), np.mean(ang <= 45))
     assert mc.self_intersections(V, F) == 0
@@ -146,7 +142,7 @@ def test_an_eye_beside_a_snouts_junction_moves_with_the_faired_head(seed):
     # (fair._part_way): no fold left, the eye neither sinks in nor floats off.
     layers, meshes, closed, names, res = _assembled(seed)
     V, F = res.mesh.V, res.mesh.F
-    h = float(np.median([np.median(np.linalg.norm(m.V[m.F[:, 0], :2] - m.V[m.F[:, 1], :2], axis=1)) for m in meshes]))
+    h = float(np.median([mc.edge_length(m.V, m.F) for m in meshes]))
     assert mc.junction_angles(V, F, res.face_layer, 8 * h).max() <= 90.0
     assert mc.self_intersections(V, F) == 0 and mc.boundary_edges(F) == 0
     eyes = [k for k, layer in enumerate(layers) if layer.name in ("eye", "eye far")]

@@ -281,7 +281,7 @@ def reseat(V: np.ndarray, V2: np.ndarray, F: np.ndarray, face_layer: np.ndarray,
     for part, below, above in rests:
         if not (below.any() or above.any()):
             continue
-        dz = V2[:, 2] - V[:, 2]
+        dz = V2[:, 2] - V[:, 2]  # again per part: a free part may rest on one moved before it
         up = float(dz[below].max()) if below.any() else -np.inf
         down = float(dz[above].min()) if above.any() else np.inf
         if up > down:
