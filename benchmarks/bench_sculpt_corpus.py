@@ -201,7 +201,7 @@ def _accumulated_drift(shape, mesh, rng, light, solver):
         if e is None:
             continue
         try:
-            new = sculpt(mesh, light, e.pick, e.band, e.stroke, solver=solver).mesh
+            new = sculpt(mesh, light, e.pick, e.band, e.stroke, solver=solver, reference=fresh).mesh
         except SketchforgeError:
             continue
         largest.append(float(np.abs(new.V[:, 2] - mesh.V[:, 2]).max() / mesh.V[:, 2].max()))

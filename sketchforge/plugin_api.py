@@ -20,7 +20,9 @@ API* lists every name below. In short:
 - **Sculpt edits survive re-inflation**: an edit appends its journal dict to
   ``Layer.edits`` and implements the classmethod ``reapply(doc, layer, entry) -> Layer``;
   :func:`inflate_layer` / :func:`reapply_edits` call it when the outline or the inflation
-  parameters change. A brush that leaves ``edits`` alone loses its edit on the next
+  parameters change. :func:`inflated` gives the layer as inflated, before any edit (kept per
+  document: a brush that bounds its change relative to the fresh layer pays no inflation). A
+  brush that leaves ``edits`` alone loses its edit on the next
   ``set_inflate_params``. It also implements ``transform_edit(entry, matrix, scale) -> dict``
   (positions through :func:`transform_points`), so that the edit follows its layer when the
   layer is moved, scaled or rotated; without it such a transform is refused
@@ -67,6 +69,7 @@ from sketchforge.document.commands import (
     MacroCommand,
     ReplaceLayerCommand,
     inflate_layer,
+    inflated,
     new_gesture_id,
     parse_field,
     parse_params,
@@ -223,6 +226,7 @@ __all__ = sorted(
         "Mesh",
         "AssembledMesh",
         "inflate_layer",
+        "inflated",
         "reapply_edits",
         "new_gesture_id",
         "parse_field",

@@ -184,6 +184,31 @@ def test_a_strips_edit_through_the_command_replays_bit_identically(make_sketchfo
     assert replayed.layer("a").edits == doc.layer("a").edits
 
 
+def test_an_edit_in_the_document_bounds_its_creases_by_the_layer_as_inflated(make_sketchforge_host,
+                                                                          make_sketchforge_document, assert_replays):
+    """Issue 36: an edit's crease bounds are relative to the layer before any edit, which the
+    document finds again (kept from its inflation, or inflated again on a replay) bit for bit."""
+    from sketchforge.plugin_api import LAMBERTIAN
+    from sketchforge.plugin_api import inflated as fresh_of
+    from sketchforge_isophote_tool.creases import CREASE_MAX, crease_bounds
+
+    host = make_sketchforge_host(installed=("inflate", "isophote_tool", "strips"))
+    doc = make_sketchforge_document(host, resolution=0.06)
+    first = doc.layer("a").mesh
+    for offset in (0.12, -0.08):
+        stroke, _, _ = isophote_stroke(doc.layer("a").mesh, PICK, offset=offset)
+        before = doc.layer("a").mesh
+        doc.execute({"command": "sculpt_isophote", "layer": "a", "pick": PICK, "band": 0.3,
+                     "stroke": np.asarray(stroke).tolist(), "solver": "strips"})
+    fresh = fresh_of(doc, doc.layer("a"))
+    assert fresh.identical(first)
+    crease, jump = crease_bounds(fresh, doc.light.direction, LAMBERTIAN)
+    assert 0.0 < crease < CREASE_MAX and np.isfinite(jump)  # a 0.06 ellipse: ~9° fresh
+    expected = sculpt(before, doc.light.direction, PICK, 0.3, stroke, solver=STRIPS, reference=fresh).mesh
+    assert doc.layer("a").mesh.identical(expected)
+    assert_replays(doc)
+
+
 @pytest.mark.parametrize("elevation", [45, 90])
 def test_a_tilted_light_lands_without_diverging(elevation):
     """A light above the drawing plane: the characteristic equations hold for any light

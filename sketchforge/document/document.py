@@ -24,6 +24,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from sketchforge.cache import LRUCache
 from sketchforge.document.commands import Command
 from sketchforge.document.events import Signal
 from sketchforge.document.layer import Layer, Light
@@ -42,6 +43,10 @@ def check_layer_count(doc) -> None:
     """LimitError when ``doc`` holds MAX_LAYERS layers already (before a layer is added)."""
     if len(doc.layers) >= MAX_LAYERS:
         raise LimitError(f"a document holds at most {MAX_LAYERS} layers; remove some before adding more")
+
+
+#: Bytes of fresh inflations a document keeps (a 46k-vertex layer's mesh is ~2 MB).
+INFLATIONS_BYTES = 64 << 20
 
 
 class Document:
@@ -64,6 +69,10 @@ class Document:
         self._assembled_revision = -1
         self._plugin_data: dict = {}
         self._assembly = SolverChoice()
+        #: The layers' fresh inflations by their inputs (:func:`~sketchforge.document.commands.
+        #: contours.inflated`): what a sculpt edit bounds its creases against, and an undone
+        #: contour or parameter change redone without inflating again.
+        self.inflations = LRUCache(max_bytes=INFLATIONS_BYTES, name="inflations")
 
         self.layer_inserted = Signal(int, Layer, name="layer_inserted")
         self.layer_removed = Signal(int, Layer, name="layer_removed")

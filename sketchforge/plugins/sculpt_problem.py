@@ -15,6 +15,7 @@ solver evaluates candidate heights exactly as the app will shade them.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -87,6 +88,14 @@ class SculptProblem:
         (:meth:`shading_change` asks each sample for its own value, :meth:`distance_to_stroke`
         is to the nearest stroke, :meth:`distance_after` the mean over every stroke's samples
         of the distance to its own isophote).
+    crease_bound : float
+        Degrees: the largest dihedral angle an edit should leave across an interior edge (both
+        ends 3 edge lengths or more from the rim) that has less now. The host makes it 2.4 times
+        the layer's largest as inflated, before any edit (at most 30), so that a chain of edits
+        stays within 2.5 times the fresh layer's creases; 30 when it does not know that layer.
+    jump_bound : float
+        Likewise for the jump of the vertex shading across such an edge (inf when the host does
+        not know the fresh layer).
     host_data : object
         The host's own data for the solvers it ships itself; other solvers must not use it.
     """
@@ -120,6 +129,8 @@ class SculptProblem:
     _distance_to_stroke: Callable = field(repr=False, default=None)
     host_data: Any = field(repr=False, default=None)
     parts: tuple = ()
+    crease_bound: float = 30.0
+    jump_bound: float = math.inf
     _sample_values: Any = field(repr=False, default=None)
 
     @property

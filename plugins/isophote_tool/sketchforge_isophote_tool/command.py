@@ -24,6 +24,8 @@ from sketchforge.plugin_api import (
     NothingToDoError,
     ReplaceLayerCommand,
     SculptError,
+    SketchforgeError,
+    inflated,
     parse_field,
     parse_params,
     parse_points,
@@ -91,6 +93,19 @@ def _transform_drawn(entry: dict, A: np.ndarray, scale: float, moved_only: bool)
     return e
 
 
+def _fresh(doc, layer: Layer):
+    """The layer as inflated, before any edit (the reference of the crease bounds an edit is
+    asked to keep, :mod:`.creases`), or None where it cannot be had (a host without an inflater,
+    a bare test host): the edit then keeps the fixed bound. Refused parameters or a failing
+    inflater are the next re-inflation's business, not this edit's."""
+    if getattr(getattr(doc, "host", None), "inflate", None) is None:
+        return None
+    try:
+        return inflated(doc, layer)
+    except SketchforgeError:
+        return None
+
+
 def _apply(doc, layer: Layer, pick, band, stroke, model_name: str, light=None, solver_name=None, params=None):
     from .pipeline import sculpt  # imports jax: only when an edit actually runs
 
@@ -99,7 +114,7 @@ def _apply(doc, layer: Layer, pick, band, stroke, model_name: str, light=None, s
     solver, provider = _solver(doc, solver_name)
     direction = doc.light.direction if light is None else np.asarray(light, dtype=np.float64)
     return sculpt(layer.mesh, direction, pick, band, stroke, _model(doc, model_name), solver=solver,
-                  params=params, provider=provider)
+                  params=params, provider=provider, reference=_fresh(doc, layer))
 
 
 def _with_solver_fields(d: dict, cmd) -> dict:
@@ -216,7 +231,8 @@ def _apply_many(doc, layer: Layer, edits: list, model_name: str, light=None, sol
     solver, provider = _solver(doc, solver_name)
     direction = doc.light.direction if light is None else np.asarray(light, dtype=np.float64)
     return sculpt_many(layer.mesh, direction, [(e["pick"], e["band"], e["stroke"]) for e in edits],
-                       _model(doc, model_name), solver=solver, params=params, provider=provider)
+                       _model(doc, model_name), solver=solver, params=params, provider=provider,
+                       reference=_fresh(doc, layer))
 
 
 def _parse_edit(d, i: int, cmd: str) -> dict:

@@ -31,6 +31,8 @@ import numpy as np
 import shapely
 import shapely.ops
 
+from .creases import face_normals, largest_creases
+
 SHAPES = ("blob", "star", "thin", "concave")
 KINDS = ("shift", "bump", "loop", "outside")
 
@@ -366,7 +368,8 @@ def run_edit(mesh, light, e: Edit, solver=None, params=None) -> Outcome:
     ld = layer_data(mesh, light, LAMBERTIAN)
     t, c = time.perf_counter(), time.process_time()
     try:
-        r = sculpt(mesh, light, e.pick, e.band, e.stroke, solver=solver, params=params)
+        # The corpus' layers are fresh: in the app the edit's crease reference is the layer itself.
+        r = sculpt(mesh, light, e.pick, e.band, e.stroke, solver=solver, params=params, reference=mesh)
     except SketchforgeError as exc:
         return Outcome(e.shape, e.kind, e.move, "refused", str(exc), np.nan, np.nan, np.nan, time.perf_counter() - t,
                        mesh.n_vertices, cpu=time.process_time() - c)
@@ -403,32 +406,6 @@ def refusal_reason(message: str) -> str:
 
 # --- chains of edits ----------------------------------------------------------------------------
 
-#: Edges this many edge lengths or more from the outline are "interior" for the crease measures
-#: (issue 36: the rim's own steepness is not a crease).
-INTERIOR_EDGES = 3.0
-
-
-def _interior_edges(pd) -> tuple[np.ndarray, np.ndarray]:
-    """Edges (e, 2) between two triangles, both ends ``INTERIOR_EDGES`` h or more from the
-    outline, and their two triangles (e, 2)."""
-    F = pd.F
-    m = len(F)
-    e = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
-    face = np.tile(np.arange(m), 3)
-    key = np.sort(e, axis=1)
-    order = np.lexsort((key[:, 1], key[:, 0]))
-    key, face = key[order], face[order]
-    twin = np.nonzero((key[1:] == key[:-1]).all(axis=1))[0]
-    edges, faces = key[twin], np.column_stack([face[twin], face[twin + 1]])
-    inner = (pd.d_rim[edges] >= INTERIOR_EDGES * pd.h).all(axis=1)
-    return edges[inner], faces[inner]
-
-
-def _face_normals(V: np.ndarray, F: np.ndarray) -> np.ndarray:
-    n = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
-    return n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
-
-
 def folded_faces(mesh) -> np.ndarray:
     """Triangles (m,) bool within the rim margin whose surface falls toward the inside: the
     height decreases along the direction away from the nearest point of the outline (a fold;
@@ -444,7 +421,7 @@ def folded_faces(mesh) -> np.ndarray:
     eps = 0.25 * pd.h
     gx = pd.rim_distance(C + [eps, 0.0]) - pd.rim_distance(C - [eps, 0.0])
     gy = pd.rim_distance(C + [0.0, eps]) - pd.rim_distance(C - [0.0, eps])
-    n = _face_normals(mesh.V, F)  # (nx, ny, nz): the height gradient is −(nx, ny) / nz
+    n = face_normals(mesh.V, F)  # (nx, ny, nz): the height gradient is −(nx, ny) / nz
     rising = -(n[:, 0] * gx + n[:, 1] * gy)
     # A sure inward direction only: at a medial point (two rims equally near) the gradient of
     # the distance vanishes and says nothing.
@@ -469,15 +446,8 @@ def chain_measures(fresh, edited, light) -> dict:
     from .layerdata import layer_data
 
     out = {}
-    for name, mesh in (("fresh", fresh), ("edited", edited)):
-        ld = layer_data(mesh, light, LAMBERTIAN)
-        edges, faces = _interior_edges(ld.planar)
-        n = _face_normals(mesh.V, ld.planar.F)
-        cos = np.clip(np.einsum("ij,ij->i", n[faces[:, 0]], n[faces[:, 1]]), -1.0, 1.0)
-        dihedral = float(np.degrees(np.arccos(cos)).max(initial=0.0))
-        jump = float(np.abs(ld.E[edges[:, 0]] - ld.E[edges[:, 1]]).max(initial=0.0))
-        suffix = "_fresh" if name == "fresh" else ""
-        out["dihedral" + suffix], out["jump" + suffix] = dihedral, jump
+    for suffix, mesh in (("_fresh", fresh), ("", edited)):
+        out["dihedral" + suffix], out["jump" + suffix] = largest_creases(layer_data(mesh, light, LAMBERTIAN))
     out["folds"] = int((folded_faces(edited) & ~folded_faces(fresh)).sum())
     return out
 
@@ -568,7 +538,8 @@ def run_pair(mesh, light, pair, solver=None, params=None) -> tuple[PairOutcome, 
         return out, out
     t = time.perf_counter()
     try:
-        r = sculpt_many(mesh, light, [(e.pick, e.band, e.stroke) for e in pair], solver=solver, params=params)
+        r = sculpt_many(mesh, light, [(e.pick, e.band, e.stroke) for e in pair], solver=solver, params=params,
+                        reference=mesh)
         _, after = _pair_distances(ld0, first, second, r.mesh.V[:, 2])
         joint = PairOutcome(first.shape, "ok", "", b0, after, np.array([p.fraction for p in r.parts]),
                             time.perf_counter() - t, 2)
@@ -581,7 +552,7 @@ def run_pair(mesh, light, pair, solver=None, params=None) -> tuple[PairOutcome, 
     try:
         for k, e in enumerate(pair):
             try:
-                res = sculpt(cur, light, e.pick, e.band, e.stroke, solver=solver, params=params)
+                res = sculpt(cur, light, e.pick, e.band, e.stroke, solver=solver, params=params, reference=mesh)
                 cur, applied, fr[k] = res.mesh, applied + 1, res.fraction
             except SketchforgeError:
                 continue

@@ -222,7 +222,7 @@ def joint_problem(ld, parts: list[SculptProblem], fractions: list[float]) -> Scu
         _slopes=first._slopes, _shading=first._shading, _shading_change=change, _distance_after=after,
         _locate=first._locate, _distance_to_stroke=to_stroke,
         host_data=HostData(ld, pieces, samples, B, rim_w, honoured),
-        parts=tuple(parts), _sample_values=values,
+        parts=tuple(parts), _sample_values=values, crease_bound=first.crease_bound, jump_bound=first.jump_bound,
     )
 
 
@@ -259,6 +259,7 @@ def sculpt_many(
     params: dict | None = None,
     never_worse: bool = True,
     provider: str | None = None,
+    reference: Mesh | None = None,
 ) -> JointSculptResult:
     """Redraw several isophotes of one layer in one solve (see the module docstring).
 
@@ -269,7 +270,7 @@ def sculpt_many(
         Unit direction towards the light (z >= 0).
     edits : sequence of (pick (2,), band float, stroke (k, 2))
         One per isophote, in order (messages number them from 1).
-    model, solver, params, never_worse, provider
+    model, solver, params, never_worse, provider, reference
         As for :func:`.pipeline.sculpt`.
 
     Raises
@@ -292,7 +293,7 @@ def sculpt_many(
         raise SculptError(one_at_a_time(solver.name, len(edits)))
     if len(edits) == 1:
         pick, band, stroke = edits[0]
-        r = sculpt(mesh, light, pick, band, stroke, model, solver, params, never_worse, provider)
+        r = sculpt(mesh, light, pick, band, stroke, model, solver, params, never_worse, provider, reference)
         return JointSculptResult(r.mesh, r.changed, [r], dict(r.timings), r.solver, 1)
     full = solver_params(solver, params)
     light = np.asarray(light, np.float64).reshape(3)
@@ -307,7 +308,8 @@ def sculpt_many(
         except SculptError as exc:
             raise SculptError(f"stroke {i}: {exc}") from None
         prepared.append(e)
-        parts.append(build_problem(ld, e.c, pick, e.iso, e.band, e.in_band, e.radius, e.pieces, e.honoured, e.before))
+        parts.append(build_problem(ld, e.c, pick, e.iso, e.band, e.in_band, e.radius, e.pieces, e.honoured, e.before,
+                                   reference))
     check_contradictions(prepared)
     T["strokes"] = time.perf_counter() - t0
 

@@ -47,6 +47,7 @@ from sketchforge.plugin_api import (
     band_radius,
 )
 
+from .creases import crease_bounds
 from .fidelity import honoured_samples, isophote_lines, mean_distance
 from .isophote import band_around, picked_isophote
 from .layerdata import LayerData, layer_data, vertex_shading
@@ -277,8 +278,10 @@ def _moves_only_in_margin(pd, pieces: list[np.ndarray], iso, honoured: np.ndarra
 
 
 def build_problem(ld: LayerData, c: float, pick, iso, band_geom, in_band: np.ndarray, r: float, pieces: list,
-                  honoured: np.ndarray, before: float) -> SculptProblem:
-    """The :class:`SculptProblem` of an edit on layer ``ld`` (services bound to its data)."""
+                  honoured: np.ndarray, before: float, reference: Mesh | None = None) -> SculptProblem:
+    """The :class:`SculptProblem` of an edit on layer ``ld`` (services bound to its data; its
+    crease bounds relative to the layer as inflated, ``reference``, when given)."""
+    crease_bound, jump_bound = crease_bounds(reference, ld.light, ld.model)
     pd, h = ld.planar, ld.h
     samples = stroke_samples(pieces)
     ds_rim = pd.rim_distance(samples.P)
@@ -304,7 +307,7 @@ def build_problem(ld: LayerData, c: float, pick, iso, band_geom, in_band: np.nda
         rim_margin=np.minimum(pd.margin_v, pd.margin), outline=pd.outline, Q=pd.Q, before=before,
         _slopes=lambda: _slopes(ld), _shading=shading, _shading_change=change, _distance_after=after,
         _locate=lambda P: pd.locator.locate(P), _distance_to_stroke=lambda P, u: distance_to(pieces, P, h, u),
-        host_data=HostData(ld, pieces, samples, B, w_rim, honoured),
+        host_data=HostData(ld, pieces, samples, B, w_rim, honoured), crease_bound=crease_bound, jump_bound=jump_bound,
     )
 
 
@@ -415,6 +418,7 @@ def sculpt(
     params: dict | None = None,
     never_worse: bool = True,
     provider: str | None = None,
+    reference: Mesh | None = None,
 ) -> SculptResult:
     """Redraw the isophote through ``pick`` along ``stroke``; recompute the heights it affects.
 
@@ -440,6 +444,11 @@ def sculpt(
         Keep a partial edit, or refuse, rather than end farther from the stroke.
     provider : str or None
         The solver's plugin, for the message if it fails.
+    reference : Mesh or None
+        The layer as inflated, before any edit: the solver is asked to keep the creases it
+        leaves within a bound relative to that layer's (:func:`.creases.crease_bounds`), so a
+        chain of edits does not crease a finely meshed layer more than a coarse one. None: a
+        fixed bound of 30 degrees.
 
     Returns
     -------
@@ -473,7 +482,7 @@ def sculpt(
     e = _prepare(ld, pick, r, stroke)
     c, iso, band_geom, in_band, pieces, honoured, before = e.c, e.iso, e.band, e.in_band, e.pieces, e.honoured, e.before
     ignored, drawn, stroke_geom = e.ignored, e.drawn, e.stroke_geom
-    problem = build_problem(ld, c, pick, iso, band_geom, in_band, r, pieces, honoured, before)
+    problem = build_problem(ld, c, pick, iso, band_geom, in_band, r, pieces, honoured, before, reference)
     T["stroke"] = time.perf_counter() - t
 
     t = time.perf_counter()

@@ -21,7 +21,8 @@
    pass integrates, along the same strips, the shading still missing on B•* at the new
    surface (damped: the whole correction if it helps, else half, else a quarter).
 6. **Shape limit** — the change scaled down, as little as needed, so that no interior edge
-   creases beyond 30° (or what it had) and no triangle of the rim margin folds.
+   creases or jumps in shading beyond the host's bounds (2.4 times the layer's as inflated,
+   30° at most; or what it had) and no triangle of the rim margin folds.
 
 The host then bounds the change (at most 60% of the peak), clamps heights at 0, keeps the
 rim at 0, refuses non-finite values, and keeps the edit only if the isophote ends no farther
@@ -52,8 +53,8 @@ from .field import Raster
 from .reconstruct import rbf_weights
 from .regions import extend, flux_seeds, triangles_region
 
-#: Bumped when the same edit would give other heights.
-VERSION = "3"
+#: Bumped when the same edit would give other heights (4: crease bounds relative to the fresh layer).
+VERSION = "4"
 
 #: Parameters of ``strips``; lengths in edge lengths h.
 DEFAULT_PARAMS = {
@@ -386,9 +387,9 @@ def solve(problem: SculptProblem, params: dict) -> SculptSolution:
     # The strips follow the PDE without regard for the shape: beside a stroke drawn near the
     # rim margin or into the notch between two lobes, where the shading barely responds to
     # the slope, they ask for steep changes (a star's single edit: a 93° crease). The change is
-    # scaled down, as little as needed, so that no interior edge creases beyond CREASE_MAX
-    # degrees (or what it had) and no triangle of the margin that rose toward the inside
-    # falls; the host then keeps it only if the isophote ends closer.
+    # scaled down, as little as needed, so that no interior edge creases, or jumps in shading,
+    # beyond the host's bounds (or what it had) and no triangle of the margin that rose toward
+    # the inside falls; the host then keeps it only if the isophote ends closer.
     t = time.perf_counter()
     limit = _shape_limit(problem, dz)
     dz *= limit
@@ -463,11 +464,8 @@ class _Smoother:
         return x
 
 
-#: The largest dihedral angle (degrees) an edit may leave across an interior edge (both ends
-#: at least INTERIOR h from the rim) that had less: a fresh inflated layer's largest is ~15°
-#: (corpus median), and issue 36 asks that chains of edits stay within 2.5 times the fresh
-#: layer's.
-CREASE_MAX = 30.0
+#: Interior edges, for the crease bounds: both ends at least this many edge lengths from the rim
+#: (the host's bounds, :attr:`SculptProblem.crease_bound`, are measured on those).
 INTERIOR = 3.0
 #: Bisection steps for the scale of a change that creases or folds (a fixed count: the scale
 #: is then a fixed function of the change).
@@ -476,8 +474,11 @@ LIMIT_STEPS = 10
 
 def _shape_limit(problem: SculptProblem, dz: np.ndarray) -> float:
     """The largest scale f in [0, 1] (to 1/2^LIMIT_STEPS) such that z + f·dz creases no
-    interior edge beyond max(CREASE_MAX, its angle now) and folds no triangle of the rim margin
-    that rises toward the inside now (see :func:`solve`)."""
+    interior edge beyond max(problem.crease_bound, its angle now), makes no shading jump across
+    one beyond max(problem.jump_bound, its jump now), and folds no triangle of the rim margin
+    that rises toward the inside now (see :func:`solve`). The bounds are relative to the layer
+    as inflated (the host's): a fixed 30° let ten edits crease a finely meshed "C", whose fresh
+    edges meet at 10° at most, to 2.9 times that."""
     V2, F, h = problem.V[:, :2], problem.F, problem.h
     z = problem.z
     touched = np.abs(dz) > 0.0
@@ -494,6 +495,7 @@ def _shape_limit(problem: SculptProblem, dz: np.ndarray) -> float:
     twin = np.nonzero((key[1:] == key[:-1]).all(axis=1))[0]
     inner = (problem.d_rim[key[twin]] >= INTERIOR * h).all(axis=1)
     pairs = np.column_stack([owner[twin], owner[twin + 1]])[inner]
+    ends = key[twin][inner]
     # Triangles of the margin and their inward direction (the gradient of the rim distance).
     P = V2[Fs]
     e1, e2 = P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]
@@ -520,13 +522,29 @@ def _shape_limit(problem: SculptProblem, dz: np.ndarray) -> float:
         n = normals(zz)
         return np.degrees(np.arccos(np.clip(np.einsum("kd,kd->k", n[pairs[:, 0]], n[pairs[:, 1]]), -1.0, 1.0)))
 
-    allowed = np.maximum(angles(z), CREASE_MAX) + 1e-9
+    allowed = np.maximum(angles(z), problem.crease_bound) + 1e-9
+    bound_jumps = len(ends) > 0 and np.isfinite(problem.jump_bound)
+    jumps_now: list = []  # the jumps before the edit, evaluated only when a jump passes the bound
+
+    def jumps(zz):
+        E = problem.shading(zz)[0]
+        return np.abs(E[ends[:, 0]] - E[ends[:, 1]])
+
+    def calm(zz):
+        j = jumps(zz)
+        if np.all(j <= problem.jump_bound):
+            return True
+        if not jumps_now:
+            jumps_now.append(np.maximum(jumps(z), problem.jump_bound) + 1e-9)
+        return not np.any(j > jumps_now[0])
 
     def fine(f):
         zz = z + f * dz
         if len(pairs) and np.any(angles(zz) > allowed):
             return False
-        return not np.any(np.einsum("kd,kd->k", grad(zz), inward)[watch] <= 0.0)
+        if np.any(np.einsum("kd,kd->k", grad(zz), inward)[watch] <= 0.0):
+            return False
+        return not bound_jumps or calm(zz)
 
     if fine(1.0):
         return 1.0

@@ -53,6 +53,7 @@ from sketchforge.document.commands.contours import (
     SetContour,
     SetInflateParams,
     inflate_layer,
+    inflated,
     layer_inflater,
     reapply_edits,
 )
@@ -80,7 +81,7 @@ __all__ = [
     "AddLayer", "Command", "CommandRegistry", "DuplicateLayer", "MacroCommand", "MirrorLayer", "MoveLayer",
     "RemoveLayer", "RenameLayer", "ReplaceLayerCommand", "SetAssembly", "SetContour", "SetInflateParams",
     "SetLayerVisible", "SetLight", "TransformLayer", "TranslateLayer",
-    "attachment", "attachment_note", "attachments", "check_affine", "compose_affine", "host_of", "inflate_layer",
+    "attachment", "attachment_note", "attachments", "check_affine", "compose_affine", "host_of", "inflate_layer", "inflated",
     "layer_inflater", "mirror_axis_x", "new_gesture_id", "parse_field", "parse_params", "parse_points",
     "parse_vector", "reapply_edits", "rotate_about", "scale_about", "transform_points", "transformed_edits",
     "twin_source",

@@ -4,11 +4,13 @@ edits re-applied, which every command that changes a stroke uses."""
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass, field
 from typing import Any, ClassVar
 
 import numpy as np
 
+from sketchforge.cache import array_key
 from sketchforge.document.commands.base import ReplaceLayerCommand, parse_field, parse_params, parse_points
 from sketchforge.document.layer import Layer
 from sketchforge.errors import EditsDoNotApplyError, SketchforgeError, SolverError
@@ -40,13 +42,41 @@ def inflate_layer(doc, layer: Layer) -> Layer:
     layer = layer.evolve(solver=inflater.name, params=params)
     if layer.points is None:
         return layer.evolve(mesh=None, edits=())
-    mesh = doc.host.inflate(layer.points, layer.closed, params, holes=[np.asarray(h) for h in layer.holes],
-                            solver=inflater.name)
+    return reapply_edits(doc, layer.evolve(mesh=inflated(doc, layer, inflater, params), edits=()), layer.edits)
+
+
+def inflated(doc, layer: Layer, inflater=None, params=None):
+    """``layer``'s surface as its inflater makes it from its points, before any sculpt edit
+    (a Mesh; None for a layer without points). Kept in ``doc.inflations`` by its inputs
+    (points, holes, closed, the inflater and its complete parameters), so the inflation a
+    sculpt edit bounds its creases against (issue 36) is the one :func:`inflate_layer` made,
+    bit for bit, in this session or on a replay. ``inflater`` and ``params``: the layer's, from
+    :func:`layer_inflater` (found when not given).
+
+    Raises
+    ------
+    SketchforgeError
+        No inflater, refused parameters, or an inflation that fails or is not finite.
+    """
+    if layer.points is None:
+        return None
+    if inflater is None:
+        inflater, params = layer_inflater(doc, layer)
+    holes = [np.asarray(h, dtype=np.float64) for h in layer.holes]
+    key = (array_key(np.asarray(layer.points, dtype=np.float64), *holes), bool(layer.closed), inflater.name, id(inflater),
+           json.dumps(params, sort_keys=True, default=repr))
+    cache = getattr(doc, "inflations", None)
+    got = None if cache is None else cache.get(key)
+    if got is not None and got[0] is inflater:
+        return got[1]
+    mesh = doc.host.inflate(layer.points, layer.closed, params, holes=holes, solver=inflater.name)
     if mesh is None:
         raise SketchforgeError("no inflate plugin is installed, so a contour cannot become a mesh")
     if not np.all(np.isfinite(mesh.V)):
         raise SolverError(f"inflating layer {layer.id!r} produced non-finite heights; nothing was changed")
-    return reapply_edits(doc, layer.evolve(mesh=mesh, edits=()), layer.edits)
+    if cache is not None:
+        cache.put(key, (inflater, mesh))
+    return mesh
 
 
 def reapply_edits(doc, layer: Layer, edits) -> Layer:
