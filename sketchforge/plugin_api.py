@@ -160,6 +160,8 @@ _LAZY: dict[str, tuple[str, str | None]] = {
     "DirichletSolver": ("sketchforge.geometry.dirichlet", "DirichletSolver"),
     "gradient_operators": ("sketchforge.geometry.intensity", "gradient_operators"),
     "vertex_normals": ("sketchforge.geometry.normals", "vertex_normals"),
+    "interior_edges": ("sketchforge.geometry.mesh_edges", "interior_edges"),
+    "edge_angles": ("sketchforge.geometry.mesh_edges", "edge_angles"),
     "layer_normals": ("sketchforge.geometry.heightfield", "layer_normals"),
     "slopes_from_heights": ("sketchforge.geometry.heightfield", "slopes_from_heights"),
     "SlopeLinearisation": ("sketchforge.geometry.heightfield", "SlopeLinearisation"),

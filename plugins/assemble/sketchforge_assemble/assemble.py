@@ -18,7 +18,17 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.sparse.csgraph import connected_components
 
-from sketchforge.plugin_api import GeometryError, LimitError, Mesh, ParameterError, laplacian_and_mass, number, quote
+from sketchforge.plugin_api import (
+    GeometryError,
+    LimitError,
+    Mesh,
+    ParameterError,
+    edge_angles,
+    interior_edges,
+    laplacian_and_mass,
+    number,
+    quote,
+)
 
 from .attach import Attachment, find_attachments
 from .blend import blend_junctions
@@ -28,11 +38,9 @@ from .errors import AttachmentError, DepthOrderError
 from .fair import (
     LIMB_SEAM_RINGS,
     adjacency,
-    edge_angles,
     fair_clear,
     fairing_faults,
     hold_weights,
-    interior_edges,
     largest_bend,
     limb_hold,
     reseat,
@@ -607,7 +615,7 @@ CREASE_REACH = 8
 def _near_seams(A, seam, rings: int, edges):
     """The interior edges near the junctions, as (edges (k, 2), their triangles (k,), (k,)): both
     ends within ``rings`` edges of a seam vertex over the vertex adjacency A (``edges``:
-    :func:`.fair.interior_edges`)."""
+    :func:`interior_edges`)."""
     E, fa, fb = edges
     close = rings_from(A, np.unique(np.asarray(seam, np.int64).ravel()), rings) <= rings
     sel = close[E[:, 0]] & close[E[:, 1]]
@@ -618,7 +626,7 @@ def _fair_rings(V, F, face_layer, face_kind, seam, ends, sheets, in_att, rings, 
                 wider=None, more=None):
     """(V, safe, zone, folds left): :func:`_fair` with ``rings`` rings around the junctions'
     ends, ``more`` around those of the vertices ``wider`` ((n,) bool, optional) (``edges``:
-    :func:`.fair.interior_edges` of F, A its vertex adjacency)."""
+    :func:`interior_edges` of F, A its vertex adjacency)."""
     if wider is None:
         _, reach = seam_zone(F, len(V), seam, ends, rings, A)
         wide = wide_zone(A, seam, rings)
@@ -725,7 +733,7 @@ def _relieve_folds(V, F, A, V2, bent, zone, hold, limb, held, h, edges, ignore=N
     benchmark's 60 lost every fold; with the limbs unheld there too, tails thinned to 0.44 of
     mid-tail, so their hold stays.
     V (n, 3), F (m, 3), A the vertex adjacency, zone and held (n,) bool, hold (n,) float64,
-    h the layers' edge length, edges :func:`.fair.interior_edges` of F.
+    h the layers' edge length, edges :func:`interior_edges` of F.
     """
     for k in RELIEF_RINGS:
         if not len(bent):

@@ -260,19 +260,7 @@ def dihedral_angles(V: np.ndarray, F: np.ndarray) -> np.ndarray:
     0 where the two triangles are coplanar, 180 where the surface folds back onto itself (a
     sleeve ending in a wedge). Edges not shared by exactly two triangles are left out.
     """
-    n = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
-    n /= np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
-    D = directed_edges(F)
-    tri = np.repeat(np.arange(len(F)), 3)
-    key = np.sort(D, axis=1)
-    order = np.lexsort((key[:, 1], key[:, 0]))
-    k = key[order]
-    same = np.all(k[1:] == k[:-1], axis=1)
-    first = np.flatnonzero(same)
-    # an edge used by exactly two triangles: a run of length 2
-    ok = np.ones(len(first), bool)
-    ok &= (first + 2 >= len(k)) | ~np.r_[same, False][first + 1]
-    ok &= (first == 0) | ~np.r_[False, same][first]
-    a, b = tri[order[first[ok]]], tri[order[first[ok] + 1]]
-    c = np.clip(np.einsum("ij,ij->i", n[a], n[b]), -1.0, 1.0)
-    return np.degrees(np.arccos(c))
+    from sketchforge.plugin_api import edge_angles, interior_edges
+
+    _, fa, fb = interior_edges(F)
+    return edge_angles(V, F, fa, fb)

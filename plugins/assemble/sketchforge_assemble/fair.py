@@ -37,6 +37,8 @@ import shapely
 from scipy.sparse.csgraph import connected_components
 from scipy.sparse.linalg import splu
 
+from sketchforge.plugin_api import edge_angles, interior_edges
+
 from .diagnostics import intersecting_pairs
 from .sheet import directed_edges
 
@@ -467,26 +469,6 @@ CLEAR_ROUNDS = 4
 CLEAR_RINGS = 2
 
 
-def interior_edges(F: np.ndarray):
-    """(edges (e, 2) int64, face a (e,), face b (e,)): every edge of F (m, 3) shared by exactly
-    two triangles, with both (made once per assembled mesh: the fairing moves vertices, never
-    the triangles, so :func:`bent_vertices` reuses it)."""
-    D = F[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2)
-    lo, hi = np.minimum(D[:, 0], D[:, 1]), np.maximum(D[:, 0], D[:, 1])
-    n = int(F.max(initial=0)) + 1
-    code = lo * n + hi
-    # Not a stable sort: which of an edge's two triangles comes first does not matter (every
-    # use is an angle between the two), and the default sort takes half the time.
-    order = np.argsort(code)
-    c = code[order]
-    start = np.flatnonzero(np.r_[True, c[1:] != c[:-1]])
-    count = np.diff(np.r_[start, len(c)])
-    two = start[count == 2]
-    tri = np.repeat(np.arange(len(F)), 3)
-    first = order[two]
-    return np.column_stack([lo[first], hi[first]]), tri[first], tri[order[two + 1]]
-
-
 def bent_vertices(V: np.ndarray, F: np.ndarray, moved: np.ndarray, A: sp.csr_matrix, limit: float,
                   edges=None) -> np.ndarray:
     """(k,) int64: the vertices of the edges, within one ring of the moved vertices (``moved``
@@ -498,19 +480,6 @@ def bent_vertices(V: np.ndarray, F: np.ndarray, moved: np.ndarray, A: sp.csr_mat
     if not sel.any():
         return np.zeros(0, np.int64)
     return np.unique(E[sel][edge_angles(V, F, fa[sel], fb[sel]) > limit].ravel())
-
-
-def edge_angles(V: np.ndarray, F: np.ndarray, fa: np.ndarray, fb: np.ndarray) -> np.ndarray:
-    """Dihedral angles (k,) float64, in degrees, between the triangles fa[i] and fb[i] (k,) of
-    F (m, 3) in V (n, 3)."""
-
-    def normals(f):  # per occurrence: cheaper than finding the unique faces first
-        T = V[F[f]]
-        nrm = np.cross(T[:, 1] - T[:, 0], T[:, 2] - T[:, 0])
-        return nrm / np.maximum(np.linalg.norm(nrm, axis=1, keepdims=True), 1e-300)
-
-    cos = np.clip(np.einsum("ij,ij->i", normals(fa), normals(fb)), -1.0, 1.0)
-    return np.degrees(np.arccos(cos))
 
 
 def fair_clear(V: np.ndarray, F: np.ndarray, moved: np.ndarray, A: sp.csr_matrix, h: float,

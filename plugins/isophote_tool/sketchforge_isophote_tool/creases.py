@@ -15,7 +15,7 @@ import math
 
 import numpy as np
 
-from sketchforge.plugin_api import LRUCache, array_key
+from sketchforge.plugin_api import LRUCache, array_key, edge_angles, interior_edges
 
 #: Edges this many edge lengths or more from the outline are interior.
 INTERIOR_EDGES = 3.0
@@ -29,39 +29,24 @@ CREASE_MAX = 30.0
 _BOUNDS = LRUCache(64, name="crease bounds")
 
 
-def interior_edges(pd) -> tuple[np.ndarray, np.ndarray]:
+def interior_edges_of(pd) -> tuple[np.ndarray, np.ndarray]:
     """Interior edges (e, 2) int64 of a layer's planar data ``pd`` (the two triangles sharing
     each, both ends ``INTERIOR_EDGES``·h or more from the outline) and those triangles (e, 2)
     int64. Kept on ``pd``: the edges of a triangulation never change with its heights."""
     got = getattr(pd, "_interior_edges", None)
     if got is None:
-        F = pd.F
-        e = np.concatenate([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]])
-        face = np.tile(np.arange(len(F)), 3)
-        key = np.sort(e, axis=1)
-        order = np.lexsort((key[:, 1], key[:, 0]))
-        key, face = key[order], face[order]
-        twin = np.nonzero((key[1:] == key[:-1]).all(axis=1))[0]
-        edges, faces = key[twin], np.column_stack([face[twin], face[twin + 1]])
-        inner = (pd.d_rim[edges] >= INTERIOR_EDGES * pd.h).all(axis=1)
-        got = (edges[inner], faces[inner])
+        E, fa, fb = interior_edges(pd.F)
+        inner = (pd.d_rim[E] >= INTERIOR_EDGES * pd.h).all(axis=1)
+        got = (E[inner], np.column_stack([fa, fb])[inner])
         pd._interior_edges = got
     return got
-
-
-def face_normals(V: np.ndarray, F: np.ndarray) -> np.ndarray:
-    """Unit normals (m, 3) float64 of triangles F (m, 3) int64 of vertices V (n, 3)."""
-    n = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
-    return n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
 
 
 def largest_creases(ld) -> tuple[float, float]:
     """The largest dihedral angle (degrees) and the largest shading jump across an interior
     edge of a layer (its :class:`~sketchforge_isophote_tool.layerdata.LayerData` ``ld``)."""
-    edges, faces = interior_edges(ld.planar)
-    n = face_normals(ld.mesh.V, ld.planar.F)
-    cos = np.clip(np.einsum("ij,ij->i", n[faces[:, 0]], n[faces[:, 1]]), -1.0, 1.0)
-    dihedral = float(np.degrees(np.arccos(cos)).max(initial=0.0))
+    edges, faces = interior_edges_of(ld.planar)
+    dihedral = float(edge_angles(ld.mesh.V, ld.planar.F, faces[:, 0], faces[:, 1]).max(initial=0.0))
     jump = float(np.abs(ld.E[edges[:, 0]] - ld.E[edges[:, 1]]).max(initial=0.0))
     return dihedral, jump
 

@@ -45,6 +45,7 @@ from sketchforge.plugin_api import (
     SculptSolver,
     array_key,
     choice,
+    interior_edges,
     number,
     validate_params,
 )
@@ -487,15 +488,10 @@ def _shape_limit(problem: SculptProblem, dz: np.ndarray) -> float:
         return 1.0
     Fs = F[faces]
     # Interior edges among the touched triangles: pairs of triangles sharing an edge.
-    e = np.concatenate([Fs[:, [0, 1]], Fs[:, [1, 2]], Fs[:, [2, 0]]])
-    owner = np.tile(np.arange(len(Fs)), 3)
-    key = np.sort(e, axis=1)
-    order = np.lexsort((key[:, 1], key[:, 0]))
-    key, owner = key[order], owner[order]
-    twin = np.nonzero((key[1:] == key[:-1]).all(axis=1))[0]
-    inner = (problem.d_rim[key[twin]] >= INTERIOR * h).all(axis=1)
-    pairs = np.column_stack([owner[twin], owner[twin + 1]])[inner]
-    ends = key[twin][inner]
+    E, fa, fb = interior_edges(Fs)
+    inner = (problem.d_rim[E] >= INTERIOR * h).all(axis=1)
+    pairs = np.column_stack([fa, fb])[inner]
+    ends = E[inner]
     # Triangles of the margin and their inward direction (the gradient of the rim distance).
     P = V2[Fs]
     e1, e2 = P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]
