@@ -6,7 +6,7 @@ from sketchforge.plugin_api import MAX_COORDINATE, Inflater, declare_params, hoo
 from sketchforge_inflate.inflate import DEFAULT_PARAMS, inflate_stroke, validate_params
 
 #: Bumped when the same stroke and parameters would inflate differently.
-VERSION = "1"
+VERSION = "2"  # 2: narrow parts meshed finer (inflate.edge_length_for)
 
 
 def inflate(points, closed, params, holes):
@@ -21,7 +21,7 @@ FORM = {
     "smoothing": number("smoothing", 0.0, 1.0, hi_open=True),
 }
 HELP = {
-    "resolution": "Target triangle edge length, drawing units (smaller: finer, slower)",
+    "resolution": "Target triangle edge length, drawing units (smaller: finer, slower); parts narrower than 4 edges are meshed finer",
     "inflation": "Height scale: 1 turns a disk of radius R into a hemisphere of height R",
     "smoothing": "Fairing weight α in [0, 1): 0 keeps the inflation's steep rim, more rounds it",
 }
