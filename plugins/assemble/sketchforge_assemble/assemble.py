@@ -539,23 +539,23 @@ def _fair(V, F, face_layer, face_kind, seam, ends, sheets, in_att, p, cache, tim
     A = adjacency(F, len(V))
     h_med = float(np.median([s.h for s in sheets]))
 
-    more = max(rings + 1, int(round(WIDER_ENDS * rings)))
     _, comp = connected_components(A, directed=False)
 
-    def attempt(wider):
+    def attempt(levels):
         return _fair_rings(V0, F, face_layer, face_kind, seam, ends, sheets, in_att, rings, timings, attachments, edges, A,
-                           wider, more)
+                           levels)
 
     def fairest():
         # Where the fairing leaves a fold, or more edges near the junctions bent over
         # CREASE_BEND than issue 34 allows (CREASE_SHARE of those within CREASE_REACH rings of a
-        # seam), it is tried again with WIDER_ENDS times the rings around the junctions' ends;
-        # kept when it bends fewer edges there over both limits and crosses nothing. Measured on
-        # the benchmark's 60 creatures: 16 rings around every end left no creature with a fold
-        # and 10 of 60, not 22, under the 45-degree share, but took the 12-part creature from
-        # 0.27 to 0.31 s; this way only the creatures that need it pay. Decided and kept per
-        # group of attached parts (a connected component), so that an edit of one creature
-        # never refairs another beside it.
+        # seam), it is tried again with WIDER_ENDS times the rings around the junctions' ends,
+        # up to CREASE_TRIES times; each try is kept for a group when it bends fewer edges there
+        # over both limits and crosses nothing, and only the groups it bettered that still bend
+        # too many go on. Measured on the benchmark's 60 creatures: 16 rings around every end
+        # left no creature with a fold and 10 of 60, not 22, under the 45-degree share, but took
+        # the 12-part creature from 0.27 to 0.31 s; this way only the creatures that need it
+        # pay. Decided and kept per group of attached parts (a connected component), so that
+        # an edit of one creature never refairs another beside it.
         V1, safe1, zone1, left1 = attempt(None)
         if not safe1:
             return V1, safe1, zone1, rings
@@ -563,31 +563,43 @@ def _fair(V, F, face_layer, face_kind, seam, ends, sheets, in_att, p, cache, tim
         k = comp.max(initial=-1) + 1
         c_near = comp[near[0][:, 0]]
         total = np.bincount(c_near, minlength=k)
-        bend1 = edge_angles(V1, F, near[1], near[2])
-        n90 = np.bincount(c_near, bend1 > MAX_BEND, minlength=k)
-        n45 = np.bincount(c_near, bend1 > CREASE_BEND, minlength=k)
+
+        def counts(Vx):
+            bend = edge_angles(Vx, F, near[1], near[2])
+            return (np.bincount(c_near, bend > MAX_BEND, minlength=k),
+                    np.bincount(c_near, bend > CREASE_BEND, minlength=k))
+
+        n90, n45 = counts(V1)
         flag = n45 > CREASE_SHARE * total
         flag[comp[np.asarray(left1, np.int64)]] = True
-        if not flag.any():
-            return V1, safe1, zone1, rings
-        V2, safe2, zone2, _ = attempt(flag[comp])
-        if not safe2:
-            return V1, safe1, zone1, rings
-        bend2 = edge_angles(V2, F, near[1], near[2])
-        b90 = np.bincount(c_near, bend2 > MAX_BEND, minlength=k)
-        b45 = np.bincount(c_near, bend2 > CREASE_BEND, minlength=k)
-        better = flag & ((b90 < n90) | ((b90 == n90) & (b45 < n45)))
-        if not better.any():
-            return V1, safe1, zone1, rings
-        # A group faired wider where it bends less, and a part that moved with it (a free part
-        # resting on it, reseated); the other groups as they were (they come out the same).
-        take = better[comp] | (~flag[comp] & np.any(V1 != V2, axis=1))
-        Vm = np.where(take[:, None], V2, V1)
-        if not np.array_equal(Vm, V2):  # a group kept as it was beside one faired wider: still clear?
-            moved = np.any(Vm != V1, axis=1) | np.any(Vm != V2, axis=1)
-            if len(fairing_faults(Vm, F, moved, h_med)):
-                return V1, safe1, zone1, rings
-        return Vm, True, zone2, more
+        level = np.full(k, rings, np.int64)
+        Vc, zone_c = V1, zone1
+        for _ in range(CREASE_TRIES):
+            if not flag.any():
+                break
+            trial = level.copy()
+            trial[flag] = np.maximum(level[flag] + 1, np.round(WIDER_ENDS * level[flag]).astype(np.int64))
+            V2, safe2, zone2, _ = attempt(trial[comp])
+            if not safe2:
+                break
+            b90, b45 = counts(V2)
+            better = flag & ((b90 < n90) | ((b90 == n90) & (b45 < n45)))
+            if not better.any():
+                break
+            # A group faired wider where it bends less, and a part that moved with it (a free
+            # part resting on it, reseated); the other groups as they were (they come out the
+            # same: the same rings, the same solves).
+            take = better[comp] | (~flag[comp] & np.any(Vc != V2, axis=1))
+            Vm = np.where(take[:, None], V2, Vc)
+            if not np.array_equal(Vm, V2):  # a group kept as it was beside one faired wider: still clear?
+                moved = np.any(Vm != Vc, axis=1) | np.any(Vm != V2, axis=1)
+                if len(fairing_faults(Vm, F, moved, h_med)):
+                    break
+            Vc, zone_c = Vm, zone2
+            level[better] = trial[better]
+            n90, n45 = np.where(better, b90, n90), np.where(better, b45, n45)
+            flag = better & ((n45 > CREASE_SHARE * total) | (n90 > 0))
+        return Vc, True, zone_c, int(level.max(initial=rings))
 
     # Through the cache by the stitched mesh itself: an undo, or an edit that leaves every
     # junction's rings as they were, skips the fairing's solves and checks.
@@ -605,8 +617,10 @@ def _fair(V, F, face_layer, face_kind, seam, ends, sheets, in_att, p, cache, tim
 CREASE_SHARE = 0.0005
 #: A junction's edges should bend by at most this many degrees (issue 34).
 CREASE_BEND = 45.0
-#: The rings around the junctions' ends of the second try, as a multiple of the first's.
+#: The rings around the junctions' ends of each further try, as a multiple of the try before.
 WIDER_ENDS = 4.0 / 3.0
+#: Tries after the first (12, 16, 21 rings at the default).
+CREASE_TRIES = 2
 #: "Near a junction" for that share: within this many rings of a seam (the creature benchmark
 #: counts the edges within 8 edge lengths, in 3D).
 CREASE_REACH = 8
@@ -623,18 +637,19 @@ def _near_seams(A, seam, rings: int, edges):
 
 
 def _fair_rings(V, F, face_layer, face_kind, seam, ends, sheets, in_att, rings, timings, attachments, edges, A,
-                wider=None, more=None):
+                levels=None):
     """(V, safe, zone, folds left): :func:`_fair` with ``rings`` rings around the junctions'
-    ends, ``more`` around those of the vertices ``wider`` ((n,) bool, optional) (``edges``:
+    ends, or ``levels[v]`` around the ends of vertex v ((n,) int64, optional) (``edges``:
     :func:`interior_edges` of F, A its vertex adjacency)."""
-    if wider is None:
+    if levels is None:
         _, reach = seam_zone(F, len(V), seam, ends, rings, A)
         wide = wide_zone(A, seam, rings)
     else:
-        s_in, e_in = wider[seam], wider[ends]
-        reach = np.minimum(seam_zone(F, len(V), seam[~s_in], ends[~e_in], rings, A)[1],
-                           seam_zone(F, len(V), seam[s_in], ends[e_in], more, A)[1])
-        wide = wide_zone(A, seam[~s_in], rings) | wide_zone(A, seam[s_in], more)
+        reach, wide = np.full(len(V), np.inf), np.zeros(len(V), bool)
+        for r in np.unique(np.r_[levels[seam], levels[ends]]):
+            s_r, e_r = seam[levels[seam] == r], ends[levels[ends] == r]
+            reach = np.minimum(reach, seam_zone(F, len(V), s_r, e_r, int(r), A)[1])
+            wide |= wide_zone(A, s_r, int(r))
     # A free part resting on a face near a junction keeps the face under it as it was solved
     # (fairing it away would leave the part floating, or sunk into it), unless faired with the
     # part moved along leaves fewer folds (faired_reseated below).
