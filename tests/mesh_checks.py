@@ -197,3 +197,68 @@ def own_layer_depth_ratio(V: np.ndarray, F: np.ndarray, part_region, host_region
 def edge_length(V: np.ndarray, F: np.ndarray) -> float:
     """Median length in the drawing plane of the first edge of every triangle F (m, 3) of V (n, 3)."""
     return float(np.median(np.linalg.norm(V[F[:, 0], :2] - V[F[:, 1], :2], axis=1)))
+
+
+def layers_edge_length(meshes) -> float:
+    """The edge length of most of a model's surface: over the triangles of every layer mesh
+    (``.V`` (n, 3), ``.F`` (m, 3)) pooled, the median by area of the length in the drawing plane
+    of each one's first edge. Not the median of each layer's own (:func:`edge_length`): the
+    inflater meshes narrow parts (a beak, an eye) finer, and a model's measuring radius should
+    not shrink because its eye is meshed finer; by area, a finer part weighs what it did."""
+    length, area = [], []
+    for m in meshes:
+        P = m.V[m.F][:, :, :2]
+        length.append(np.linalg.norm(P[:, 0] - P[:, 1], axis=1))
+        d1, d2 = P[:, 1] - P[:, 0], P[:, 2] - P[:, 0]
+        area.append(0.5 * np.abs(d1[:, 0] * d2[:, 1] - d1[:, 1] * d2[:, 0]))
+    length, area = np.concatenate(length), np.concatenate(area)
+    order = np.argsort(length, kind="stable")
+    cum = np.cumsum(area[order])
+    return float(length[order][np.searchsorted(cum, 0.5 * cum[-1])])
+
+
+def drawn_tips(mesh, turn: float = 50.0) -> np.ndarray:
+    """(k, 2) float64: the sharp corners drawn on a layer's outline (``mesh.V`` (n, 3),
+    ``mesh.boundary`` its outline loop, ``mesh.junction`` the junction's vertices, skipped):
+    the outline vertices where it turns by more than ``turn`` degrees between the points one
+    edge length (:func:`edge_length`) behind and ahead along it. A beak's tip, a claw."""
+    B = mesh.V[mesh.boundary, :2]
+    k = len(B)
+    if k < 3:
+        return np.zeros((0, 2))
+    h = edge_length(mesh.V, mesh.F)
+    ring = np.vstack([B, B[:1]])
+    s = np.r_[0.0, np.cumsum(np.linalg.norm(np.diff(ring, axis=0), axis=1))]
+    total = s[-1]
+
+    def at(t):
+        t = np.mod(t, total)
+        j = np.clip(np.searchsorted(s, t, side="right") - 1, 0, k - 1)
+        a = (t - s[j]) / np.maximum(s[j + 1] - s[j], 1e-300)
+        return ring[j] * (1 - a)[:, None] + ring[j + 1] * a[:, None]
+
+    u, v = B - at(s[:k] - h), at(s[:k] + h) - B
+    cos = np.sum(u * v, axis=1) / np.maximum(np.linalg.norm(u, axis=1) * np.linalg.norm(v, axis=1), 1e-300)
+    sharp = np.degrees(np.arccos(np.clip(cos, -1.0, 1.0))) > turn
+    sharp &= ~np.isin(mesh.boundary, mesh.junction)
+    return B[sharp]
+
+
+def at_drawn_tips(V: np.ndarray, F: np.ndarray, face_layer: np.ndarray, tips, radius: float) -> np.ndarray:
+    """(e,) bool over :func:`dihedral`'s edges: both triangles of the edge on one layer, and
+    the edge's midpoint within ``radius`` (in the drawing plane) of one of that layer's drawn
+    tips (``tips[k]``: :func:`drawn_tips` of layer k). Such an edge bends with the part's own
+    drawn corner, present in the layer as inflated, not with a junction."""
+    key, pair, count = _edges(F)
+    ok = count == 2
+    key, pair = key[ok], pair[ok]
+    la, lb = face_layer[pair[:, 0]], face_layer[pair[:, 1]]
+    out = np.zeros(len(key), bool)
+    mid = V[key].mean(axis=1)[:, :2]
+    for k, T in enumerate(tips):
+        sel = np.flatnonzero((la == k) & (lb == k))
+        if len(T) == 0 or len(sel) == 0:
+            continue
+        d, _ = cKDTree(np.asarray(T)).query(mid[sel], distance_upper_bound=radius)
+        out[sel[np.isfinite(d)]] = True
+    return out

@@ -126,7 +126,7 @@ def test_a_fold_the_wide_fairing_leaves_is_relieved(seed):
     # rings kept back from a crossing, where the fairing did not look for folds: now it does.
     layers, meshes, closed, names, res = _assembled(seed)
     V, F = res.mesh.V, res.mesh.F
-    h = float(np.median([mc.edge_length(m.V, m.F) for m in meshes]))
+    h = mc.layers_edge_length(meshes)
     ang = mc.junction_angles(V, F, res.face_layer, 8 * h)
     assert ang.max() <= 90.0 and np.mean(ang <= 45) >= 0.999, (ang.max(), np.mean(ang <= 45))
     assert mc.self_intersections(V, F) == 0
@@ -142,7 +142,7 @@ def test_an_eye_beside_a_snouts_junction_moves_with_the_faired_head(seed):
     # (fair._part_way): no fold left, the eye neither sinks in nor floats off.
     layers, meshes, closed, names, res = _assembled(seed)
     V, F = res.mesh.V, res.mesh.F
-    h = float(np.median([mc.edge_length(m.V, m.F) for m in meshes]))
+    h = mc.layers_edge_length(meshes)
     assert mc.junction_angles(V, F, res.face_layer, 8 * h).max() <= 90.0
     assert mc.self_intersections(V, F) == 0 and mc.boundary_edges(F) == 0
     eyes = [k for k, layer in enumerate(layers) if layer.name in ("eye", "eye far")]
@@ -160,13 +160,14 @@ def test_an_eye_beside_a_snouts_junction_moves_with_the_faired_head(seed):
 def test_a_group_left_creased_is_faired_again_with_wider_ends(seed):
     # Seed 3 kept a 112-degree fold where a thin snout's front, faired next to its junction's end,
     # would cross its own back (the rings there kept back); seed 44 had 99.89% of its junction
-    # edges under 45 degrees. Faired again with 16 rings around the junctions' ends instead of 12
-    # (only the groups left creased): no fold, 99.9% under 45, nothing crossing, limbs as thick.
+    # edges under 45 degrees. Faired again with 16 rings around the junctions' ends instead of 12,
+    # and 21 where 16 still left too many (only the groups left creased): no fold, 99.9% under 45,
+    # nothing crossing, limbs as thick.
     layers, meshes, closed, names, res = _assembled(seed)
     V, F = res.mesh.V, res.mesh.F
-    h = float(np.median([mc.edge_length(m.V, m.F) for m in meshes]))
+    h = mc.layers_edge_length(meshes)
     ang = mc.junction_angles(V, F, res.face_layer, 8 * h)
-    assert res.solver["fair_rings"] == 16
+    assert res.solver["fair_rings"] in (16, 21)
     assert ang.max() <= 90.0 and np.mean(ang <= 45) >= 0.999, (ang.max(), np.mean(ang <= 45))
     assert mc.self_intersections(V, F) == 0 and mc.boundary_edges(F) == 0
     assert min(r for r, _ in _limb_ratios(meshes, res).values()) >= 0.8
