@@ -11,10 +11,10 @@ self-intersecting triangle pairs; the largest dihedral angle across the junction
 within 8 edge lengths of a glued seam, the layers' edge length taken by area) and its 99.9th
 percentile, the share under 45 degrees, and both again away from the corners drawn sharp on a
 part itself (within 3 edge lengths of a beak's tip: it bends so in the layer as inflated); the
-largest over the whole mesh; the smallest limb depth ratio (a limb's thickness just outside its host over
-its thickness at mid-limb, for limbs whose region reaches 6 edge lengths past the host) and
-the same ratio of that limb's own inflated layer (under 0.8 where it is drawn narrower there);
-CPU time of the assembly. Then the corpus summary: rates and percentiles.
+largest over the whole mesh; the smallest limb depth ratio (a limb's thickness just outside
+its host over its thickness at mid-limb, for limbs whose region reaches 6 edge lengths past
+the host) and the same ratio of that limb's own inflated layer (under 0.8 where it is drawn
+narrower there); CPU time of the assembly. Then the corpus summary: rates and percentiles.
 """
 
 from __future__ import annotations
@@ -64,15 +64,14 @@ def measure(seed: int):
     cpu, wall = time.process_time() - c0, time.perf_counter() - w0
     V, F = r.mesh.V, r.mesh.F
     h = mc.layers_edge_length(meshes)
-    ang_all = mc.dihedral(V, F)[1]
-    ang_j = mc.junction_angles(V, F, r.face_layer, ZONE_EDGES * h)
-    # The same edges, less those at a corner drawn sharp on their own layer (a beak's tip: it
-    # bends like that in the layer as inflated, whatever the junction does)
-    key, ang = mc.dihedral(V, F)
+    # mc.junction_angles' edges, the bends measured once; then the same edges less those at a
+    # corner drawn sharp on their own layer (a beak's tip: it bends like that in the layer as
+    # inflated, whatever the junction does)
+    key, ang_all = mc.dihedral(V, F)
     zone = mc.seam_zone(V, F, r.face_layer, ZONE_EDGES * h)
-    tip = mc.at_drawn_tips(V, F, r.face_layer, [mc.drawn_tips(m) for m in meshes], TIP_EDGES * h)
     inz = zone[key[:, 0]] & zone[key[:, 1]]
-    ang_t, ang_a = ang[inz & tip], ang[inz & ~tip]
+    tip = mc.at_drawn_tips(V, F, r.face_layer, [mc.drawn_tips(m) for m in meshes], TIP_EDGES * h)
+    ang_j, ang_t, ang_a = ang_all[inz], ang_all[inz & tip], ang_all[inz & ~tip]
     ratios = []
     for a in r.attachments:
         part, host, hp = region(meshes[a.upper]), region(meshes[a.lower]), guard_h(meshes[a.upper])

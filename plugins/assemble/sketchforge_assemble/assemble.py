@@ -641,15 +641,12 @@ def _fair_rings(V, F, face_layer, face_kind, seam, ends, sheets, in_att, rings, 
     """(V, safe, zone, folds left): :func:`_fair` with ``rings`` rings around the junctions'
     ends, or ``levels[v]`` around the ends of vertex v ((n,) int64, optional) (``edges``:
     :func:`interior_edges` of F, A its vertex adjacency)."""
-    if levels is None:
-        _, reach = seam_zone(F, len(V), seam, ends, rings, A)
-        wide = wide_zone(A, seam, rings)
-    else:
-        reach, wide = np.full(len(V), np.inf), np.zeros(len(V), bool)
-        for r in np.unique(np.r_[levels[seam], levels[ends]]):
-            s_r, e_r = seam[levels[seam] == r], ends[levels[ends] == r]
-            reach = np.minimum(reach, seam_zone(F, len(V), s_r, e_r, int(r), A)[1])
-            wide |= wide_zone(A, s_r, int(r))
+    levels = np.full(len(V), rings, np.int64) if levels is None else levels
+    reach, wide = np.full(len(V), np.inf), np.zeros(len(V), bool)
+    for r in np.unique(np.r_[levels[seam], levels[ends]]):
+        s_r, e_r = seam[levels[seam] == r], ends[levels[ends] == r]
+        reach = np.minimum(reach, seam_zone(F, len(V), s_r, e_r, int(r), A)[1])
+        wide |= wide_zone(A, s_r, int(r))
     # A free part resting on a face near a junction keeps the face under it as it was solved
     # (fairing it away would leave the part floating, or sunk into it), unless faired with the
     # part moved along leaves fewer folds (faired_reseated below).

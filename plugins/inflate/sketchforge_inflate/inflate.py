@@ -92,16 +92,20 @@ def inflate_stroke(points, closed: bool = False, params: Mapping | None = None, 
     """
     p = validate_params(params)
     outline = prepare_outline(points, p["resolution"], closed=bool(closed))
-    contour, rings = _contour_and_holes(outline, holes, max_vertices)
-    size = _size(outline, rings)
+    # The size needs the holes' rings, and those are resampled against the contour: with holes
+    # the part is resampled as asked first (and again if narrow); without, only once.
+    asked = _contour_and_holes(outline, holes, max_vertices) if holes is not None and len(holes) else None
+    size = _size(outline, asked[1] if asked else [])
     fine = edge_length_for(size, outline.edge_length)
+    contour_rings = None
     if fine < outline.edge_length:
         try:
-            contour, rings = _contour_and_holes(replace(outline, edge_length=fine), holes, max_vertices)
+            contour_rings = _contour_and_holes(replace(outline, edge_length=fine), holes, max_vertices)
         except (LimitError, ContourError):
             # too many vertices that fine, or a hole too close to the outline for the finer
             # spacing: the part is meshed as asked, never refused for being meshed finer
             pass
+    contour, rings = contour_rings or asked or _contour_and_holes(outline, holes, max_vertices)
     tri = triangulate_polygon(contour.points, contour.edge_length, MIN_ANGLE, holes=rings)
     rim = np.concatenate([tri.boundary, *tri.holes]) if rings else tri.boundary
     L, M = laplacian_and_mass(tri.V2, tri.F)
