@@ -7,8 +7,8 @@ scaled at random, inflated at resolution 0.03 as asked and as the inflater now m
 
 Per kind: strokes refused either way, the share meshed differently, vertices (new over asked:
 median, p90, max), the largest bend between neighbouring triangles of the layer (median, p90,
-as asked -> now), the strokes inflated flat (every vertex on the rim: height 0), CPU time of both passes and the machine's load. Prints figures, asserts
-nothing.
+as asked -> now), the strokes inflated flat (every vertex on the rim: height 0), CPU time of
+both passes and the machine's load. Prints figures, asserts nothing.
 """
 
 from __future__ import annotations
