@@ -256,8 +256,8 @@ def test_narrow_fairing_keeps_the_parts_and_widens_only_where_a_fold_is_left(mon
     real = fair.fair_clear
     calls = []
 
-    def planted(V, F, moved, A, h, hold=None, bend_limit=180.0, edges=None, ignore=None):
-        out = real(V, F, moved, A, h, hold, bend_limit, edges, ignore)
+    def planted(V, F, moved, A, h, hold=None, bend_limit=180.0, edges=None, ignore=None, scale=None):
+        out = real(V, F, moved, A, h, hold, bend_limit, edges, ignore, scale)
         calls.append(bend_limit)
         return (out[0], out[1], np.array([seed]), out[3]) if len(calls) == 1 else out
 
@@ -337,3 +337,39 @@ def test_reseat_moves_a_free_part_with_the_faces_it_rests_on_and_refuses_a_cross
     assert reseat(V, V4, F, layer, [(1, np.array([1, 0, 1, 1, 0, 0, 0], bool), none)]) is None
     # nothing to rest on: unchanged
     assert np.array_equal(reseat(V, V2, F, layer, [(1, none, none)]), V2)
+
+
+def test_vertex_scale_marks_only_parts_meshed_finer_and_is_continuous():
+    from sketchforge_assemble.fair import FINE_SHARE, vertex_scale
+
+    # two triangles sharing the edge (1, 2): layer edge lengths per triangle
+    F = np.array([[0, 1, 2], [1, 3, 2]], np.int64)
+    assert vertex_scale(F, 4, np.array([1.0, 1.0])) is None  # parts meshed alike: fair as ever
+    assert vertex_scale(F, 4, np.array([1.0, 0.9])) is None  # within FINE_SHARE: alike
+    s = vertex_scale(F, 4, np.array([1.0, 0.4]))
+    # the shared vertices count with the finer part, the coarse part's own vertex whole
+    assert np.allclose(s, [1.0, 0.4 / FINE_SHARE, 0.4 / FINE_SHARE, 0.4 / FINE_SHARE])
+    # continuous in the finer part's edge length through the threshold (no jump at FINE_SHARE)
+    hs = np.linspace(0.5, 0.95, 451)
+    ss = np.array([(vertex_scale(F, 4, np.array([1.0, x])) if x < FINE_SHARE else np.ones(4))[3] for x in hs])
+    assert np.abs(np.diff(ss)).max() < 0.01
+
+
+def test_fairing_at_one_scale_is_the_plain_fairing():
+    # Inside a part of one edge length the scaled fairing must be the plain one (a part meshed
+    # finer is faired the same as before; only the weights across a change of scale differ).
+    from sketchforge_assemble.fair import adjacency, fair_seams
+
+    layers, meshes, closed = meshes_from_journal(EXAMPLES / "drawn.json")
+    res = assemble_detailed(meshes, closed)
+    V, F = res.mesh.V, res.mesh.F
+    A = adjacency(F, len(V))
+    body = res.face_layer == int(np.argmax(np.bincount(res.face_layer)))  # the largest part
+    moved = np.zeros(len(V), bool)
+    moved[F[body].ravel()] = True
+    moved[F[~body].ravel()] = False  # its own vertices only, away from its seams
+    hold = np.full(len(V), 0.02)
+    plain = fair_seams(V, F, moved, A, hold=hold)
+    scaled = fair_seams(V, F, moved, A, hold=hold, scale=np.full(len(V), 0.37))
+    assert not np.array_equal(plain, V)
+    assert np.abs(scaled - plain).max() <= 1e-9 * np.abs(V).max()

@@ -196,3 +196,19 @@ def test_a_birds_eye_and_beak_come_out_round_and_unfolded(seed):
     tip = mc.at_drawn_tips(V, F, res.face_layer, [mc.drawn_tips(m) if k == beak else np.zeros((0, 2))
                                                   for k, m in enumerate(meshes)], 3 * h)
     assert tip.any() and bend[tip].max() <= 80.0
+
+
+@pytest.mark.parametrize("seed", [19, 34, 58])
+def test_a_beak_meshed_finer_than_its_head_joins_it_without_a_crease(seed):
+    # The beak is meshed at a third of the head's edge length. Faired with every edge weighted
+    # alike, its first rings next to the junction creased (seeds 19, 58: 99.87% and 99.89% of
+    # the junction edges under 45 degrees) and seed 34's beak folded by 109 degrees; with the
+    # weights following the edges' lengths (fair.vertex_scale): no fold, 99.9% under 45,
+    # nothing crossing, the limbs as thick.
+    layers, meshes, closed, names, res = _assembled(seed)
+    V, F = res.mesh.V, res.mesh.F
+    h = mc.layers_edge_length(meshes)
+    ang = mc.junction_angles(V, F, res.face_layer, 8 * h)
+    assert ang.max() <= 90.0 and np.mean(ang <= 45) >= 0.999, (ang.max(), np.mean(ang <= 45))
+    assert mc.self_intersections(V, F) == 0 and mc.boundary_edges(F) == 0
+    assert min(r for r, _ in _limb_ratios(meshes, res).values()) >= 0.7

@@ -48,6 +48,7 @@ from .fair import (
     rings_from,
     seam_zone,
     supports,
+    vertex_scale,
     wide_zone,
 )
 from .remesh import insert_chains
@@ -656,6 +657,7 @@ def _fair_rings(V, F, face_layer, face_kind, seam, ends, sheets, in_att, rings, 
     for _, below, above in rests:
         held |= below | above
     h_med = float(np.median([s.h for s in sheets]))
+    scale = vertex_scale(F, len(V), np.array([s.h for s in sheets])[face_layer])
     limbs = [(a.upper, sheets[a.lower].polygon(), sheets[a.upper].h) for a in attachments]
 
     def faired(V=V, A=A, reach=reach, wide=wide, held=held, ignore=None):
@@ -674,13 +676,13 @@ def _fair_rings(V, F, face_layer, face_kind, seam, ends, sheets, in_att, rings, 
             return limb_hold(V, F, face_layer, limbs, zone, seam_rings)
 
         hold = np.maximum(hold, limb(narrow))
-        V2, clear, bent, _ = fair_clear(V, F, narrow, A, h_med, hold, MAX_BEND, edges, ignore)
+        V2, clear, bent, _ = fair_clear(V, F, narrow, A, h_med, hold, MAX_BEND, edges, ignore, scale)
         zone, left = "narrow", bent
         if clear and len(bent):
             near_seam = seam[ring_region(A, bent, 2 * rings)[seam]]
             local = wide_zone(A, near_seam, rings) & ~held if len(near_seam) else np.zeros(len(V), bool)
             if local.any():
-                V3, clear3, bent3, _ = fair_clear(V, F, narrow | local, A, h_med, hold, MAX_BEND, edges, ignore)
+                V3, clear3, bent3, _ = fair_clear(V, F, narrow | local, A, h_med, hold, MAX_BEND, edges, ignore, scale)
                 if clear3:
                     V2, zone, left = V3, "narrow+wide", bent3
                 if clear3 and len(bent3):
@@ -688,12 +690,12 @@ def _fair_rings(V, F, face_layer, face_kind, seam, ends, sheets, in_att, rings, 
                     # the limb keeps its thickness (the toucan's head over the body's rim)
                     loose = ring_region(A, bent3, FOLD_RINGS) & local
                     hold4 = np.where(loose, 0.0, hold)
-                    V4, clear4, bent4, _ = fair_clear(V, F, narrow | local, A, h_med, hold4, MAX_BEND, edges, ignore)
+                    V4, clear4, bent4, _ = fair_clear(V, F, narrow | local, A, h_med, hold4, MAX_BEND, edges, ignore, scale)
                     if clear4 and _gentler(V4, bent4, V3, bent3, F, narrow | local, A):
                         V2, left, hold = V4, bent4, hold4
-                    V2, left = _relieve_folds(V, F, A, V2, left, narrow | local, hold, limb, held, h_med, edges, ignore)
+                    V2, left = _relieve_folds(V, F, A, V2, left, narrow | local, hold, limb, held, h_med, edges, ignore, scale)
         if not clear:
-            V2, clear, _, _ = fair_clear(V, F, wide & ~held, A, h_med, ignore=ignore)
+            V2, clear, _, _ = fair_clear(V, F, wide & ~held, A, h_med, ignore=ignore, scale=scale)
             zone = "wide"
         timings["fair"] = time.perf_counter() - t1
         return V2, clear, zone, left
@@ -730,7 +732,7 @@ def _gentler(Va, bent_a, Vb, bent_b, F, zone, A) -> bool:
 RELIEF_RINGS = (2, 3)
 
 
-def _relieve_folds(V, F, A, V2, bent, zone, hold, limb, held, h, edges, ignore=None):
+def _relieve_folds(V, F, A, V2, bent, zone, hold, limb, held, h, edges, ignore=None, scale=None):
     """(V, bent): the faired mesh ``V2`` (from the stitched ``V``), with the folds it
     still has (``bent``: the vertices of edges over :data:`MAX_BEND`) faired again in widening
     rings around them, without the zone's soft hold there but with the limbs'
@@ -752,7 +754,7 @@ def _relieve_folds(V, F, A, V2, bent, zone, hold, limb, held, h, edges, ignore=N
             break
         loose = ring_region(A, bent, FOLD_RINGS * k) & ~held
         hold_k = np.where(loose, limb(loose), hold)
-        Vk, clear, bent_k, _ = fair_clear(V, F, zone | loose, A, h, hold_k, MAX_BEND, edges, ignore)
+        Vk, clear, bent_k, _ = fair_clear(V, F, zone | loose, A, h, hold_k, MAX_BEND, edges, ignore, scale)
         if clear and _gentler(Vk, bent_k, V2, bent, F, zone | loose, A):
             V2, bent, zone, hold = Vk, bent_k, zone | loose, hold_k
     return V2, bent
