@@ -12,7 +12,7 @@ from .cache import AssemblyCache
 CACHE = AssemblyCache()
 
 #: Bumped when the same layers and parameters would assemble differently.
-VERSION = "2"  # 2: issue 34 (sides, stretches, free parts, full thickness, thin parts refined)
+VERSION = "3"  # 2: issue 34 (sides, stretches, free parts, full thickness, thin parts refined); 3: finer parts faired by edge length
 
 
 def assemble_layers(layers, params):
