@@ -21,6 +21,20 @@ def _assembled(seed):
     return layers, meshes, closed, names, assemble_detailed(meshes, closed, names=names)
 
 
+def _joins_fold_free(seed, min_ratio):
+    """Issue 34's joins on the creature of ``seed``, by mesh_checks alone: no junction edge (within
+    8 edge lengths of a seam) over 90 degrees, 99.9% at most 45, a closed mesh with nothing
+    crossing, every limb at least ``min_ratio`` of its mid-limb depth just outside its host.
+    Returns the assembly result."""
+    layers, meshes, closed, names, res = _assembled(seed)
+    V, F = res.mesh.V, res.mesh.F
+    ang = mc.junction_angles(V, F, res.face_layer, 8 * mc.layers_edge_length(meshes))
+    assert ang.max() <= 90.0 and np.mean(ang <= 45) >= 0.999, (ang.max(), np.mean(ang <= 45))
+    assert mc.self_intersections(V, F) == 0 and mc.boundary_edges(F) == 0
+    assert min(r for r, _ in _limb_ratios(meshes, res).values()) >= min_ratio
+    return res
+
+
 def test_the_generator_draws_every_kind_deterministically_as_the_app_places_strokes():
     docs = [drawn_creature(s) for s in range(3)]
     assert docs[0] == drawn_creature(0) and docs[0] != drawn_creature(3)
@@ -124,13 +138,7 @@ def test_a_fold_the_wide_fairing_leaves_is_relieved(seed):
     # its unheld rings around the fold; the fold freed in wider rings (with the limbs still
     # held) leaves none, and the limbs keep their thickness. Seed 15's fold (106 degrees) lay in
     # rings kept back from a crossing, where the fairing did not look for folds: now it does.
-    layers, meshes, closed, names, res = _assembled(seed)
-    V, F = res.mesh.V, res.mesh.F
-    h = mc.layers_edge_length(meshes)
-    ang = mc.junction_angles(V, F, res.face_layer, 8 * h)
-    assert ang.max() <= 90.0 and np.mean(ang <= 45) >= 0.999, (ang.max(), np.mean(ang <= 45))
-    assert mc.self_intersections(V, F) == 0
-    assert min(r for r, _ in _limb_ratios(meshes, res).values()) >= 0.85
+    _joins_fold_free(seed, min_ratio=0.85)
 
 
 @pytest.mark.parametrize("seed", [27, 30])
@@ -163,14 +171,8 @@ def test_a_group_left_creased_is_faired_again_with_wider_ends(seed):
     # edges under 45 degrees. Faired again with 16 rings around the junctions' ends instead of 12,
     # and 21 where 16 still left too many (only the groups left creased): no fold, 99.9% under 45,
     # nothing crossing, limbs as thick.
-    layers, meshes, closed, names, res = _assembled(seed)
-    V, F = res.mesh.V, res.mesh.F
-    h = mc.layers_edge_length(meshes)
-    ang = mc.junction_angles(V, F, res.face_layer, 8 * h)
+    res = _joins_fold_free(seed, min_ratio=0.8)
     assert res.solver["fair_rings"] in (16, 21)
-    assert ang.max() <= 90.0 and np.mean(ang <= 45) >= 0.999, (ang.max(), np.mean(ang <= 45))
-    assert mc.self_intersections(V, F) == 0 and mc.boundary_edges(F) == 0
-    assert min(r for r, _ in _limb_ratios(meshes, res).values()) >= 0.8
 
 
 @pytest.mark.parametrize("seed", [19, 46])
@@ -205,10 +207,4 @@ def test_a_beak_meshed_finer_than_its_head_joins_it_without_a_crease(seed):
     # the junction edges under 45 degrees) and seed 34's beak folded by 109 degrees; with the
     # weights following the edges' lengths (fair.vertex_scale): no fold, 99.9% under 45,
     # nothing crossing, the limbs as thick.
-    layers, meshes, closed, names, res = _assembled(seed)
-    V, F = res.mesh.V, res.mesh.F
-    h = mc.layers_edge_length(meshes)
-    ang = mc.junction_angles(V, F, res.face_layer, 8 * h)
-    assert ang.max() <= 90.0 and np.mean(ang <= 45) >= 0.999, (ang.max(), np.mean(ang <= 45))
-    assert mc.self_intersections(V, F) == 0 and mc.boundary_edges(F) == 0
-    assert min(r for r, _ in _limb_ratios(meshes, res).values()) >= 0.7
+    _joins_fold_free(seed, min_ratio=0.7)
