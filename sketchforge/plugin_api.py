@@ -160,6 +160,7 @@ _LAZY: dict[str, tuple[str, str | None]] = {
     "DirichletSolver": ("sketchforge.geometry.dirichlet", "DirichletSolver"),
     "gradient_operators": ("sketchforge.geometry.intensity", "gradient_operators"),
     "vertex_normals": ("sketchforge.geometry.normals", "vertex_normals"),
+    "face_normals": ("sketchforge.geometry.normals", "face_normals"),
     "interior_edges": ("sketchforge.geometry.mesh_edges", "interior_edges"),
     "edge_angles": ("sketchforge.geometry.mesh_edges", "edge_angles"),
     "layer_normals": ("sketchforge.geometry.heightfield", "layer_normals"),

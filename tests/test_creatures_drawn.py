@@ -24,14 +24,16 @@ def _assembled(seed):
 def _joins_fold_free(seed, min_ratio):
     """Issue 34's joins on the creature of ``seed``, by mesh_checks alone: no junction edge (within
     8 edge lengths of a seam) over 90 degrees, 99.9% at most 45, a closed mesh with nothing
-    crossing, every limb at least ``min_ratio`` of its mid-limb depth just outside its host.
-    Returns the assembly result."""
+    crossing, every limb at least ``min_ratio`` of its mid-limb depth just outside its host, or
+    at least 0.9 of its own inflated layer's ratio where it is drawn narrower there. Returns the
+    assembly result."""
     layers, meshes, closed, names, res = _assembled(seed)
     V, F = res.mesh.V, res.mesh.F
     ang = mc.junction_angles(V, F, res.face_layer, 8 * mc.layers_edge_length(meshes))
     assert ang.max() <= 90.0 and np.mean(ang <= 45) >= 0.999, (ang.max(), np.mean(ang <= 45))
     assert mc.self_intersections(V, F) == 0 and mc.boundary_edges(F) == 0
-    assert min(r for r, _ in _limb_ratios(meshes, res).values()) >= min_ratio
+    thin = {names[k]: (r, own) for k, (r, own) in _limb_ratios(meshes, res).items() if r < min(min_ratio, 0.9 * own)}
+    assert not thin, thin
     return res
 
 
@@ -206,5 +208,6 @@ def test_a_beak_meshed_finer_than_its_head_joins_it_without_a_crease(seed):
     # alike, its first rings next to the junction creased (seeds 19, 58: 99.87% and 99.89% of
     # the junction edges under 45 degrees) and seed 34's beak folded by 109 degrees; with the
     # weights following the edges' lengths (fair.vertex_scale): no fold, 99.9% under 45,
-    # nothing crossing, the limbs as thick.
-    _joins_fold_free(seed, min_ratio=0.7)
+    # nothing crossing, the limbs at full thickness (seed 34's near leg is drawn narrower where
+    # it leaves the body: 0.74 in its own layer, 0.74 assembled).
+    _joins_fold_free(seed, min_ratio=0.8)

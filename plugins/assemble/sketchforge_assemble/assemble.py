@@ -539,12 +539,13 @@ def _fair(V, F, face_layer, face_kind, seam, ends, sheets, in_att, p, cache, tim
     edges = interior_edges(F)
     A = adjacency(F, len(V))
     h_med = float(np.median([s.h for s in sheets]))
+    scale = vertex_scale(F, len(V), np.array([s.h for s in sheets])[face_layer])
 
     _, comp = connected_components(A, directed=False)
 
     def attempt(levels):
         return _fair_rings(V0, F, face_layer, face_kind, seam, ends, sheets, in_att, rings, timings, attachments, edges, A,
-                           levels)
+                           h_med, scale, levels)
 
     def fairest():
         # Where the fairing leaves a fold, or more edges near the junctions bent over
@@ -604,7 +605,8 @@ def _fair(V, F, face_layer, face_kind, seam, ends, sheets, in_att, p, cache, tim
 
     # Through the cache by the stitched mesh itself: an undo, or an edit that leaves every
     # junction's rings as they were, skips the fairing's solves and checks.
-    V, safe, zone, used = memo(cache, "fair", (V, F, face_layer, face_kind, seam, ends, sorted(int(k) for k in in_att), rings, h_med),
+    V, safe, zone, used = memo(cache, "fair", (V, F, face_layer, face_kind, seam, ends, sorted(int(k) for k in in_att), rings,
+                                             [s.h for s in sheets]),
                          fairest)
     timings.setdefault("fair", time.perf_counter() - t)
     timings.setdefault("fair_check", 0.0)
@@ -638,10 +640,11 @@ def _near_seams(A, seam, rings: int, edges):
 
 
 def _fair_rings(V, F, face_layer, face_kind, seam, ends, sheets, in_att, rings, timings, attachments, edges, A,
-                levels=None):
+                h_med, scale, levels=None):
     """(V, safe, zone, folds left): :func:`_fair` with ``rings`` rings around the junctions'
     ends, or ``levels[v]`` around the ends of vertex v ((n,) int64, optional) (``edges``:
-    :func:`interior_edges` of F, A its vertex adjacency)."""
+    :func:`interior_edges` of F, A its vertex adjacency, h_med the layers' median edge length,
+    ``scale`` :func:`.fair.vertex_scale`)."""
     levels = np.full(len(V), rings, np.int64) if levels is None else levels
     reach, wide = np.full(len(V), np.inf), np.zeros(len(V), bool)
     for r in np.unique(np.r_[levels[seam], levels[ends]]):
@@ -656,8 +659,6 @@ def _fair_rings(V, F, face_layer, face_kind, seam, ends, sheets, in_att, rings, 
     held = np.zeros(len(V), bool)
     for _, below, above in rests:
         held |= below | above
-    h_med = float(np.median([s.h for s in sheets]))
-    scale = vertex_scale(F, len(V), np.array([s.h for s in sheets])[face_layer])
     limbs = [(a.upper, sheets[a.lower].polygon(), sheets[a.upper].h) for a in attachments]
 
     def faired(V=V, A=A, reach=reach, wide=wide, held=held, ignore=None):

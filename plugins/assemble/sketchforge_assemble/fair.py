@@ -161,13 +161,16 @@ def vertex_scale(F: np.ndarray, n: int, face_h: np.ndarray) -> np.ndarray | None
 
     Why. The fairing's graph Laplacian weighs every edge alike, which is right where the edges
     are alike. Where a part meshed at a third of its host's edge length meets it (a bird's
-    beak on its head), the umbrella operator pulls the fine vertices towards the coarse ones:
-    the fairing slid the beak's base by up to 0.9 body edge lengths (3 of its own) and creased
-    it by up to 82 degrees next to its junction (seeds 19, 40, 58), and folded seed 34's beak
-    by 109 degrees. See :func:`fair_seams` for how the scale enters: inside a part the fairing
-    is the same as before, only the weights across a change of edge length follow the edges'
-    lengths. Continuous in each part's edge length; a creature without finer parts (None) is
-    faired exactly as before.
+    beak on its head), a seam vertex reads its bend mostly from neighbours three times farther
+    on the host's side than on the beak's, and smoothing that misread bend creased the beak's
+    first rings next to its junction by up to 82 degrees (seeds 19, 40, 58: edges bent 6-13
+    degrees before the fairing) and folded seed 34's beak by 109 degrees. (It is not a slide:
+    the whole small beak moves about one body edge length either way, and on a flat plane
+    meshed at two densities the weights do not lessen the fairing's in-plane drift.) See
+    :func:`fair_seams` for how the scale enters: inside a part the fairing is the same as
+    before, only the weights across a change of edge length follow the edges' lengths.
+    Continuous in each part's edge length; a creature without finer parts (None) is faired
+    exactly as before.
     """
     face_h = np.asarray(face_h, np.float64)
     h_ref = FINE_SHARE * float(face_h.max(initial=0.0))
@@ -363,8 +366,8 @@ def fair_seams(V: np.ndarray, F: np.ndarray, moved: np.ndarray, A: sp.csr_matrix
     With ``scale`` ((n,) float64 > 0, :func:`vertex_scale`: each vertex's edge length as a
     share) the Laplacian's edge weights are 1/(s_i s_j), the masses s_i²/d_i and the holds
     hold_i/s_i²: inside a part of one scale s every term is the plain one over s², so the same
-    surface; where the scale changes, the vertices are averaged by their edges' lengths, not
-    pulled towards the far coarse neighbours.
+    surface; where the scale changes, a vertex's bend is read with its near neighbours weighing
+    more than its far ones.
     """
     A = adjacency(F, len(V)) if A is None else A
     # A component with no fixed vertex (a small model inside the rings) has no boundary to
@@ -377,11 +380,10 @@ def fair_seams(V: np.ndarray, F: np.ndarray, moved: np.ndarray, A: sp.csr_matrix
     if len(free) == 0:
         return V.copy()
     deg = np.asarray(A.sum(axis=1)).ravel()
-    mass = 1.0 / deg
-    W = A
-    if scale is not None:
-        s = np.asarray(scale, np.float64)
-        scale = s
+    s = None if scale is None else np.asarray(scale, np.float64)
+    if s is None:
+        W, mass = A, 1.0 / deg
+    else:
         C = A.tocoo()
         W = sp.csr_matrix((1.0 / (s[C.row] * s[C.col]), (C.row, C.col)), shape=A.shape)
         mass = s * s / deg
@@ -395,7 +397,7 @@ def fair_seams(V: np.ndarray, F: np.ndarray, moved: np.ndarray, A: sp.csr_matrix
     rhs = -(Qf[:, fixed] @ V[fixed])
     K = Qf[:, free]
     if hold is not None:
-        w = np.asarray(hold, np.float64)[free] / (1.0 if scale is None else scale[free] ** 2)
+        w = np.asarray(hold, np.float64)[free] / (1.0 if s is None else s[free] ** 2)
         K = K + sp.diags(w)
         rhs = rhs + w[:, None] * V[free]
     X = _spd_solve(K.tocsc(), rhs)

@@ -31,6 +31,8 @@ import numpy as np
 import shapely
 import shapely.ops
 
+from sketchforge.plugin_api import face_normals
+
 from .creases import largest_creases
 
 SHAPES = ("blob", "star", "thin", "concave")
@@ -406,11 +408,6 @@ def refusal_reason(message: str) -> str:
 
 # --- chains of edits ----------------------------------------------------------------------------
 
-def _face_normals(V: np.ndarray, F: np.ndarray) -> np.ndarray:
-    n = np.cross(V[F[:, 1]] - V[F[:, 0]], V[F[:, 2]] - V[F[:, 0]])
-    return n / np.maximum(np.linalg.norm(n, axis=1, keepdims=True), 1e-300)
-
-
 def folded_faces(mesh) -> np.ndarray:
     """Triangles (m,) bool within the rim margin whose surface falls toward the inside: the
     height decreases along the direction away from the nearest point of the outline (a fold;
@@ -426,7 +423,7 @@ def folded_faces(mesh) -> np.ndarray:
     eps = 0.25 * pd.h
     gx = pd.rim_distance(C + [eps, 0.0]) - pd.rim_distance(C - [eps, 0.0])
     gy = pd.rim_distance(C + [0.0, eps]) - pd.rim_distance(C - [0.0, eps])
-    n = _face_normals(mesh.V, F)  # (nx, ny, nz): the height gradient is −(nx, ny) / nz
+    n, _ = face_normals(mesh.V, F)  # (nx, ny, nz): the height gradient is −(nx, ny) / nz
     rising = -(n[:, 0] * gx + n[:, 1] * gy)
     # A sure inward direction only: at a medial point (two rims equally near) the gradient of
     # the distance vanishes and says nothing.
