@@ -214,9 +214,12 @@ def test_fillet_starts_the_part_where_the_host_is():
         assert np.min(V[ring, 2]) - 1.0 * h <= V[v, 2] <= np.max(V[ring, 2]) + 5.0 * h
 
 
-def test_a_model_inside_the_fairing_rings_keeps_its_fillet():
+def test_a_model_inside_the_fairing_rings_keeps_its_fillet(monkeypatch):
     # A small, coarse model: 50 rings cover all of it, so nothing would hold the fairing in
-    # place (a singular system); it keeps the fillet's shape instead, closed and clean.
+    # place (a singular system); it keeps the fillet's shape instead, closed and clean. (At 50
+    # rings the body counts as thin, fair.far_weights, and its far face would hold the
+    # fairing: that is checked at the end; here every host counts as thick.)
+    import sketchforge_assemble.fair as fair
     from sketchforge_inflate import inflate_stroke
 
     t = np.linspace(0, 2 * np.pi, 48, endpoint=False)
@@ -225,12 +228,17 @@ def test_a_model_inside_the_fairing_rings_keeps_its_fillet():
     body = inflate_stroke(np.c_[0.6 * np.cos(t), 0.4 * np.sin(t)], closed=True, params=params)
     arm = inflate_stroke(np.c_[0.35 + 0.25 * np.cos(a), -0.2 + 0.25 * np.sin(a)], closed=False, params=params)
     fillet_only = assemble_detailed([body, arm], params={"fair": 0})
-    whole = assemble_detailed([body, arm], params={"fair": 50})
+    with monkeypatch.context() as m:
+        m.setattr(fair, "THIN_HOST", (0.0, 1e-9))
+        whole = assemble_detailed([body, arm], params={"fair": 50})
     assert not whole.warnings and whole.mesh.identical(fillet_only.mesh)
     _check_closed(whole)
     faired = assemble_detailed([body, arm])  # 12 rings leave the body's far side to hold it
     assert not np.array_equal(faired.mesh.V, fillet_only.mesh.V)
     _check_closed(faired)
+    held = assemble_detailed([body, arm], params={"fair": 50})  # the far face, not counted, holds it
+    assert not held.warnings and not np.array_equal(held.mesh.V, fillet_only.mesh.V)
+    _check_closed(held)
 
 
 def test_narrow_fairing_keeps_the_parts_and_widens_only_where_a_fold_is_left(monkeypatch):
@@ -373,3 +381,68 @@ def test_fairing_at_one_scale_is_the_plain_fairing():
     scaled = fair_seams(V, F, moved, A, hold=hold, scale=np.full(len(V), 0.37))
     assert not np.array_equal(plain, V)
     assert np.abs(scaled - plain).max() <= 1e-9 * np.abs(V).max()
+
+
+def _slab(n=9, t=0.5):
+    """A closed square slab of n x n vertices per face (unit spacing), front at z = t (face_kind
+    0), back at -t (1), its rim bridged (2), all layer 0; and a tent of layer 1 glued on the
+    front by the two middle vertices of its first row. Returns V, F, face_layer, face_kind,
+    the two glued vertices."""
+    idx = np.arange(n * n).reshape(n, n)
+    xy = np.c_[np.tile(np.arange(n), n), np.repeat(np.arange(n), n)].astype(float)
+    quads = np.c_[idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, 1:].ravel(), idx[1:, :-1].ravel()]
+    tri = np.r_[quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]]
+    V = np.r_[np.c_[xy, np.full(n * n, t)], np.c_[xy, np.full(n * n, -t)]]
+    ring = np.r_[idx[0, :-1], idx[:-1, -1], idx[-1, :0:-1], idx[:0:-1, 0]]
+    a, b = ring, np.roll(ring, -1)
+    rim = np.r_[np.c_[b, a, a + n * n], np.c_[b, a + n * n, b + n * n]]
+    g = idx[n // 2, n // 2], idx[n // 2, n // 2 + 1]
+    apex = len(V)
+    V = np.r_[V, [[n // 2 + 0.5, n // 2 - 0.5, t + 1.0]]]
+    tent = np.array([[g[0], g[1], apex]])
+    F = np.r_[tri, tri[:, ::-1] + n * n, rim, tent]
+    layer = np.r_[np.zeros(len(F) - 1, np.int64), [1]]
+    kind = np.r_[np.zeros(len(tri), np.int8), np.ones(len(tri), np.int8), np.full(len(rim), 2, np.int8), [0]]
+    return V, F, layer, kind, np.array(g, np.int64)
+
+
+def test_rings_around_a_thin_hosts_junction_stay_on_its_glued_face():
+    from types import SimpleNamespace
+
+    from sketchforge_assemble.fair import FAR_BLOCK, adjacency, glued_face_distance, rings_from
+
+    V, F, layer, kind, glued = _slab()
+    A = adjacency(F, len(V))
+    att = [SimpleNamespace(upper=1, lower=0, side=1)]  # glued on the front (FRONT = 1)
+    plain = glued_face_distance(A, F, layer, kind, att, {})(glued, 20)
+    assert np.array_equal(plain, rings_from(A, glued, 20))
+    kept = glued_face_distance(A, F, layer, kind, att, {(0, 1): FAR_BLOCK})(glued, 20)
+    back = np.arange(81, 162)
+    front = np.arange(81)
+    # the front counts as before; the back, one rim edge away from the front's rim in the plain
+    # count (4 + 1 rings from the middle), is out of reach
+    assert np.array_equal(kept[front], plain[front])
+    assert plain[back].min() <= 6 and kept[back].min() == 21
+
+
+def test_far_weights_count_only_thin_hosts_and_are_continuous_in_their_thickness():
+    from types import SimpleNamespace
+
+    from sketchforge_assemble.fair import FAR_BLOCK, THIN_HOST, far_weights
+
+    n = 21
+    xy = np.c_[np.tile(np.arange(n), n), np.repeat(np.arange(n), n)].astype(float) * 0.1
+    part = SimpleNamespace(xy=np.array([[1.0, 1.0], [1.2, 1.0]]), junction=np.array([0, 1]), h=0.1, n=2)
+    att = [SimpleNamespace(upper=1, lower=0, side=1)]
+    rings = 12
+
+    def weight(thick_in_rings):
+        # a host whose drawn thickness (twice its height) is thick_in_rings x rings x h
+        host = SimpleNamespace(xy=xy, z=np.full(n * n, 0.5 * thick_in_rings * rings * 0.1), h=0.1, n=n * n)
+        return far_weights([host, part], att, rings).get((0, 1), 1.0)
+
+    assert weight(THIN_HOST[1] + 0.01) == 1.0 and weight(3.0) == 1.0
+    assert weight(THIN_HOST[0] - 0.01) == FAR_BLOCK and weight(0.5) == FAR_BLOCK
+    ts = np.linspace(THIN_HOST[0], THIN_HOST[1], 201)
+    w = np.array([weight(t) for t in ts])
+    assert np.all(np.diff(w) <= 0) and np.max(np.abs(np.diff(w))) < 0.02 * FAR_BLOCK

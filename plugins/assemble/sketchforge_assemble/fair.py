@@ -37,7 +37,7 @@ import shapely
 from scipy.sparse.csgraph import connected_components
 from scipy.sparse.linalg import splu
 
-from sketchforge.plugin_api import edge_angles, interior_edges
+from sketchforge.plugin_api import FRONT, edge_angles, interior_edges
 
 from .diagnostics import intersecting_pairs
 from .sheet import directed_edges
@@ -182,7 +182,8 @@ def vertex_scale(F: np.ndarray, n: int, face_h: np.ndarray) -> np.ndarray | None
     return np.clip(vh / h_ref, 1e-3, 1.0)
 
 
-def seam_zone(F: np.ndarray, n: int, seam: np.ndarray, ends: np.ndarray, rings: int, A: sp.csr_matrix | None = None):
+def seam_zone(F: np.ndarray, n: int, seam: np.ndarray, ends: np.ndarray, rings: int, A: sp.csr_matrix | None = None,
+              dist=None):
     """Where :func:`fair_seams` may move vertices, as a distance: ``rings`` edges around the
     ends of every junction, ``SEAM_SHARE`` of that around the rest of its seam.
 
@@ -205,6 +206,9 @@ def seam_zone(F: np.ndarray, n: int, seam: np.ndarray, ends: np.ndarray, rings: 
         Rings around the ends (>= 1).
     A : (n, n) csr_matrix, optional
         The vertex adjacency of F (:func:`adjacency`), if already made.
+    dist : callable, optional
+        ``(seed, rings) -> (n,) float64`` rings from ``seed`` (:func:`glued_face_distance`);
+        :func:`rings_from` over A when not given.
 
     Returns
     -------
@@ -216,14 +220,186 @@ def seam_zone(F: np.ndarray, n: int, seam: np.ndarray, ends: np.ndarray, rings: 
     """
     A = adjacency(F, n) if A is None else A
     near = max(1, int(round(SEAM_SHARE * rings)))
-    t = np.minimum(rings_from(A, seam, near) / near, rings_from(A, ends, rings) / rings)
+    if dist is None:
+        def dist(seed, r):
+            return rings_from(A, seed, r)
+    t = np.minimum(dist(seam, near) / near, dist(ends, rings) / rings)
     return A, t
 
 
-def wide_zone(A: sp.csr_matrix, seam: np.ndarray, rings: int) -> np.ndarray:
+#: A host thicker than THIN_HOST[1] times the rings around a junction's ends (in its edge
+#: lengths, the most within that many of them of an end) is faired over its rim like any
+#: surface; one thinner than THIN_HOST[0] times them only over the face its part is glued on
+#: (an edge on its rim or its other face counts FAR_BLOCK rings), smoothly in between.
+#: Measured on the 60 creatures of ``benchmarks/bench_creatures.py``: a tail glued on a wing
+#: near its tip sees 1.1 (13 edge lengths at 12 rings); every part glued on a body or a head
+#: 1.9 or more (22).
+THIN_HOST = (1.25, 1.75)
+FAR_BLOCK = 100.0
+
+
+def far_weights(sheets, attachments, rings: int) -> dict:
+    """{(host layer, side): weight > 1} for :func:`glued_face_distance`: the faces of thin
+    hosts (:data:`THIN_HOST`) that the rings around their parts' junction ends should not wrap
+    onto; a host face missing from it counts like any other. A host's thickness is its drawn
+    one (twice its height field), the largest within ``rings`` of its edge lengths of an end,
+    the smallest over the ends glued on that face.
+
+    Why. The fairing's rings around a junction's end spread over whatever surface lies within
+    that many edges, and a host thinner than the reach has its rim and other face there: the
+    tail glued on a wing's back near its tip (seeds 1 and 40 of the benchmark) had its rings
+    wrap over the wing's rim, squash the wing from 10 to 4 edge lengths thick and crease it by
+    up to 85 degrees. Counted over the glued face only, those two creatures went from 99.68%
+    and 99.77% of their junction edges under 45 degrees to 99.91% and 99.90%; the other 58 came
+    out the same, vertex for vertex (no host of theirs is that thin).
+
+    sheets: the :class:`.sheet.Sheet` list; attachments: :class:`.attach.Attachment` list.
+    """
+    thin: dict = {}
+    for at in attachments:
+        up, host = sheets[at.upper], sheets[at.lower]
+        if len(up.junction) == 0 or host.n == 0:
+            continue
+        for end in up.xy[up.junction[[0, -1]]]:
+            near = np.sum((host.xy - end) ** 2, axis=1) <= (rings * host.h) ** 2
+            t = 2.0 * float(np.max(host.z[near], initial=0.0)) / host.h
+            key = (at.lower, at.side)
+            thin[key] = min(thin.get(key, np.inf), t / rings)
+    out = {}
+    for key in sorted(thin):
+        u = float(np.clip((THIN_HOST[1] - thin[key]) / (THIN_HOST[1] - THIN_HOST[0]), 0.0, 1.0))
+        if u > 0:
+            out[key] = 1.0 + (FAR_BLOCK - 1.0) * u * u * (3.0 - 2.0 * u)
+    return out
+
+
+def _on_layer(F: np.ndarray, face_layer: np.ndarray, layer: int, n: int) -> np.ndarray:
+    """(n,) bool: the vertices of layer ``layer``'s triangles."""
+    out = np.zeros(n, bool)
+    out[F[face_layer == layer].ravel()] = True
+    return out
+
+
+def _edge_matrix(F: np.ndarray, n: int) -> sp.csr_matrix:
+    """(n, n) with 1 where an edge of the triangles F (m, 3) joins two vertices."""
+    a = F.ravel()
+    b = F[:, [1, 2, 0]].ravel()
+    M = sp.coo_matrix((np.ones(2 * len(a)), (np.r_[a, b], np.r_[b, a])), shape=(n, n)).tocsr()
+    M.data[:] = 1.0
+    return M
+
+
+def glued_face_distance(A: sp.csr_matrix, F: np.ndarray, face_layer: np.ndarray, face_kind: np.ndarray,
+                        attachments, weights: dict):
+    """A function ``(seed, rings) -> (n,) float64``: how many rings each vertex lies from the
+    vertices ``seed`` (k,) int64 (``rings + 1`` past ``rings``), where from a junction of a
+    thin host (a key of ``weights``, :func:`far_weights`) an edge that lies only on that host's
+    rim or its other face counts its weight in rings. Without weights: :func:`rings_from`.
+
+    A (n, n) the vertex adjacency of F (m, 3) int64; face_layer, face_kind (m,) as
+    :func:`.stitch.build_mesh` gives them; attachments a list of :class:`.attach.Attachment`.
+    """
+    from scipy.sparse.csgraph import dijkstra
+
+    n = A.shape[0]
+    F = np.asarray(F, np.int64)
+    members: dict = {}
+    for at in attachments:
+        key = (at.lower, at.side)
+        if key not in weights:
+            continue
+        own = _on_layer(F, face_layer, at.upper, n)
+        # the junction's chains on both faces; a part's chain that a lip's strip joins to its
+        # host's face (:func:`.stitch.build_mesh`) lies on the part's faces only, next to them
+        both = own & _on_layer(F, face_layer, at.lower, n)
+        members[key] = members.get(key, np.zeros(n, bool)) | both | (own & ((A @ both.astype(np.float64)) > 0))
+    weighted = {}
+    for lower, side in members:
+        far = (face_layer == lower) & (face_kind != side_kind(side))
+        near_m, far_m = _edge_matrix(F[~far], n), _edge_matrix(F[far], n)
+        only_far = far_m - far_m.multiply(near_m)
+        only_far.eliminate_zeros()
+        weighted[(lower, side)] = (near_m + weights[(lower, side)] * only_far).tocsr()
+
+    def dist(seed, rings):
+        seed = np.asarray(seed, np.int64)
+        grouped = np.zeros(len(seed), bool)
+        out = np.full(n, float(rings + 1))
+        for key in sorted(members):
+            inside = members[key][seed]
+            grouped |= inside
+            if inside.any():
+                d = dijkstra(weighted[key], directed=False, indices=seed[inside], min_only=True, limit=rings + 0.5)
+                out = np.minimum(out, d)
+        if (~grouped).any():
+            out = np.minimum(out, rings_from(A, seed[~grouped], rings))
+        return np.minimum(out, rings + 1)
+
+    return dist
+
+
+def limb_necks(V: np.ndarray, F: np.ndarray, face_layer: np.ndarray, face_kind: np.ndarray, attachments,
+               sheets) -> list:
+    """Per attachment, the part's front and back vertices that face each other (same xy) past
+    its host's outline, as ((k,) int64, (k,) int64) pairs at its neck (within 2 of its edge
+    lengths of the outline) and at mid-limb (40-60% of the farthest pair's distance), both
+    empty where the part hardly leaves its host (under 6 edge lengths), for
+    :func:`neck_ratio`. The way the creature benchmark measures a limb (issue 34, point 5),
+    on the mesh's own vertices."""
+    from scipy.spatial import cKDTree
+
+    F = np.asarray(F, np.int64)
+    empty = (np.zeros(0, np.int64), np.zeros(0, np.int64))
+    out = []
+    for at in attachments:
+        lay = face_layer == at.upper
+        front = np.unique(F[lay & (face_kind == 0)])
+        back = np.unique(F[lay & (face_kind == 1)])
+        h = sheets[at.upper].h
+        if len(front) == 0 or len(back) == 0:
+            out.append((empty, empty))
+            continue
+        host = sheets[at.lower].polygon()
+        xy = V[front, :2]
+        past = ~shapely.contains_xy(host, xy[:, 0], xy[:, 1])
+        gap, nb = cKDTree(V[back, :2]).query(xy)
+        past &= gap <= 1e-6 * h
+        d = shapely.distance(host, shapely.points(xy[past])) if past.any() else np.zeros(0)
+        if len(d) == 0 or d.max() < 6.0 * h:
+            out.append((empty, empty))
+            continue
+        f, bk = front[past], back[nb[past]]
+        neck, mid = d <= 2.0 * h, (d >= 0.4 * d.max()) & (d <= 0.6 * d.max())
+        out.append(((f[neck], bk[neck]), (f[mid], bk[mid])))
+    return out
+
+
+def neck_ratio(V: np.ndarray, necks) -> np.ndarray:
+    """(a,) float64: each part's largest thickness at its neck over its largest at mid-limb
+    (:func:`limb_necks`), NaN where either is missing or flat."""
+    out = np.full(len(necks), np.nan)
+    for i, ((nf, nb), (mf, mb)) in enumerate(necks):
+        if len(nf) and len(mf):
+            mid = float(np.max(V[mf, 2] - V[mb, 2]))
+            if mid > 0:
+                out[i] = float(np.max(V[nf, 2] - V[nb, 2])) / mid
+    return out
+
+
+def side_kind(side: int) -> int:
+    """The face_kind (0 front, 1 back) of the face a part is glued on, from its attachment's
+    ``side`` (:data:`sketchforge.plugin_api.FRONT` or ``BACK``)."""
+    return 0 if side == FRONT else 1
+
+
+def wide_zone(A: sp.csr_matrix, seam: np.ndarray, rings: int, dist=None) -> np.ndarray:
     """(n,) bool: the fallback zone, ``WIDE_SHARE * rings`` rings around the whole seam (what
-    the fairing moved before the narrow zone, 14 rings at the default 12)."""
-    return ring_region(A, np.asarray(seam, np.int64), max(1, int(round(WIDE_SHARE * rings))))
+    the fairing moved before the narrow zone, 14 rings at the default 12), counted by ``dist``
+    where given (as in :func:`seam_zone`)."""
+    r = max(1, int(round(WIDE_SHARE * rings)))
+    if dist is not None:
+        return dist(np.asarray(seam, np.int64), r) <= r
+    return ring_region(A, np.asarray(seam, np.int64), r)
 
 
 def hold_weights(t: np.ndarray) -> np.ndarray:
