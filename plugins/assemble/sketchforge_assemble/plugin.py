@@ -12,7 +12,9 @@ from .cache import AssemblyCache
 CACHE = AssemblyCache()
 
 #: Bumped when the same layers and parameters would assemble differently.
-VERSION = "3"  # 2: issue 34 (sides, stretches, free parts, full thickness, thin parts refined); 3: finer parts faired by edge length
+#: 2: issue 34 (sides, stretches, free parts, full thickness, thin parts refined); 3: finer parts
+#: faired by edge length; 4: thin hosts faired over their glued face, a try that squashes a limb not kept
+VERSION = "4"
 
 
 def assemble_layers(layers, params):
