@@ -587,7 +587,10 @@ def _fair(V, F, face_layer, face_kind, seam, ends, sheets, in_att, p, cache, tim
             # 0.72 there (issue 34 asks 0.8). Without NECK_KEEP a try that left a tail drawn
             # narrow (0.75) as it was, to 1e-4, was refused on that round-off (seed 16), and
             # seed 2's far leg, 0.84 to 0.78 by this count (0.81 by the benchmark's), would
-            # keep a crease.
+            # keep a crease. Tried and not kept: the try made again with the squashed part's
+            # junction kept at its rings and the rest wider took seed 40 over the 45-degree
+            # share (99.896% -> 99.912%, the leg 0.81), but its 21 rings squashed the near wing
+            # around the tail back to 0.57 of its thickness (0.96 at 16) and thinned the tail.
             if not necks:
                 necks.extend(limb_necks(V0, F, face_layer, face_kind, attachments, sheets))
             a_comp = np.array([comp[n[0][0][0]] if len(n[0][0]) else -1 for n in necks], np.int64)

@@ -273,6 +273,21 @@ def far_weights(sheets, attachments, rings: int) -> dict:
     return out
 
 
+def junction_vertices(A: sp.csr_matrix, F: np.ndarray, face_layer: np.ndarray, attachments) -> list:
+    """Per attachment, (n,) bool: the vertices of its junction, on both the part's faces and its
+    host's, and the part's own chain next to them (a lip's strip joins that chain to the host's
+    face, :func:`.stitch.build_mesh`, so it lies on the part's faces only). A (n, n) the vertex
+    adjacency of F (m, 3) int64, face_layer (m,) int64."""
+    n = A.shape[0]
+    F = np.asarray(F, np.int64)
+    out = []
+    for at in attachments:
+        own = _on_layer(F, face_layer, at.upper, n)
+        both = own & _on_layer(F, face_layer, at.lower, n)
+        out.append(both | (own & ((A @ both.astype(np.float64)) > 0)))
+    return out
+
+
 def _on_layer(F: np.ndarray, face_layer: np.ndarray, layer: int, n: int) -> np.ndarray:
     """(n,) bool: the vertices of layer ``layer``'s triangles."""
     out = np.zeros(n, bool)
@@ -304,15 +319,10 @@ def glued_face_distance(A: sp.csr_matrix, F: np.ndarray, face_layer: np.ndarray,
     n = A.shape[0]
     F = np.asarray(F, np.int64)
     members: dict = {}
-    for at in attachments:
+    for at, joint in zip(attachments, junction_vertices(A, F, face_layer, attachments)):
         key = (at.lower, at.side)
-        if key not in weights:
-            continue
-        own = _on_layer(F, face_layer, at.upper, n)
-        # the junction's chains on both faces; a part's chain that a lip's strip joins to its
-        # host's face (:func:`.stitch.build_mesh`) lies on the part's faces only, next to them
-        both = own & _on_layer(F, face_layer, at.lower, n)
-        members[key] = members.get(key, np.zeros(n, bool)) | both | (own & ((A @ both.astype(np.float64)) > 0))
+        if key in weights:
+            members[key] = members.get(key, np.zeros(n, bool)) | joint
     weighted = {}
     for lower, side in members:
         far = (face_layer == lower) & (face_kind != side_kind(side))
