@@ -117,8 +117,7 @@ def limb_hold(V: np.ndarray, F: np.ndarray, face_layer: np.ndarray, limbs, zone:
     u = np.clip(np.asarray(seam_rings, np.float64) / LIMB_SEAM_RINGS, 0.0, 1.0)
     near_seam = u * u * (3.0 - 2.0 * u)
     for layer, host, h in limbs:
-        own = np.zeros(len(V), bool)
-        own[F[face_layer == layer].ravel()] = True
+        own = _on_layer(F, face_layer, layer, len(V))
         idx = np.flatnonzero(own & zone & (near_seam > 0))
         if len(idx) == 0:
             continue
@@ -295,15 +294,6 @@ def _on_layer(F: np.ndarray, face_layer: np.ndarray, layer: int, n: int) -> np.n
     return out
 
 
-def _edge_matrix(F: np.ndarray, n: int) -> sp.csr_matrix:
-    """(n, n) with 1 where an edge of the triangles F (m, 3) joins two vertices."""
-    a = F.ravel()
-    b = F[:, [1, 2, 0]].ravel()
-    M = sp.coo_matrix((np.ones(2 * len(a)), (np.r_[a, b], np.r_[b, a])), shape=(n, n)).tocsr()
-    M.data[:] = 1.0
-    return M
-
-
 def glued_face_distance(A: sp.csr_matrix, F: np.ndarray, face_layer: np.ndarray, face_kind: np.ndarray,
                         attachments, weights: dict):
     """A function ``(seed, rings) -> (n,) float64``: how many rings each vertex lies from the
@@ -328,7 +318,7 @@ def glued_face_distance(A: sp.csr_matrix, F: np.ndarray, face_layer: np.ndarray,
     weighted = {}
     for lower, side in members:
         far = (face_layer == lower) & (face_kind != side_kind(side))
-        near_m, far_m = _edge_matrix(F[~far], n), _edge_matrix(F[far], n)
+        near_m, far_m = adjacency(F[~far], n), adjacency(F[far], n)
         only_far = far_m - far_m.multiply(near_m)
         only_far.eliminate_zeros()
         weighted[(lower, side)] = (near_m + weights[(lower, side)] * only_far).tocsr()
