@@ -70,6 +70,37 @@ void main() {
     gl_Position = u_mvp * a_position;
 }
 """
+#: The isophotes style's vertex shader: the head light's shading and n·l of the document's
+#: light, per vertex. Why: llvmpipe (software OpenGL) spent 18 ms of its rasteriser threads per
+#: played frame of the 16k-vertex model on the per-pixel normalizes, dots and line test (the
+#: frame cost 34 ms of CPU in all, 25 shaded; issue 34 asks 30); with both per vertex, 11 ms
+#: (26 in all). An isophote of a triangle mesh is piecewise linear anyway: the product finds
+#: the curves it sculpts from per-vertex shading (:func:`sketchforge.geometry.isophotes.isophotes`),
+#: so lines through the interpolated per-vertex value are the lines it works with; and the
+#: shading, interpolated over ~2-pixel triangles, differs from the per-pixel one in 0.7% of the
+#: pixels by more than 10 of 255 (frame 12 of examples/animated.json, compared side by side
+#: at 3x: no facets). The line count stays a fragment uniform only: Mesa refused to validate
+#: the program with one uniform declared in both stages, and the model was not drawn.
+_VERTEX_ISOPHOTES = """
+uniform mat4 u_mvp;
+uniform mat3 u_normal;
+uniform float u_light[3];
+attribute vec4 a_position;
+attribute vec3 a_normal;
+attribute vec4 a_color;
+varying vec4 v_color;
+varying vec3 v_normal;
+varying float v_e;
+varying float v_lit;
+void main() {
+    v_normal = normalize(u_normal * a_normal);
+    float p = dot(v_normal, normalize(vec3(0.4, 0.5, 1.0)));
+    v_lit = 0.25 + 0.75 * (p < 0. ? 0.15 * -p : p);
+    v_e = dot(normalize(a_normal), vec3(u_light[0], u_light[1], u_light[2]));
+    v_color = a_color;
+    gl_Position = u_mvp * a_position;
+}
+"""
 
 _HEADER = """
 #ifdef GL_ES
@@ -78,30 +109,32 @@ precision mediump float;
 #endif
 varying vec4 v_color;
 varying vec3 v_normal;
-varying vec3 v_model_normal;
 """
-#: The head light's shading of the clay colour (shaded and isophotes styles).
+#: The head light's shading of the clay colour, per pixel (shaded style).
 _LIT = """
     float p = dot(normalize(v_normal), normalize(vec3(0.4, 0.5, 1.0)));
     p = p < 0. ? 0.15 * -p : p;
     vec3 rgb = v_color.rgb * (0.25 + 0.75 * p);
 """
-#: n·l of the document's light (cel and isophotes styles).
+#: n·l of the document's light, per pixel (cel style; the isophotes style takes it per vertex).
 _LIGHT = """
     float e = dot(normalize(v_model_normal), vec3(u_light[0], u_light[1], u_light[2]));
 """
 #: style -> (fragment shader body, its uniforms and their initial values)
 _FRAGMENTS = {
     "shaded": ("void main() {" + _LIT + "    gl_FragColor = vec4(rgb, v_color.a);\n}\n", {}),
-    "cel": ("uniform float u_light[3];\nvoid main() {" + _LIGHT + """
+    "cel": ("uniform float u_light[3];\nvarying vec3 v_model_normal;\nvoid main() {" + _LIGHT + """
     vec3 rgb = e <= 0.0 ? vec3(%(t0)s) : (e <= 0.5 ? vec3(%(t1)s) : vec3(%(t2)s));
     gl_FragColor = vec4(rgb, v_color.a);
 }
 """, {"u_light": [1.0, 0.0, 0.0]}),
-    "isophotes": ("uniform float u_light[3];\nuniform float u_lines;\nvoid main() {" + _LIT + _LIGHT + """
-    float k = u_lines;
-    float t = e * (k + 1.0);
-    float d = abs(t - clamp(floor(t + 0.5), 1.0, k));
+    "isophotes": ("""uniform float u_lines;
+varying float v_e;
+varying float v_lit;
+void main() {
+    vec3 rgb = v_color.rgb * v_lit;
+    float t = v_e * (u_lines + 1.0);
+    float d = abs(t - clamp(floor(t + 0.5), 1.0, u_lines));
     float line = 1.0 - clamp(d / max(fwidth(t), 1e-6) - 0.1, 0.0, 1.0);
     rgb = mix(rgb, vec3(0.12, 0.10, 0.10), 0.85 * line);
     gl_FragColor = vec4(rgb, v_color.a);
@@ -126,7 +159,8 @@ def _register_shader() -> None:
             continue
         extension = "#extension GL_OES_standard_derivatives : enable" if "fwidth" in body else ""
         source = _HEADER % {"extension": extension} + body % tones
-        shaders.ShaderProgram(shader_name(style), [shaders.VertexShader(_VERTEX), shaders.FragmentShader(source)],
+        vertex = _VERTEX_ISOPHOTES if style == "isophotes" else _VERTEX
+        shaders.ShaderProgram(shader_name(style), [shaders.VertexShader(vertex), shaders.FragmentShader(source)],
                               uniforms=dict(uniforms))
 
 
