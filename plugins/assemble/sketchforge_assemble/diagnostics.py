@@ -98,19 +98,20 @@ def box_pairs(lo: np.ndarray, hi: np.ndarray, among: np.ndarray | None = None, b
     if among is not None:
         mask = np.zeros(m, bool)
         mask[among] = True
-    ext = (hi - lo).max(axis=1)
+    e = hi - lo
+    ext = np.maximum(np.maximum(e[:, 0], e[:, 1]), e[:, 2])
     cell = 2.0 * float(np.median(ext))
     if not np.isfinite(cell) or cell <= 0.0:
         cell = float(ext.max(initial=0.0))  # most boxes are points (collapsed triangles)
     # Never so fine that the grid's indices overflow int64 (a cell of 1e-300 over a unit spread
     # cast 1e300 to int64: garbage keys decided the pairs): at most 2^20 cells a side, so a
     # cell's key (three axes) stays below 2^61.
-    span = float(np.max(hi.max(axis=0) - lo.min(axis=0), initial=0.0))
+    origin, top = _column_min(lo), _column_max(hi)
+    span = float(np.max(top - origin, initial=0.0))
     cell = max(cell, span / 2.0**20, 1e-300)
-    origin = lo.min(axis=0)
     a = np.floor((lo - origin) / cell).astype(np.int64)
     b = np.floor((hi - origin) / cell).astype(np.int64)
-    dims = b.max(axis=0) + 1
+    dims = _column_max(b) + 1
     r = b - a + 1
     count = r[:, 0] * r[:, 1] * r[:, 2]
     small = np.flatnonzero(count <= big)
@@ -158,6 +159,17 @@ def box_pairs(lo: np.ndarray, hi: np.ndarray, among: np.ndarray | None = None, b
     if not ordered:
         return pairs.astype(np.int64, copy=False)
     return _ordered(pairs)
+
+
+def _column_min(X: np.ndarray) -> np.ndarray:
+    """(d,) the least of each column of X (m, d), m >= 1: a reduction over the short axis
+    of a (m, 3) array costs numpy 20 times one over each column (0.8 against 0.04 ms at 32k)."""
+    return np.array([X[:, j].min() for j in range(X.shape[1])], X.dtype)
+
+
+def _column_max(X: np.ndarray) -> np.ndarray:
+    """(d,) the largest of each column of X (m, d), m >= 1 (see :func:`_column_min`)."""
+    return np.array([X[:, j].max() for j in range(X.shape[1])], X.dtype)
 
 
 def _ordered(pairs: np.ndarray) -> np.ndarray:
@@ -223,12 +235,13 @@ def intersecting_pairs(V: np.ndarray, F: np.ndarray, face_group: np.ndarray | No
 
 def _intersecting_pairs(V, F, face_group, chunk, among):
     """:func:`intersecting_pairs` in one thread."""
-    T = V[F]
+    a, b, c = V[F[:, 0]], V[F[:, 1]], V[F[:, 2]]
     # The broad phase on float32 boxes rounded outwards (a superset of the float64 pairs; the
     # narrow phase below is exact): half the memory traffic, and steadier (median 32 against
-    # 45 ms on the creature's fairing check).
-    lo = np.nextafter(T.min(axis=1).astype(np.float32), np.float32(-np.inf))
-    hi = np.nextafter(T.max(axis=1).astype(np.float32), np.float32(np.inf))
+    # 45 ms on the creature's fairing check). The corners' least and largest taken pairwise:
+    # numpy's min over the middle axis of V[F] (m, 3, 3) took 2.7 ms, this 0.05.
+    lo = np.nextafter(np.minimum(np.minimum(a, b), c).astype(np.float32), np.float32(-np.inf))
+    hi = np.nextafter(np.maximum(np.maximum(a, b), c).astype(np.float32), np.float32(np.inf))
     pairs = box_pairs(lo, hi, among, ordered=False)
     if face_group is not None and len(pairs):
         pairs = pairs[face_group[pairs[:, 0]] != face_group[pairs[:, 1]]]
