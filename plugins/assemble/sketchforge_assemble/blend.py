@@ -69,13 +69,17 @@ def distance_to(xy: np.ndarray, line_xy: np.ndarray, reach: float = np.inf) -> n
     ab = b - a
     L2 = np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300)
     best = np.full(len(xy), np.inf)
-    # chunked over segments: junctions have tens of points, layers tens of thousands
+    x, y = xy[:, 0:1], xy[:, 1:2]
+    # chunked over segments: junctions have tens of points, layers tens of thousands. The
+    # least squared distance, then one square root: sqrt is monotonic and correctly rounded,
+    # so the same bits as the least of the distances, at a third of the cost.
     for s in range(0, len(a), 64):
         A, AB, l2 = a[s:s + 64], ab[s:s + 64], L2[s:s + 64]
         t = np.clip(np.einsum("nsk,sk->ns", xy[:, None, :] - A[None], AB) / l2, 0.0, 1.0)
-        p = A[None] + t[:, :, None] * AB[None]
-        best = np.minimum(best, np.min(np.linalg.norm(xy[:, None, :] - p, axis=2), axis=1))
-    return best
+        dx = x - (A[None, :, 0] + t * AB[None, :, 0])
+        dy = y - (A[None, :, 1] + t * AB[None, :, 1])
+        best = np.minimum(best, np.min(dx * dx + dy * dy, axis=1))
+    return np.sqrt(best)
 
 
 def _distance_and_nearest(xy: np.ndarray, line_xy: np.ndarray, reach: float):
