@@ -446,3 +446,42 @@ def test_far_weights_count_only_thin_hosts_and_are_continuous_in_their_thickness
     ts = np.linspace(THIN_HOST[0], THIN_HOST[1], 201)
     w = np.array([weight(t) for t in ts])
     assert np.all(np.diff(w) <= 0) and np.max(np.abs(np.diff(w))) < 0.02 * FAR_BLOCK
+
+
+def _roof(slope: float, n: int = 9):
+    """A grid over [-1, 1]² folded along x = 0 (z = slope·|x|), its columns on the fold:
+    V (n², 3), F, and the (n²,) bool of the vertices on the fold. Its bend there is
+    2·atan(slope) degrees, 0 everywhere else."""
+    from sketchforge.geometry.mesh_edges import interior_edges
+
+    x, y = np.meshgrid(np.linspace(-1, 1, n), np.linspace(-1, 1, n))
+    V = np.c_[x.ravel(), y.ravel(), slope * np.abs(x.ravel())]
+    idx = np.arange(n * n).reshape(n, n)
+    a, b, c, d = idx[:-1, :-1].ravel(), idx[:-1, 1:].ravel(), idx[1:, 1:].ravel(), idx[1:, :-1].ravel()
+    F = np.r_[np.c_[a, b, c], np.c_[a, c, d]].astype(np.int64)
+    return V, F, np.isclose(V[:, 0], 0.0), interior_edges(F)
+
+
+def test_the_limb_hold_lets_go_at_a_crease_continuously_in_its_bend():
+    """fair.crease_release (issue 34, point 5): the hold that keeps a limb's thickness past its
+    host is let go where the stitched surface is creased, so the fairing can smooth the crease
+    (seed 40's tail kept 9 edges over 45 degrees under the hold). 1 on smooth surface, 0 at a
+    bend of 60 degrees or more, and no jump as the bend grows (a decision continuous in the
+    drawing)."""
+    from sketchforge_assemble.fair import CREASE_RELEASE, crease_release
+
+    got = []
+    for deg in np.arange(0.0, 91.0, 0.5):
+        V, F, fold, edges = _roof(np.tan(np.radians(deg / 2)))
+        r = crease_release(V, F, edges)
+        assert np.all(r[~fold] == 1.0)  # flat away from the fold: held as before
+        assert np.ptp(r[fold]) < 1e-12
+        got.append(r[fold][0])
+        at = fold & (V[:, 1] > 0)  # only some vertices asked for: the same there, 1 elsewhere
+        assert np.array_equal(crease_release(V, F, edges, at=at)[at], r[at])
+        assert np.all(crease_release(V, F, edges, at=at)[~at] == 1.0)
+    got = np.array(got)
+    lo, hi = CREASE_RELEASE
+    bends = np.arange(0.0, 91.0, 0.5)
+    assert np.all(got[bends <= lo - 0.5] == 1.0) and np.all(got[bends >= hi + 0.5] < 1e-9)
+    assert np.all(np.diff(got) <= 1e-12) and np.max(np.abs(np.diff(got))) < 0.05

@@ -243,9 +243,10 @@ def test_a_tail_glued_near_a_wings_tip_leaves_the_wing_its_thickness(seed, wing,
     # rings wrapped over the wing's rim onto its other face and squashed it: around the tail the
     # wing kept a median 0.42 (seed 1) and 0.59 (seed 40) of its unfaired thickness, creased by
     # up to 85 degrees (99.68% and 99.77% of the junction edges under 45). Counted over the face
-    # the tail is glued on (fair.far_weights): 0.70 and 0.96, no fold, nothing crossing; seed 1
-    # meets the 45-degree share, seed 40 comes within one edge of it (99.896%: the try that
-    # would take it further squashed its near leg to 0.72 and is not kept).
+    # the tail is glued on (fair.far_weights): 0.70 and 0.96, no fold, nothing crossing. Seed 40
+    # then kept 9 creased edges on the tail's base under the limb's hold (99.896% of the
+    # junction edges under 45, one edge short); the hold let go at creases
+    # (fair.crease_release): 99.91%, seed 1 99.908%.
     layers, meshes, closed, names, res = _assembled(seed)
     raw = assemble_detailed(meshes, closed, names=names, params={"fair": 0})
     assert _host_kept_around(meshes, res, raw, names.index(wing), names.index("tail"), 12) >= kept
@@ -253,7 +254,7 @@ def test_a_tail_glued_near_a_wings_tip_leaves_the_wing_its_thickness(seed, wing,
         _joins_fold_free(seed, min_ratio=0.8)
     V, F = res.mesh.V, res.mesh.F
     ang = mc.junction_angles(V, F, res.face_layer, 8 * mc.layers_edge_length(meshes))
-    assert ang.max() <= 90.0 and np.mean(ang <= 45) >= 0.998, (ang.max(), np.mean(ang <= 45))
+    assert ang.max() <= 90.0 and np.mean(ang <= 45) >= 0.999, (ang.max(), np.mean(ang <= 45))
     assert mc.self_intersections(V, F) == 0 and mc.boundary_edges(F) == 0
     thin = {names[k]: (r, own) for k, (r, own) in _limb_ratios(meshes, res).items() if r < min(0.8, 0.9 * own)}
     assert not thin, thin

@@ -735,10 +735,11 @@ def _fair_rings(fx: _Fairing, levels=None):
         narrow = (reach < 1.0) & ~held
         hold = hold_weights(reach)
         # where a limb has left its host it is held (fair.limb_hold), so it keeps its thickness
+        # (its thickness, not the stitching's creases: given the edges, it lets go at those)
         seam_rings = rings_from(A, seam, LIMB_SEAM_RINGS)
 
         def limb(zone):
-            return limb_hold(V, F, face_layer, limbs, zone, seam_rings)
+            return limb_hold(V, F, face_layer, limbs, zone, seam_rings, edges)
 
         hold = np.maximum(hold, limb(narrow))
         V2, clear, bent, _ = fair_clear(V, F, narrow, A, h_med, hold, MAX_BEND, edges, ignore, scale)
