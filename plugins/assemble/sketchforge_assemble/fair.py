@@ -161,7 +161,8 @@ def crease_release(V: np.ndarray, F: np.ndarray, edges=None, at: np.ndarray | No
     drawn creatures kept 14 junction edges over 45 degrees, 9 at the tail's base (up to 65),
     one more than the 0.1% that issue 34 allows; released at its creases, 12 (the tail's 7),
     and no limb of the 60 creatures thinner than before (the creases are a few vertices:
-    their neighbours still hold the tube). The ramp starts under the 45 degrees the issue
+    their neighbours still hold the tube); with the hold then tripled (:data:`LIMB_HOLD`),
+    11 (the tail's 6). The ramp starts under the 45 degrees the issue
     counts and is smooth, so no hold jumps with a bend's round-off.
     """
     E, fa, fb = interior_edges(F) if edges is None else edges
