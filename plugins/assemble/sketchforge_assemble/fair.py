@@ -80,13 +80,8 @@ HOLD_START = 0.3
 #: past the outline and :data:`LIMB_SEAM_RINGS` rings from the seam. Chosen on the 60 seeded
 #: creatures of ``benchmarks/bench_creatures.py`` (fair = 12): with no such hold 31 of them had
 #: a limb thinner than 0.8 of mid-limb just outside its host; 0.1: 8, with as many junction
-#: folds as before; 0.3: 4, with a worse fold (174 degrees) and one more creature folded. Once
-#: the fold passes and further tries came, 0.1 left 5 (4 of them drawn so), and once the hold
-#: let go at the stitching's creases (:func:`crease_release`) 0.3 leaves the 4 drawn so
-#: (median 0.87 -> 0.92; seed 16's tail 0.76 -> 0.81, its own layer 0.80), no fold, every
-#: creature still at least 99.9% of its junction edges under 45 degrees (worst 99.904%
-#: against 99.908%) and its sharpest 84 against 89 degrees; 0.2 kept seed 16's tail at 0.79.
-LIMB_HOLD = 0.3
+#: folds as before; 0.3: 4, with a worse fold (174 degrees) and one more creature folded.
+LIMB_HOLD = 0.1
 LIMB_RAMP = 1.5
 LIMB_SEAM_RINGS = 4
 
@@ -161,8 +156,7 @@ def crease_release(V: np.ndarray, F: np.ndarray, edges=None, at: np.ndarray | No
     drawn creatures kept 14 junction edges over 45 degrees, 9 at the tail's base (up to 65),
     one more than the 0.1% that issue 34 allows; released at its creases, 12 (the tail's 7),
     and no limb of the 60 creatures thinner than before (the creases are a few vertices:
-    their neighbours still hold the tube); with the hold then tripled (:data:`LIMB_HOLD`),
-    11 (the tail's 6). The ramp starts under the 45 degrees the issue
+    their neighbours still hold the tube). The ramp starts under the 45 degrees the issue
     counts and is smooth, so no hold jumps with a bend's round-off.
     """
     E, fa, fb = interior_edges(F) if edges is None else edges
