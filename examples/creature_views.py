@@ -32,14 +32,18 @@ def _rotation(ax: float, ay: float) -> np.ndarray:
 def views(mesh, size: int = 420, light=(0.45, 0.55, 0.7)) -> np.ndarray:
     """(size, 3·size, 3) uint8: ``mesh`` (an assembled model) from the front, the side and in
     three-quarter view, side by side."""
-    from sketchforge.geometry.mesh import Mesh
+    import dataclasses
+
+    from sketchforge.geometry.mesh import AssembledMesh, Mesh
     from sketchforge.geometry.raster import render_top
 
     c = mesh.V.mean(axis=0)
     shots = []
     for ax, ay in VIEWS.values():
         V = (mesh.V - c) @ _rotation(ax, ay).T
-        shots.append(render_top([Mesh(V, mesh.F)], np.array(light), size))
+        # turned, the model keeps its rim pairs (normals shared across each part's rim)
+        turned = dataclasses.replace(mesh, V=V) if isinstance(mesh, AssembledMesh) else Mesh(V, mesh.F)
+        shots.append(render_top([turned], np.array(light), size))
     return np.concatenate(shots, axis=1)
 
 

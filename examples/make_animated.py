@@ -60,7 +60,7 @@ def main(out: Path = HERE / "animated.json") -> None:
 def strip(doc_path: Path, png: Path, frames=(0, 8, 16, 24, 32, 40), size: int = 240) -> None:
     """Render the given frames of the animation side by side (front view, no OpenGL)."""
     from sketchforge.geometry.raster import render_top, write_png
-    from sketchforge_animate import Animation, Animator
+    from sketchforge_animate import Animation, Animator, posed_mesh
 
     doc = ff.load(doc_path, default_host())
     mesh = doc.export_mesh()
@@ -69,11 +69,15 @@ def strip(doc_path: Path, png: Path, frames=(0, 8, 16, 24, 32, 40), size: int = 
     # one frame box for all images, so the motion is visible against a fixed background
     lo = np.min([posed[f][:, :2].min(0) for f in frames], axis=0)
     hi = np.max([posed[f][:, :2].max(0) for f in frames], axis=0)
-    corners = np.array([[lo[0], lo[1], 0.0], [hi[0], hi[1], 0.0], [(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, 0.0]])  # no area: frames only
-    frame_mesh = Mesh(corners, np.array([[0, 1, 2]]))
+    # two specks at the box's corners frame every image alike (one triangle across the box drew
+    # its outline as a diagonal line through the pictures)
+    e = 1e-9 * float(np.max(hi - lo))
+    corners = np.array([[lo[0], lo[1], 0.0], [lo[0] + e, lo[1], 0.0], [lo[0], lo[1] + e, 0.0],
+                        [hi[0], hi[1], 0.0], [hi[0] - e, hi[1], 0.0], [hi[0], hi[1] - e, 0.0]])
+    frame_mesh = Mesh(corners, np.array([[0, 1, 2], [3, 5, 4]]))
     images = []
     for f in frames:
-        img = render_top([frame_mesh, Mesh(posed[f], mesh.F)], doc.light.direction, size=size, cel=False)
+        img = render_top([frame_mesh, posed_mesh(mesh, anim, f)], doc.light.direction, size=size, cel=False)
         images.append(img)
     write_png(png, np.concatenate(images, axis=1))
     print(f"wrote {png}: frames {', '.join(map(str, frames))}")

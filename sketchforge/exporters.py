@@ -47,9 +47,15 @@ def stl_bytes(mesh: Mesh) -> bytes:
 
 
 def _gltf_parts(mesh: Mesh) -> tuple[dict, bytes]:
+    """The glTF document and its binary buffer: positions, triangles and the display's own
+    normals (:func:`sketchforge.geometry.heightfield.layer_normals`: a viewer given none draws
+    every triangle flat, glTF 2.0 3.7.2.1; an assembled model's are shared across its rim pairs)."""
+    from sketchforge.geometry.heightfield import layer_normals
+
     pos = mesh.V.astype("<f4")
     idx = mesh.F.astype("<u4").ravel()
-    pos_bytes, idx_bytes = pos.tobytes(), idx.tobytes()
+    nrm = layer_normals(mesh).astype("<f4") if mesh.n_faces else np.zeros((len(pos), 3), "<f4")
+    pos_bytes, idx_bytes, nrm_bytes = pos.tobytes(), idx.tobytes(), nrm.tobytes()
     lo = pos.min(axis=0).tolist() if len(pos) else [0.0, 0.0, 0.0]
     hi = pos.max(axis=0).tolist() if len(pos) else [0.0, 0.0, 0.0]
     gltf = {
@@ -57,18 +63,20 @@ def _gltf_parts(mesh: Mesh) -> tuple[dict, bytes]:
         "scene": 0,
         "scenes": [{"nodes": [0]}],
         "nodes": [{"mesh": 0}],
-        "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
-        "buffers": [{"byteLength": len(pos_bytes) + len(idx_bytes)}],
+        "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "NORMAL": 2}, "indices": 1}]}],
+        "buffers": [{"byteLength": len(pos_bytes) + len(idx_bytes) + len(nrm_bytes)}],
         "bufferViews": [
             {"buffer": 0, "byteOffset": 0, "byteLength": len(pos_bytes), "target": 34962},
             {"buffer": 0, "byteOffset": len(pos_bytes), "byteLength": len(idx_bytes), "target": 34963},
+            {"buffer": 0, "byteOffset": len(pos_bytes) + len(idx_bytes), "byteLength": len(nrm_bytes), "target": 34962},
         ],
         "accessors": [
             {"bufferView": 0, "componentType": 5126, "count": len(pos), "type": "VEC3", "min": lo, "max": hi},
             {"bufferView": 1, "componentType": 5125, "count": len(idx), "type": "SCALAR"},
+            {"bufferView": 2, "componentType": 5126, "count": len(nrm), "type": "VEC3"},
         ],
     }
-    return gltf, pos_bytes + idx_bytes
+    return gltf, pos_bytes + idx_bytes + nrm_bytes
 
 
 def glb_bytes(mesh: Mesh) -> bytes:

@@ -305,3 +305,30 @@ def test_example_is_rebuilt_deterministically_and_is_closed(tmp_path):
     assert np.all(counts == 2)
     assert np.all(np.isfinite(P)) and np.abs(P - mesh.V).max() > 0.05  # it moved
     assert np.median(rel_edge_change(mesh.V, P, F)) < 0.03
+
+
+def test_a_posed_model_and_its_glb_keep_the_rim_shared(real_host, tmp_path):
+    """The assembled model's rim pairs (issue 34) live on through a pose: the posed model still
+    names them, so the renderers share its rim normals in every frame, and the animated .glb's
+    normals (base and every morph target) are the shared ones."""
+    from sketchforge.geometry.normals import vertex_normals
+    from sketchforge_animate.export import pose_document
+
+    doc = animated_doc(real_host)
+    model = doc.export_mesh()
+    assert len(model.rim_pairs) > 20
+    posed = pose_document(doc, 8)
+    np.testing.assert_array_equal(posed.rim_pairs, model.rim_pairs)
+    assert np.abs(posed.V - model.V).max() > 0.05
+    doc_path = tmp_path / "a.glb"
+    real_host.exporter_for(doc_path, doc).write_document(doc_path, doc)
+    gltf, blob = read_glb(doc_path.read_bytes())
+    prim = gltf["meshes"][0]["primitives"][0]
+    base_n = accessor_array(gltf, blob, prim["attributes"]["NORMAL"]).reshape(-1, 3)
+    first = pose_document(doc, 0)  # the .glb's base is frame 0
+    np.testing.assert_allclose(base_n, vertex_normals(first.V, first.F, first.rim_pairs), atol=1e-6)
+    own = vertex_normals(first.V, first.F)
+    rim = model.rim_pairs.ravel()
+    assert np.abs(base_n[rim, 2]).max() < 0.5 * np.abs(own[rim, 2]).min()  # not the unshared ones
+    d8 = accessor_array(gltf, blob, prim["targets"][7]["NORMAL"]).reshape(-1, 3)
+    np.testing.assert_allclose(base_n + d8, vertex_normals(posed.V, posed.F, posed.rim_pairs), atol=2e-6)

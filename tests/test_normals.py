@@ -241,3 +241,91 @@ def test_faces_outward_only_for_a_closed_surface_wound_outwards():
     assert not faces_outward(Q, np.r_[H, box[:, ::-1]])
     m = hemisphere(1.0, 0.12)
     assert not faces_outward(m.V, m.F)
+
+
+def test_a_rim_pair_shares_its_normal_and_the_lens_is_round_at_its_rim():
+    """Issue 34: an assembled part's front and back rim vertices are kept a small margin apart;
+    their own normals tilt by ±15-20° towards their own side, so seen edge-on the shading
+    jumped across the rim within a pixel (a line along the outline). Shared, they are one
+    point of the surface: horizontal, pointing out of the outline."""
+    from rim_lens import lens
+
+    from sketchforge.geometry.normals import faces_outward, rim_pair_weights
+
+    V, F, P = lens(0.01)
+    assert faces_outward(V, F)
+    np.testing.assert_array_equal(rim_pair_weights(V, F, P), 1.0)
+    own = vertex_normals(V, F)
+    assert np.all(own[P[:, 0], 2] > 0.25) and np.all(own[P[:, 1], 2] < -0.25)  # the jump
+    N = vertex_normals(V, F, P)
+    np.testing.assert_allclose(N[P[:, 0]], N[P[:, 1]], atol=1e-12)
+    assert np.max(np.abs(N[P[:, 0], 2])) < 1e-12
+    out = V[P[:, 0], :2] / np.linalg.norm(V[P[:, 0], :2], axis=1, keepdims=True)
+    assert np.degrees(np.arccos(np.min(np.einsum("ij,ij->i", N[P[:, 0], :2], out)))) < 10.0
+    # every vertex off the rim keeps its own normal, bit for bit
+    off = np.setdiff1d(np.arange(len(V)), P.ravel())
+    np.testing.assert_array_equal(N[off], own[off])
+
+
+def test_rim_pairs_let_go_continuously_as_the_rim_opens_into_a_band():
+    """Where the assembly's fairing has opened a rim into a band of ordinary triangles, the
+    two vertices are no longer one point and keep their own normals; in between the share
+    fades without a step (decisions continuous in the input)."""
+    from rim_lens import lens
+
+    from sketchforge.geometry.normals import RIM_SHARE, rim_pair_weights
+
+    seps = np.linspace(0.0, 0.12, 61)
+    w = np.array([rim_pair_weights(*lens(s))[0] for s in seps])
+    assert w[0] == 1.0 and w[-1] == 0.0
+    assert np.all(np.diff(w) <= 0.0) and np.max(np.abs(np.diff(w))) < 0.12
+    V, F, P = lens(0.12)
+    np.testing.assert_array_equal(vertex_normals(V, F, P), vertex_normals(V, F))
+    # the weight's ends, in edge lengths around the pair
+    assert RIM_SHARE[0] < RIM_SHARE[1] <= 1.0
+    # and the normals follow the weight continuously
+    prev = None
+    for s in seps:
+        V, F, P = lens(s)
+        N = vertex_normals(V, F, P)[P[0, 0]]
+        if prev is not None:
+            assert np.degrees(np.arccos(min(1.0, float(N @ prev)))) < 3.0
+        prev = N
+
+
+def test_the_3d_view_s_shading_vertices_share_the_rim_as_the_headless_normals_do():
+    """The 3D view's per-corner groups (crease_groups, computed at rest) with rim pairs: every
+    corner at a fully shared pair shades with the headless renderer's normal, the indexed
+    mesh still shades each corner as its own group would (rest and posed), also where the
+    weights differ along the rim."""
+    from rim_lens import lens
+
+    from sketchforge.geometry.normals import (
+        corner_normals_grouped,
+        crease_groups,
+        group_normals,
+        rim_pair_weights,
+        shading_vertices,
+    )
+
+    V, F, P = lens(0.01)
+    groups = crease_groups(V, F, 50.0, P)
+    src, tris, rows = shading_vertices(F, groups)
+    N = group_normals(V, F, rows)
+    rim = np.isin(src, P.ravel())
+    np.testing.assert_allclose(N[rim], vertex_normals(V, F, P)[src[rim]], atol=1e-12)
+    assert np.bincount(src[rim]).max() == 1  # one shading vertex per rim vertex
+    # rungs from shared to let go around the rim (x from -1 to 1: 0 to 0.1 apart)
+    V, F, P = lens(0.05 * (1.0 + hemisphere(1.0, 0.1).V[:, 0]))
+    w = rim_pair_weights(V, F, P)
+    assert w.min() == 0.0 and w.max() == 1.0 and np.sum((w > 0) & (w < 1)) >= 3
+    for crease in (50.0, 15.0):  # at 15° a pair's corners smooth over faces by other weights
+        groups = crease_groups(V, F, crease, P)
+        src, tris, rows = shading_vertices(F, groups)
+        np.testing.assert_array_equal(src[tris], F)
+        np.testing.assert_array_equal(group_normals(V, F, rows)[tris], corner_normals_grouped(V, F, groups))
+        posed = V + np.random.default_rng(34).normal(0.0, 0.003, V.shape)
+        np.testing.assert_array_equal(group_normals(posed, F, rows)[tris], corner_normals_grouped(posed, F, groups))
+    # with the crease test off, the groups are the headless normals exactly
+    src, tris, rows = shading_vertices(F, crease_groups(V, F, 180.0, P))
+    np.testing.assert_allclose(group_normals(V, F, rows)[tris], vertex_normals(V, F, P)[F], atol=1e-12)

@@ -136,8 +136,22 @@ class AssembledMesh(Mesh):
     notes : tuple of str
         One sentence per part glued by a stretch of its junction only (it runs off its host,
         spans two layers or touches another part's junction on the same face).
+    rim_pairs : (r, 2) int64
+        Pairs of vertices that stand for one point of the smooth surface: a part's front and
+        back vertex at a point of its rim, which the assembly keeps a small margin apart
+        (joined by a thin strip of triangles). Renderers and exporters share their normals
+        (:func:`sketchforge.geometry.normals.vertex_normals`); empty when the assembler has
+        none (its rims are single vertices, or it does not say).
     """
 
     free: tuple = ()
     warnings: tuple = ()
     notes: tuple = ()
+    rim_pairs: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), np.int64))
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        pairs = frozen_array(np.asarray(self.rim_pairs, dtype=np.int64).reshape(-1, 2), np.int64)
+        object.__setattr__(self, "rim_pairs", pairs)
+        if pairs.size and (pairs.min() < 0 or pairs.max() >= len(self.V)):
+            raise ValueError(f"AssembledMesh.rim_pairs refers to a vertex outside 0..{len(self.V) - 1}")

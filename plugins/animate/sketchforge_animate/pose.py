@@ -11,11 +11,12 @@ animation (what ``replay --frame N`` and the glTF exporter compute), bit for bit
 from __future__ import annotations
 
 import atexit
+import dataclasses
 
 import numpy as np
 from scipy.spatial import cKDTree
 
-from sketchforge.plugin_api import Mesh, ParameterError
+from sketchforge.plugin_api import AssembledMesh, Mesh, ParameterError
 
 from .arap import ArapSolver
 from .state import Animation
@@ -106,5 +107,9 @@ def animator_for(mesh: Mesh, anim: Animation) -> Animator:
 
 
 def posed_mesh(mesh: Mesh, anim: Animation, frame: int) -> Mesh:
-    """The model posed at ``frame``: same triangles, moved vertices."""
-    return Mesh(animator_for(mesh, anim).frame(anim, frame), mesh.F)
+    """The model posed at ``frame``: same triangles (and rim pairs, for an assembled model),
+    moved vertices."""
+    P = animator_for(mesh, anim).frame(anim, frame)
+    # a posed surface keeps no outline (it is no height field); an assembled model keeps its
+    # rim pairs, whose normals the renderers share
+    return dataclasses.replace(mesh, V=P) if isinstance(mesh, AssembledMesh) else Mesh(P, mesh.F)

@@ -111,6 +111,9 @@ class AssemblyResult:
         Index (in the input list) of the layer each triangle comes from.
     face_kind : (m,) int8
         0 front face, 1 back face, 2 rim bridge.
+    rim_pairs : (r, 2) int64
+        Each part's front and back vertex at a point of its rim (kept the margin apart): the
+        display shares their normals (:attr:`sketchforge.geometry.mesh.AssembledMesh.rim_pairs`).
     attachments : list of Attachment
         In input indices.
     components : int
@@ -141,6 +144,7 @@ class AssemblyResult:
     mesh: Mesh
     face_layer: np.ndarray
     face_kind: np.ndarray
+    rim_pairs: np.ndarray
     attachments: list
     components: int
     n_equalities: int
@@ -355,6 +359,7 @@ def _result(res: _Stages, run: _Run, sheets: list, t0: float) -> AssemblyResult:
         mesh=Mesh(res.V, res.F),
         face_layer=keep_arr[res.face_layer],
         face_kind=res.face_kind,
+        rim_pairs=res.rim_pairs,
         attachments=[Attachment(keep[a.upper], keep[a.lower], a.side, a.keep) for a in res.attachments],
         components=res.components,
         n_equalities=res.n_equalities,
@@ -395,6 +400,7 @@ class _Stages:
     F: np.ndarray
     face_layer: np.ndarray
     face_kind: np.ndarray
+    rim_pairs: np.ndarray
     attachments: list
     components: int
     n_equalities: int
@@ -449,15 +455,16 @@ def _assemble(sheets: list, knames: list[str], p: dict, cache, freed: dict[int, 
 
     t = time.perf_counter()
     delta = [x[offsets[k]:offsets[k + 1]] for k in range(len(sheets))]
-    V, F, face_layer, face_kind, seam, ends = build_mesh(sheets, attachments, delta, front_off, back_off, lips)
+    V, F, face_layer, face_kind, seam, ends, rim_pairs = build_mesh(sheets, attachments, delta, front_off, back_off,
+                                                                    lips)
     timings["stitch"] = time.perf_counter() - t
     faired = None
     sinfo["fair_zone"] = sinfo["fair_rings"] = None
     if lips is not None and p["fair"] > 0:
         V, faired, sinfo["fair_zone"], sinfo["fair_rings"] = _fair(V, F, face_layer, face_kind, seam, ends, sheets,
                                                                    in_att, p, cache, timings, attachments)
-    return _Stages(V, F, face_layer, face_kind, attachments, _components(len(sheets), attachments), int(len(beq)),
-                   int(len(bin_)), viol, glue_error, warnings, notes, timings, sinfo, faired)
+    return _Stages(V, F, face_layer, face_kind, rim_pairs, attachments, _components(len(sheets), attachments),
+                   int(len(beq)), int(len(bin_)), viol, glue_error, warnings, notes, timings, sinfo, faired)
 
 
 def _attach_sheets(sheets: list, attachments: list, attached: set, cache, operators: dict) -> None:

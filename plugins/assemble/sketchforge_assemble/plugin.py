@@ -32,7 +32,7 @@ def assemble_layers(layers, params):
     # what the person should know: the parts shown free and why, the parts glued by a
     # stretch of their junction only (issue 34)
     return AssembledMesh(result.mesh.V, result.mesh.F, free=tuple(layers[i].id for i in result.free + result.left_out),
-                         warnings=tuple(result.warnings), notes=tuple(result.notes))
+                         warnings=tuple(result.warnings), notes=tuple(result.notes), rim_pairs=result.rim_pairs)
 
 
 #: The parameters as the app's form shows them: the ranges and options ``_params`` checks

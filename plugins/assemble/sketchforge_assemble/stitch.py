@@ -91,6 +91,10 @@ def build_mesh(sheets: list[Sheet], attachments: list[Attachment], delta: list[n
     ends : (e,) int64
         The two ends of every glued junction, where the part's front and back faces meet the
         slit's end (:func:`.fair.seam_zone` fairs more rings around them).
+    rim_pairs : (r, 2) int64
+        A part's front and back vertex at each point of its bridged rim (outline and holes,
+        not a glued junction): one point of the smooth surface the mesh stands for, kept the
+        margin apart (see :attr:`sketchforge.geometry.mesh.AssembledMesh.rim_pairs`).
     """
     sizes = np.array([s.n for s in sheets])
     base = np.r_[0, np.cumsum(2 * sizes)]
@@ -163,6 +167,7 @@ def build_mesh(sheets: list[Sheet], attachments: list[Attachment], delta: list[n
 
     # Rim bridges along the outline, except along a glued junction.
     bridges = []
+    rims = []  # (k, 2) front and back vertex of each bridged rim point
     for i, s in enumerate(sheets):
         b = s.boundary
         a_, b_ = b, np.roll(b, -1)
@@ -179,6 +184,8 @@ def build_mesh(sheets: list[Sheet], attachments: list[Attachment], delta: list[n
         for hole in s.holes:
             a_, b_ = np.r_[a_, hole], np.r_[b_, np.roll(hole, -1)]
         af, bf, ab, bb = front[i][a_], front[i][b_], back[i][a_], back[i][b_]
+        rim = np.unique(np.r_[a_, b_])
+        rims.append(np.c_[front[i][rim], back[i][rim]])
         bridges.append(np.c_[bf, af, ab])
         bridges.append(np.c_[bf, ab, bb])
 
@@ -205,5 +212,8 @@ def build_mesh(sheets: list[Sheet], attachments: list[Attachment], delta: list[n
     new = np.cumsum(used) - 1
     seam = np.unique(remap[np.concatenate(seam)]) if seam else np.zeros(0, np.int64)
     ends = np.unique([front[i][sheets[i].junction[e]] for i in sorted(attached) for e in (0, -1)]).astype(np.int64)
+    # a junction's end is one vertex of front and back already (remap): no pair there
+    pairs = remap[np.vstack(rims)] if rims else np.zeros((0, 2), np.int64)
+    pairs = pairs[(pairs[:, 0] != pairs[:, 1]) & used[pairs].all(axis=1)]
     return (V[used], new[F].astype(np.int64), face_layer.astype(np.int64), face_kind, new[seam].astype(np.int64),
-            new[ends].astype(np.int64))
+            new[ends].astype(np.int64), new[pairs].astype(np.int64))
