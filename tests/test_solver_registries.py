@@ -80,7 +80,7 @@ def test_provenance_names_every_solver_with_its_plugin_and_version(third_party_d
     assert solvers["inflate"]["rings"] == {"plugin": PLUGIN, "version": None, "solver_version": "2"}
     assert solvers["inflate"]["poisson"]["plugin"] == "inflate"
     assert solvers["sculpt"] == {"probe": {"plugin": PLUGIN, "version": None, "solver_version": "3"}}
-    assert solvers["assemble"] == {"depth_qp": {"plugin": "assemble", "version": "0.1.0", "solver_version": "5"}}
+    assert solvers["assemble"] == {"depth_qp": {"plugin": "assemble", "version": "0.1.0", "solver_version": "6"}}
 
 
 def test_replay_check_names_a_solver_that_is_not_installed(third_party_doc, tmp_path, capsys):

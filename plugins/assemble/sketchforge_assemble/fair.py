@@ -84,6 +84,14 @@ HOLD_START = 0.3
 LIMB_HOLD = 0.1
 LIMB_RAMP = 1.5
 LIMB_SEAM_RINGS = 4
+#: For a limb the fairing still thinned under 0.8 of mid-limb where it leaves its host (the
+#: neck try of :func:`sketchforge_assemble.assemble._fair`), the hold starts this many of its
+#: edge lengths inside the host's outline: the thinning lies in the first two edge lengths
+#: past it, where the hold was still rising (seed 16's tail: 0.76 of mid-tail, drawn 0.80;
+#: started 0.75 edge lengths inside 0.79, 1.5 inside 0.80). Not for every limb: holding
+#: there keeps a junction near its host's outline creased (the example creature's head: 1
+#: edge over 45 degrees, 3 with the shift, and its assembly faired twice more).
+NECK_SHIFT = 1.5
 
 
 def limb_hold(V: np.ndarray, F: np.ndarray, face_layer: np.ndarray, limbs, zone: np.ndarray,
@@ -106,8 +114,10 @@ def limb_hold(V: np.ndarray, F: np.ndarray, face_layer: np.ndarray, limbs, zone:
     V : (n, 3) float64
     F : (m, 3) int64
     face_layer : (m,) int64
-    limbs : list of (int, shapely geometry, float)
-        Per glued part: its layer, its host's region in the drawing plane, its edge length.
+    limbs : list of (int, shapely geometry, float) or (int, shapely geometry, float, float)
+        Per glued part: its layer, its host's region in the drawing plane, its edge length,
+        and optionally how many of its edge lengths inside the host's outline the hold
+        starts (default 0: at the outline; see :data:`NECK_SHIFT`).
     zone : (n,) bool
         The vertices the fairing may move; only these are looked at.
     seam_rings : (n,) int64
@@ -120,17 +130,25 @@ def limb_hold(V: np.ndarray, F: np.ndarray, face_layer: np.ndarray, limbs, zone:
     out = np.zeros(len(V))
     u = np.clip(np.asarray(seam_rings, np.float64) / LIMB_SEAM_RINGS, 0.0, 1.0)
     near_seam = u * u * (3.0 - 2.0 * u)
-    for layer, host, h in limbs:
+    for layer, host, h, *rest in limbs:
+        shift = float(rest[0]) if rest else 0.0
         own = _on_layer(F, face_layer, layer, len(V))
         idx = np.flatnonzero(own & zone & (near_seam > 0))
         if len(idx) == 0:
             continue
         xy = V[idx, :2]
         outside = ~shapely.contains_xy(host, xy[:, 0], xy[:, 1])
-        if not outside.any():
-            continue
-        idx = idx[outside]
-        t = np.clip(shapely.distance(host, shapely.points(xy[outside])) / (LIMB_RAMP * h), 0.0, 1.0)
+        if shift > 0.0:
+            # the hold starts inside the outline: distances signed, negative inside
+            pts = shapely.points(xy)
+            d = np.where(outside, shapely.distance(host, pts), -shapely.distance(host.boundary, pts))
+            t = np.clip((d + shift * h) / (LIMB_RAMP * h), 0.0, 1.0)
+            idx, t = idx[t > 0.0], t[t > 0.0]
+        else:
+            if not outside.any():
+                continue
+            idx = idx[outside]
+            t = np.clip(shapely.distance(host, shapely.points(xy[outside])) / (LIMB_RAMP * h), 0.0, 1.0)
         out[idx] = np.maximum(out[idx], LIMB_HOLD * near_seam[idx] * t * t * (3.0 - 2.0 * t))
     if edges is None:
         return out
@@ -384,39 +402,75 @@ def glued_face_distance(A: sp.csr_matrix, F: np.ndarray, face_layer: np.ndarray,
     return dist
 
 
-def limb_necks(V: np.ndarray, F: np.ndarray, face_layer: np.ndarray, face_kind: np.ndarray, attachments,
-               sheets) -> list:
-    """Per attachment, the part's front and back vertices that face each other (same xy) past
-    its host's outline, as ((k,) int64, (k,) int64) pairs at its neck (within 2 of its edge
-    lengths of the outline) and at mid-limb (40-60% of the farthest pair's distance), both
-    empty where the part hardly leaves its host (under 6 edge lengths), for
-    :func:`neck_ratio`. The way the creature benchmark measures a limb (issue 34, point 5),
-    on the mesh's own vertices."""
+def outline_distance(region, xy: np.ndarray, spacing: float) -> np.ndarray:
+    """(k,) float64: the distance from each point xy (k, 2) outside ``region`` (a shapely
+    Polygon or MultiPolygon, holes included) to its outline, measured to the outline resampled
+    at most ``spacing`` apart: at most ``spacing²/(8d)`` over the true distance d (half the
+    spacing at d = 0). What :func:`limb_necks` needs, ~6 times faster than
+    ``shapely.distance`` (which measures every point against every edge: 1.5 ms a limb)."""
     from scipy.spatial import cKDTree
 
-    F = np.asarray(F, np.int64)
+    samples = []
+    for ring in shapely.get_rings(shapely.get_parts(region)):
+        c = shapely.get_coordinates(ring)
+        if len(c) < 2:
+            continue
+        a, b = c[:-1], c[1:]
+        n = np.maximum(1, np.ceil(np.linalg.norm(b - a, axis=1) / spacing).astype(np.int64))
+        t = np.arange(int(n.sum())) - np.repeat(np.cumsum(n) - n, n)
+        samples.append(np.repeat(a, n, axis=0) + (t / np.repeat(n, n))[:, None] * np.repeat(b - a, n, axis=0))
+    return cKDTree(np.vstack(samples)).query(np.asarray(xy, np.float64).reshape(-1, 2))[0]
+
+
+def limb_necks(V: np.ndarray, twins, attachments, sheets, only=None) -> list:
+    """Per attachment, the part's front and back vertices that face each other (``twins``:
+    :func:`.stitch.build_mesh`'s pairs and their sheets) past its host's outline in V (n, 3)
+    as stitched, as ((k,) int64, (k,) int64) pairs at its neck (within 2 of its edge lengths
+    of the outline) and at mid-limb (40-60% of the farthest pair's distance), both empty where
+    the part hardly leaves its host (under 6 edge lengths), for :func:`neck_ratio`. The way
+    the creature benchmark measures a limb (issue 34, point 5), on the mesh's own vertices.
+    ``only`` ((a,) bool, optional): measure those attachments, the others get empty pairs."""
+    pairs, sheet_of = twins
     empty = (np.zeros(0, np.int64), np.zeros(0, np.int64))
     out = []
-    for at in attachments:
-        lay = face_layer == at.upper
-        front = np.unique(F[lay & (face_kind == 0)])
-        back = np.unique(F[lay & (face_kind == 1)])
-        h = sheets[at.upper].h
-        if len(front) == 0 or len(back) == 0:
+    for i, at in enumerate(attachments):
+        mine = pairs[sheet_of == at.upper]
+        if (only is not None and not only[i]) or len(mine) == 0:
             out.append((empty, empty))
             continue
+        h = sheets[at.upper].h
         host = sheets[at.lower].polygon()
-        xy = V[front, :2]
+        xy = V[mine[:, 0], :2]
         past = ~shapely.contains_xy(host, xy[:, 0], xy[:, 1])
-        gap, nb = cKDTree(V[back, :2]).query(xy)
-        past &= gap <= 1e-6 * h
-        d = shapely.distance(host, shapely.points(xy[past])) if past.any() else np.zeros(0)
+        d = outline_distance(host, xy[past], h / 4.0) if past.any() else np.zeros(0)
         if len(d) == 0 or d.max() < 6.0 * h:
             out.append((empty, empty))
             continue
-        f, bk = front[past], back[nb[past]]
+        f, bk = mine[past, 0], mine[past, 1]
         neck, mid = d <= 2.0 * h, (d >= 0.4 * d.max()) & (d <= 0.6 * d.max())
         out.append(((f[neck], bk[neck]), (f[mid], bk[mid])))
+    return out
+
+
+#: See :func:`moved_past_host`.
+NECK_STILL = 0.02
+
+
+def moved_past_host(V0: np.ndarray, V: np.ndarray, F: np.ndarray, face_layer: np.ndarray, attachments,
+                    sheets) -> np.ndarray:
+    """(a,) bool: for each attachment, whether V (n, 3) moved any vertex of the part (from V0)
+    that lies past its host's outline by more than :data:`NECK_STILL` of the part's edge
+    length: where none did, its neck thickness (:func:`limb_necks`) changed by at most twice
+    that, under 3% of a limb the neck measure looks at (one reaching 6 edge lengths past its
+    host is seldom thinner than 1.3 of them), and measuring it (~2.5 ms a part) is skipped."""
+    owner = np.full(len(V), -1, np.int64)
+    owner[np.asarray(F, np.int64).ravel()] = np.repeat(np.asarray(face_layer, np.int64), 3)
+    step = np.max(np.abs(V - V0), axis=1)
+    out = np.zeros(len(attachments), bool)
+    for i, at in enumerate(attachments):
+        xy = V0[(step > NECK_STILL * sheets[at.upper].h) & (owner == at.upper), :2]
+        if len(xy):
+            out[i] = not shapely.contains_xy(sheets[at.lower].polygon(), xy[:, 0], xy[:, 1]).all()
     return out
 
 

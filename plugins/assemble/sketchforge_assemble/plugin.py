@@ -14,8 +14,9 @@ CACHE = AssemblyCache()
 #: Bumped when the same layers and parameters would assemble differently.
 #: 2: issue 34 (sides, stretches, free parts, full thickness, thin parts refined); 3: finer parts
 #: faired by edge length; 4: thin hosts faired over their glued face, a try that squashes a limb not kept;
-#: 5: a limb's hold let go at the stitching's creases
-VERSION = "5"
+#: 5: a limb's hold let go at the stitching's creases; 6: a limb the fairing thinned under 0.8 of
+#: mid-limb faired again with its hold starting inside its host's outline (the neck try)
+VERSION = "6"
 
 
 def assemble_layers(layers, params):

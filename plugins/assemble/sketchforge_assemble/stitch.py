@@ -95,6 +95,9 @@ def build_mesh(sheets: list[Sheet], attachments: list[Attachment], delta: list[n
         A part's front and back vertex at each point of its bridged rim (outline and holes,
         not a glued junction): one point of the smooth surface the mesh stands for, kept the
         margin apart (see :attr:`sketchforge.geometry.mesh.AssembledMesh.rim_pairs`).
+    twins : (t, 2) int64, (t,) int64
+        Every sheet vertex's front and back vertex (same xy as stitched; not where they are
+        one vertex, at a junction's ends), and the sheet's index: where a part is thick.
     """
     sizes = np.array([s.n for s in sheets])
     base = np.r_[0, np.cumsum(2 * sizes)]
@@ -212,8 +215,13 @@ def build_mesh(sheets: list[Sheet], attachments: list[Attachment], delta: list[n
     new = np.cumsum(used) - 1
     seam = np.unique(remap[np.concatenate(seam)]) if seam else np.zeros(0, np.int64)
     ends = np.unique([front[i][sheets[i].junction[e]] for i in sorted(attached) for e in (0, -1)]).astype(np.int64)
-    # a junction's end is one vertex of front and back already (remap): no pair there
-    pairs = remap[np.vstack(rims)] if rims else np.zeros((0, 2), np.int64)
-    pairs = pairs[(pairs[:, 0] != pairs[:, 1]) & used[pairs].all(axis=1)]
+    def kept(pairs):  # a junction's end is one vertex of front and back already (remap)
+        pairs = remap[pairs]
+        ok = (pairs[:, 0] != pairs[:, 1]) & used[pairs].all(axis=1)
+        return new[pairs[ok]].astype(np.int64), ok
+
+    rim_pairs, _ = kept(np.vstack(rims) if rims else np.zeros((0, 2), np.int64))
+    twins, ok = kept(np.vstack([np.c_[front[i], back[i]] for i in range(len(sheets))]))
+    twin_sheet = np.repeat(np.arange(len(sheets)), sizes)[ok]
     return (V[used], new[F].astype(np.int64), face_layer.astype(np.int64), face_kind, new[seam].astype(np.int64),
-            new[ends].astype(np.int64), new[pairs].astype(np.int64))
+            new[ends].astype(np.int64), rim_pairs, (twins, twin_sheet))
