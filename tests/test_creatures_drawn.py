@@ -273,7 +273,6 @@ def _rim_steps(mesh, rims, size=400):
     from scipy.ndimage import binary_erosion
 
     from sketchforge.geometry.gbuffer import View, front_surface
-    from sketchforge.geometry.normals import rim_pair_weights
 
     t = np.radians(90.0)
     R = np.array([[np.cos(t), 0.0, np.sin(t)], [0.0, 1.0, 0.0], [-np.sin(t), 0.0, np.cos(t)]])
@@ -281,8 +280,7 @@ def _rim_steps(mesh, rims, size=400):
     side = dataclasses.replace(mesh, V=V)
     s = front_surface([side], View.framing([side], size, size, 0.05))
     H, W = s.mask.shape
-    pairs = rims[rim_pair_weights(mesh.V, mesh.F, rims) == 1.0]
-    pix = np.floor(s.view.to_pixels(0.5 * (V[pairs[:, 0]] + V[pairs[:, 1]]))).astype(int)
+    pix = np.floor(s.view.to_pixels(0.5 * (V[rims[:, 0]] + V[rims[:, 1]]))).astype(int)
     near = np.zeros((H, W), bool)
     for dx in (-1, 0, 1):
         for dy in (-1, 0, 1):
@@ -298,21 +296,61 @@ def _rim_steps(mesh, rims, size=400):
     return np.concatenate(steps)
 
 
-def test_a_parts_outline_seen_edge_on_shades_without_a_line():
-    """Issue 34, point 5: seen from the side, the README's bird showed a straight line through
-    its body and along its legs: the front's and the back's rim normals, tilted by ±15° towards
-    their own side, met within a pixel. The assembled model names its rim pairs and the display
-    shares their normals (the headless renderer here, the 3D view and glTF alike)."""
-    import dataclasses
+def _rim_corners(V, F, pairs):
+    """(r,) float64: for each rim pair (front, back vertex), the sharpest corner of the part's
+    profile across its rim, in degrees: the profile runs from the mean of the front vertex's
+    neighbours off the rim, through the two rim vertices, to the back's; its turns at the two
+    rim vertices count as one corner where they lie under 0.3 of the first step apart."""
+    rim = np.zeros(len(V), bool)
+    rim[pairs.ravel()] = True
+    E = np.unique(np.sort(np.vstack([F[:, [0, 1]], F[:, [1, 2]], F[:, [2, 0]]]), axis=1), axis=0)
+    E = np.vstack([E, E[:, ::-1]])
+    E = E[~rim[E[:, 1]]]
+    total = np.zeros((len(V), 3))
+    np.add.at(total, E[:, 0], V[E[:, 1]])
+    count = np.bincount(E[:, 0], minlength=len(V))
 
+    def turn(a, c, e):
+        u, v = c - a, e - c
+        return np.degrees(np.arccos(np.clip(u @ v / np.linalg.norm(u) / np.linalg.norm(v), -1.0, 1.0)))
+
+    out = []
+    for f, b in pairs:
+        if not count[f] or not count[b]:
+            continue
+        q1, q4 = total[f] / count[f], total[b] / count[b]
+        mid = 0.5 * (V[f] + V[b])
+        o = mid[:2] - 0.5 * (q1[:2] + q4[:2])
+        o /= np.linalg.norm(o)
+        P = [np.array([(p[:2] - mid[:2]) @ o, p[2]]) for p in (q1, V[f], V[b], q4)]
+        t2, t3 = turn(*P[:3]), turn(*P[1:])
+        out.append(t2 + t3 if np.linalg.norm(P[2] - P[1]) < 0.3 * np.linalg.norm(P[1] - P[0]) else max(t2, t3))
+    return np.array(out)
+
+
+def test_a_parts_outline_seen_edge_on_is_round_and_shades_without_a_line(monkeypatch):
+    """Issue 34, point 5: seen from the side, the README's bird showed a line through its body
+    and along its legs (the front's and the back's rim normals, tilted by ±15° towards their
+    own side, met within a pixel), and its outline a point there (the inflated profile's whole
+    turn near the rim fell on one vertex: a corner of 26-33° on every limb). Now the rim is
+    lifted (sheet.rim_lift) and the display shares the rim pairs' normals."""
+    import sketchforge_assemble.sheet as sheet
+    from sketchforge.geometry.mesh import AssembledMesh
     from sketchforge_assemble.plugin import assemble_layers
 
-    layers, _, _ = meshes_from_journal(drawn_creature(1))
+    layers, meshes, closed = meshes_from_journal(drawn_creature(1))
     model = assemble_layers(layers, {})
-    assert len(model.rim_pairs) > 500
-    shared = _rim_steps(model, model.rim_pairs)
-    apart = _rim_steps(dataclasses.replace(model, rim_pairs=np.zeros((0, 2), np.int64)), model.rim_pairs)
-    assert len(shared) > 1000
+    assert len(model.rim_pairs) > 500 and np.mean(model.rim_weights == 1.0) > 0.3
+    kept = model.rim_pairs[model.rim_weights == 1.0]  # the rims the fairing left as stitched
+    monkeypatch.setattr(sheet, "RIM_LIFT", 0.0)  # the rim as it was: the margin only, unshared
+    before = assemble_detailed(meshes, closed, names=[l.name for l in layers])
+    old = AssembledMesh(before.mesh.V, before.mesh.F)
+    old_kept = before.rim_pairs[np.isin(before.rim_pairs[:, 0], kept[:, 0])]
+    shared, apart = _rim_steps(model, kept), _rim_steps(old, old_kept)
+    assert len(shared) > 1000 and len(apart) > 1000
     assert np.percentile(apart, 90) > 15.0 and np.mean(apart > 10.0) > 0.1  # the line, measured
     assert np.percentile(shared, 90) < 8.0 and np.mean(shared > 10.0) < 0.03, (
         np.percentile(shared, 90), np.mean(shared > 10.0))
+    # the outline's corner across the rim: 26-33° on the limbs before, a third less now
+    now, then = _rim_corners(model.V, model.F, kept), _rim_corners(old.V, old.F, old_kept)
+    assert np.median(then) > 20.0 and np.median(now) < 0.75 * np.median(then), (np.median(now), np.median(then))

@@ -244,53 +244,47 @@ def test_faces_outward_only_for_a_closed_surface_wound_outwards():
 
 
 def test_a_rim_pair_shares_its_normal_and_the_lens_is_round_at_its_rim():
-    """Issue 34: an assembled part's front and back rim vertices are kept a small margin apart;
-    their own normals tilt by ±15-20° towards their own side, so seen edge-on the shading
-    jumped across the rim within a pixel (a line along the outline). Shared, they are one
-    point of the surface: horizontal, pointing out of the outline."""
+    """Issue 34: an assembled part's front and back rim vertices are kept apart; their own
+    normals tilt by ±15-20° towards their own side, so seen edge-on the shading jumped across
+    the rim (a line along the outline). Shared, they stand for one round rim: horizontal,
+    pointing out of the outline; weight 0 leaves every normal as it was."""
     from rim_lens import lens
 
-    from sketchforge.geometry.normals import faces_outward, rim_pair_weights
+    from sketchforge.geometry.normals import faces_outward
 
     V, F, P = lens(0.01)
     assert faces_outward(V, F)
-    np.testing.assert_array_equal(rim_pair_weights(V, F, P), 1.0)
     own = vertex_normals(V, F)
     assert np.all(own[P[:, 0], 2] > 0.25) and np.all(own[P[:, 1], 2] < -0.25)  # the jump
-    N = vertex_normals(V, F, P)
+    N = vertex_normals(V, F, P)  # weights 1 by default
+    np.testing.assert_array_equal(N, vertex_normals(V, F, P, np.ones(len(P))))
     np.testing.assert_allclose(N[P[:, 0]], N[P[:, 1]], atol=1e-12)
     assert np.max(np.abs(N[P[:, 0], 2])) < 1e-12
     out = V[P[:, 0], :2] / np.linalg.norm(V[P[:, 0], :2], axis=1, keepdims=True)
     assert np.degrees(np.arccos(np.min(np.einsum("ij,ij->i", N[P[:, 0], :2], out)))) < 10.0
-    # every vertex off the rim keeps its own normal, bit for bit
+    # every vertex off the rim keeps its own normal, bit for bit; weight 0: every vertex
     off = np.setdiff1d(np.arange(len(V)), P.ravel())
     np.testing.assert_array_equal(N[off], own[off])
+    np.testing.assert_array_equal(vertex_normals(V, F, P, np.zeros(len(P))), own)
+    with pytest.raises(ValueError, match="rim weights"):
+        vertex_normals(V, F, P, np.ones(len(P) - 1))
 
 
-def test_rim_pairs_let_go_continuously_as_the_rim_opens_into_a_band():
-    """Where the assembly's fairing has opened a rim into a band of ordinary triangles, the
-    two vertices are no longer one point and keep their own normals; in between the share
-    fades without a step (decisions continuous in the input)."""
+def test_rim_normals_follow_the_pairs_weight_continuously():
+    """The share fades with the pair's weight without a step (decisions continuous in the
+    input): the rim normal turns monotonically from its own to the shared one."""
     from rim_lens import lens
 
-    from sketchforge.geometry.normals import RIM_SHARE, rim_pair_weights
-
-    seps = np.linspace(0.0, 0.12, 61)
-    w = np.array([rim_pair_weights(*lens(s))[0] for s in seps])
-    assert w[0] == 1.0 and w[-1] == 0.0
-    assert np.all(np.diff(w) <= 0.0) and np.max(np.abs(np.diff(w))) < 0.12
-    V, F, P = lens(0.12)
-    np.testing.assert_array_equal(vertex_normals(V, F, P), vertex_normals(V, F))
-    # the weight's ends, in edge lengths around the pair
-    assert RIM_SHARE[0] < RIM_SHARE[1] <= 1.0
-    # and the normals follow the weight continuously
-    prev = None
-    for s in seps:
-        V, F, P = lens(s)
-        N = vertex_normals(V, F, P)[P[0, 0]]
+    V, F, P = lens(0.01)
+    own = vertex_normals(V, F)[P[0, 0]]
+    prev, turned = None, []
+    for w in np.linspace(0.0, 1.0, 41):
+        N = vertex_normals(V, F, P, np.full(len(P), w))[P[0, 0]]
+        turned.append(np.degrees(np.arccos(min(1.0, float(N @ own)))))
         if prev is not None:
-            assert np.degrees(np.arccos(min(1.0, float(N @ prev)))) < 3.0
+            assert np.degrees(np.arccos(min(1.0, float(N @ prev)))) < 1.5
         prev = N
+    assert turned[0] == 0.0 and np.all(np.diff(turned) >= 0) and turned[-1] > 15.0
 
 
 def test_the_3d_view_s_shading_vertices_share_the_rim_as_the_headless_normals_do():
@@ -300,13 +294,7 @@ def test_the_3d_view_s_shading_vertices_share_the_rim_as_the_headless_normals_do
     weights differ along the rim."""
     from rim_lens import lens
 
-    from sketchforge.geometry.normals import (
-        corner_normals_grouped,
-        crease_groups,
-        group_normals,
-        rim_pair_weights,
-        shading_vertices,
-    )
+    from sketchforge.geometry.normals import corner_normals_grouped, crease_groups, group_normals, shading_vertices
 
     V, F, P = lens(0.01)
     groups = crease_groups(V, F, 50.0, P)
@@ -315,17 +303,16 @@ def test_the_3d_view_s_shading_vertices_share_the_rim_as_the_headless_normals_do
     rim = np.isin(src, P.ravel())
     np.testing.assert_allclose(N[rim], vertex_normals(V, F, P)[src[rim]], atol=1e-12)
     assert np.bincount(src[rim]).max() == 1  # one shading vertex per rim vertex
-    # rungs from shared to let go around the rim (x from -1 to 1: 0 to 0.1 apart)
-    V, F, P = lens(0.05 * (1.0 + hemisphere(1.0, 0.1).V[:, 0]))
-    w = rim_pair_weights(V, F, P)
+    # weights from shared to let go around the rim (x from -1 to 1)
+    w = np.clip(1.5 * (0.5 - 0.5 * V[P[:, 0], 0]) - 0.25, 0.0, 1.0)
     assert w.min() == 0.0 and w.max() == 1.0 and np.sum((w > 0) & (w < 1)) >= 3
     for crease in (50.0, 15.0):  # at 15° a pair's corners smooth over faces by other weights
-        groups = crease_groups(V, F, crease, P)
+        groups = crease_groups(V, F, crease, P, w)
         src, tris, rows = shading_vertices(F, groups)
         np.testing.assert_array_equal(src[tris], F)
         np.testing.assert_array_equal(group_normals(V, F, rows)[tris], corner_normals_grouped(V, F, groups))
         posed = V + np.random.default_rng(34).normal(0.0, 0.003, V.shape)
         np.testing.assert_array_equal(group_normals(posed, F, rows)[tris], corner_normals_grouped(posed, F, groups))
     # with the crease test off, the groups are the headless normals exactly
-    src, tris, rows = shading_vertices(F, crease_groups(V, F, 180.0, P))
-    np.testing.assert_allclose(group_normals(V, F, rows)[tris], vertex_normals(V, F, P)[F], atol=1e-12)
+    src, tris, rows = shading_vertices(F, crease_groups(V, F, 180.0, P, w))
+    np.testing.assert_allclose(group_normals(V, F, rows)[tris], vertex_normals(V, F, P, w)[F], atol=1e-12)

@@ -223,14 +223,14 @@ def layer_normals(mesh) -> np.ndarray:
     :func:`slopes_from_heights` for a layer (an open surface; vertex by vertex, so wherever
     z < 0 they are the area-weighted ones, as the sculpt solver sees them), the area-weighted
     vertex normals for a closed mesh (an assembled model, a posed one), shared across the
-    rim pairs it carries (:attr:`sketchforge.geometry.mesh.AssembledMesh.rim_pairs`).
+    rim pairs it carries by their weights (:attr:`sketchforge.geometry.mesh.AssembledMesh.rim_pairs`).
 
     The gradient operators are kept per planar mesh (an edit changes only heights)."""
     V = np.asarray(mesh.V, dtype=np.float64)
     F = np.asarray(mesh.F, dtype=np.int64)
     z = V[:, 2]
     if len(mesh.boundary) == 0 or len(F) == 0:
-        return vertex_normals(V, F, getattr(mesh, "rim_pairs", None))
+        return vertex_normals(V, F, getattr(mesh, "rim_pairs", None), getattr(mesh, "rim_weights", None))
     p, q = slopes_from_heights(*_operators(V[:, :2], F), z)
     return normals_from_slopes(p, q)
 

@@ -138,16 +138,20 @@ class AssembledMesh(Mesh):
         spans two layers or touches another part's junction on the same face).
     rim_pairs : (r, 2) int64
         Pairs of vertices that stand for one point of the smooth surface: a part's front and
-        back vertex at a point of its rim, which the assembly keeps a small margin apart
-        (joined by a thin strip of triangles). Renderers and exporters share their normals
+        back vertex at a point of its rim, which the assembly keeps apart (joined by a band
+        of triangles). Renderers and exporters share their normals by ``rim_weights``
         (:func:`sketchforge.geometry.normals.vertex_normals`); empty when the assembler has
         none (its rims are single vertices, or it does not say).
+    rim_weights : (r,) float64 in [0, 1]
+        How much each pair shares (1 by default): 1 where the band is the rim as stitched, 0
+        where the assembly reshaped it into a surface of its own (a faired junction's rings).
     """
 
     free: tuple = ()
     warnings: tuple = ()
     notes: tuple = ()
     rim_pairs: np.ndarray = field(default_factory=lambda: np.zeros((0, 2), np.int64))
+    rim_weights: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         super().__post_init__()
@@ -155,3 +159,8 @@ class AssembledMesh(Mesh):
         object.__setattr__(self, "rim_pairs", pairs)
         if pairs.size and (pairs.min() < 0 or pairs.max() >= len(self.V)):
             raise ValueError(f"AssembledMesh.rim_pairs refers to a vertex outside 0..{len(self.V) - 1}")
+        w = np.ones(len(pairs)) if self.rim_weights is None else self.rim_weights
+        w = frozen_array(np.asarray(w, dtype=np.float64).reshape(-1), np.float64)
+        if len(w) != len(pairs) or not np.all((w >= 0.0) & (w <= 1.0)):
+            raise ValueError(f"AssembledMesh.rim_weights needs one weight in [0, 1] per rim pair ({len(pairs)})")
+        object.__setattr__(self, "rim_weights", w)

@@ -107,53 +107,17 @@ def faces_outward(V: np.ndarray, F: np.ndarray) -> bool:
     return bool(np.all(volume[np.unique(piece[F[:, 0]])] > 0.0))
 
 
-#: A rim pair (:attr:`sketchforge.geometry.mesh.AssembledMesh.rim_pairs`) shares its normals
-#: fully while its two vertices are at most the first of these apart, and not at all from the
-#: second on, in edge lengths around them (:func:`rim_pair_weights`). Measured on 12 seeded
-#: creatures (7 736 pairs): as stitched (the margin apart) 0.03-0.2; where the junctions'
-#: fairing has opened the rim into a band of ordinary triangles 0.6-2, whose own normals are
-#: right; 151 in between, at the edge of the faired zones, where the weight fades.
-RIM_SHARE = (0.25, 0.5)
+def _pair_weights(pairs: np.ndarray, weights) -> np.ndarray:
+    """(r,) float64 in [0, 1]: ``weights`` for the (r, 2) ``pairs`` (all 1 when None)."""
+    if weights is None:
+        return np.ones(len(pairs))
+    w = np.asarray(weights, dtype=np.float64).reshape(-1)
+    if len(w) != len(pairs):
+        raise ValueError(f"{len(w)} rim weights for {len(pairs)} rim pairs")
+    return np.clip(w, 0.0, 1.0)
 
 
-def rim_pair_weights(V: np.ndarray, F: np.ndarray, pairs, cross: np.ndarray | None = None) -> np.ndarray:
-    """How much each rim pair's two vertices share their normals, from 1 (one point of the
-    surface, the margin apart) to 0 (a band of its own): a smoothstep of the pair's distance
-    over the edge length around it (the side of the equilateral triangle with the mean area
-    of the faces at either vertex), from :data:`RIM_SHARE`'s first value to its second.
-    Continuous in V, so a pose or a round-off moves a normal by as little.
-
-    Parameters
-    ----------
-    V : (n, 3) float64
-    F : (m, 3) int64
-    pairs : (r, 2) int64
-    cross : (m, 3) float64, optional
-        ``_face_cross(V, F)`` when the caller has it.
-
-    Returns
-    -------
-    (r,) float64 in [0, 1]
-    """
-    pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
-    if len(pairs) == 0:
-        return np.zeros(0)
-    V = np.asarray(V, dtype=np.float64)
-    F = np.asarray(F, dtype=np.int64)
-    twice_area = np.linalg.norm(_face_cross(V, F) if cross is None else cross, axis=1)
-    corners = F.ravel()
-    total = np.bincount(corners, weights=np.repeat(twice_area, 3), minlength=len(V))
-    count = np.bincount(corners, minlength=len(V)).astype(np.float64)
-    a, b = pairs[:, 0], pairs[:, 1]
-    mean = (total[a] + total[b]) / np.maximum(count[a] + count[b], 1.0)
-    edge = np.sqrt(mean / (np.sqrt(3.0) / 2.0))  # |cross| of an equilateral triangle: (√3/2)·side²
-    dist = np.linalg.norm(V[a] - V[b], axis=1)
-    lo, hi = RIM_SHARE
-    t = np.clip((hi - dist / np.maximum(edge, 1e-300)) / (hi - lo), 0.0, 1.0)
-    return t * t * (3.0 - 2.0 * t)
-
-
-def vertex_normals(V: np.ndarray, F: np.ndarray, rim_pairs=None) -> np.ndarray:
+def vertex_normals(V: np.ndarray, F: np.ndarray, rim_pairs=None, rim_weights=None) -> np.ndarray:
     """Area-weighted unit vertex normals.
 
     Each vertex gets the sum of its faces' normals weighted by face area (the sum of the
@@ -161,16 +125,17 @@ def vertex_normals(V: np.ndarray, F: np.ndarray, rim_pairs=None) -> np.ndarray:
     it (thesis 4.5), which are never vertical on a height field, so n_z > 0 there.
 
     With ``rim_pairs`` (an assembled model's, :attr:`sketchforge.geometry.mesh.AssembledMesh.rim_pairs`)
-    each vertex of a pair adds its twin's sum, weighted by :func:`rim_pair_weights`: the two
-    vertices a part's front and back keep apart at its rim are one point of the surface, whose
-    normal lies in between (issue 34: seen edge-on, a part's outline showed as a line where the
-    front's tilted rim normals met the back's within a pixel).
+    each vertex of a pair adds its twin's sum times the pair's weight (``rim_weights``, default
+    1): the two vertices a part's front and back keep apart at its rim stand for one rounded
+    rim, whose normal lies in between (issue 34: seen edge-on, a part's outline showed as a line
+    where the front's tilted rim normals met the back's).
 
     Parameters
     ----------
     V : (n, 3) float64
     F : (m, 3) int64
     rim_pairs : (r, 2) int64, optional
+    rim_weights : (r,) float64 in [0, 1], optional
 
     Returns
     -------
@@ -184,7 +149,7 @@ def vertex_normals(V: np.ndarray, F: np.ndarray, rim_pairs=None) -> np.ndarray:
         np.add.at(acc, F[:, k], cross)
     if rim_pairs is not None and len(rim_pairs):
         pairs = np.asarray(rim_pairs, dtype=np.int64).reshape(-1, 2)
-        w = rim_pair_weights(V, F, pairs, cross)[:, None]
+        w = _pair_weights(pairs, rim_weights)[:, None]
         a, b = pairs[:, 0], pairs[:, 1]
         own_a, own_b = acc[a], acc[b]
         np.add.at(acc, a, w * own_b)
@@ -263,16 +228,16 @@ def corner_normals(V: np.ndarray, F: np.ndarray, crease_deg: float = 50.0) -> np
     return corner_normals_grouped(V, F, crease_groups(V, F, crease_deg))
 
 
-def crease_groups(V: np.ndarray, F: np.ndarray, crease_deg: float = 50.0, rim_pairs=None):
+def crease_groups(V: np.ndarray, F: np.ndarray, crease_deg: float = 50.0, rim_pairs=None, rim_weights=None):
     """Which faces each triangle corner smooths over (the expensive, pose-independent half of
     :func:`corner_normals`): the faces around the corner's vertex whose normals are within
     ``crease_deg`` of the corner's own face. A near-rigid deformation (a posed model) keeps
     them, so its normals cost only :func:`corner_normals_grouped` (one sparse product).
 
-    With ``rim_pairs`` (as for :func:`vertex_normals`) a corner at a vertex of a pair also
-    smooths over its twin's faces, and over every face of its own, each with the pair's
-    weight (:func:`rim_pair_weights`, at these positions): a part's rim is no crease, and at
-    weight 1 both vertices' corners shade as one point, whatever face they belong to.
+    With ``rim_pairs`` and ``rim_weights`` (as for :func:`vertex_normals`) a corner at a vertex
+    of a pair also smooths over its twin's faces, and over every face of its own, each with the
+    pair's weight: a part's rim is no crease, and at weight 1 both vertices' corners shade as
+    one point, whatever face they belong to.
 
     Returns
     -------
@@ -305,7 +270,7 @@ def crease_groups(V: np.ndarray, F: np.ndarray, crease_deg: float = 50.0, rim_pa
     rows, cols, data = c[same], nb[same], np.ones(int(same.sum()))
     if rim_pairs is not None and len(rim_pairs):
         pairs = np.asarray(rim_pairs, dtype=np.int64).reshape(-1, 2)
-        w_pair = rim_pair_weights(V, F, pairs)
+        w_pair = _pair_weights(pairs, rim_weights)
         twin = np.full(len(V), -1, np.int64)
         weight = np.zeros(len(V))
         twin[pairs[:, 0]], twin[pairs[:, 1]] = pairs[:, 1], pairs[:, 0]

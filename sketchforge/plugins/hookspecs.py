@@ -121,9 +121,9 @@ def sketchforge_assemblers():
     outward-oriented triangles, ``boundary`` and ``junction`` empty; or an ``AssembledMesh``
     (a ``Mesh`` that also says which layers it could not glue, ``free``, with one sentence
     each in ``warnings``, and ``notes`` on parts glued by a stretch of their junction), which
-    the app shows over the model; its ``rim_pairs`` name the vertices that stand for one point
-    of the surface (a front and a back rim vertex kept a margin apart), whose normals the
-    display and the exporters share. One part that cannot be glued should never refuse the
+    the app shows over the model; its ``rim_pairs`` name a part's front and back rim vertices,
+    which stand for one round rim and whose normals the display and the exporters share by
+    ``rim_weights``. One part that cannot be glued should never refuse the
     whole model (issue 34): assemble it free and say so.
     """
 

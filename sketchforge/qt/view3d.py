@@ -186,10 +186,10 @@ def _mesh_item_class():
         drawing cost). Where a pose folds the surface over itself, the surface behind the
         fold shows instead of the fold's dark back."""
 
-        def __init__(self, V, F, rim_pairs=None, **kwds):
+        def __init__(self, V, F, rim_pairs=None, rim_weights=None, **kwds):
             V = np.asarray(V, dtype=np.float64)
             self._F = np.asarray(F, dtype=np.int64)
-            groups = crease_groups(V, self._F, CREASE_DEG, rim_pairs)  # an assembled model's rims shade round
+            groups = crease_groups(V, self._F, CREASE_DEG, rim_pairs, rim_weights)  # an assembled model's rims shade round
             self._src, tris, self._rows = shading_vertices(self._F, groups)
             super().__init__(smooth=True, computeNormals=False, **kwds)
             if faces_outward(V, self._F):
@@ -515,8 +515,8 @@ class View3D(QWidget):
         allv = []
         item_class = _mesh_item_class()
         for mesh, colour in meshes:
-            item = item_class(mesh.V, mesh.F, getattr(mesh, "rim_pairs", None), shader=shader_name(self.shading_style),
-                              color=colour, glOptions="opaque")
+            item = item_class(mesh.V, mesh.F, getattr(mesh, "rim_pairs", None), getattr(mesh, "rim_weights", None),
+                              shader=shader_name(self.shading_style), color=colour, glOptions="opaque")
             # The drawing stands upright: document (x, y, z) -> world (x, -z, y), so the grid is
             # the ground, y is up and the viewer of the drawing looks along world +y.
             item.rotate(90, 1, 0, 0)

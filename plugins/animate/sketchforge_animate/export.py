@@ -42,7 +42,8 @@ def write_animation(path, doc, progress=None) -> str:
         frames.append(P.copy())
         if progress is not None:
             progress(f + 1, count)
-    write_bytes_atomic(path, animated_glb_bytes(mesh.F, frames, rim_pairs=getattr(mesh, "rim_pairs", None)))
+    write_bytes_atomic(path, animated_glb_bytes(mesh.F, frames, rim_pairs=getattr(mesh, "rim_pairs", None),
+                                                rim_weights=getattr(mesh, "rim_weights", None)))
     secs = count / FPS
     return f"{count} frames, {secs:.2f} s at {FPS} fps, {mesh.n_vertices} vertices, {mesh.n_faces} triangles"
 

@@ -48,10 +48,12 @@ class _Blob:
         return len(self.accessors) - 1
 
 
-def animated_glb_bytes(F: np.ndarray, frames: list[np.ndarray], fps: int = FPS, rim_pairs=None) -> bytes:
+def animated_glb_bytes(F: np.ndarray, frames: list[np.ndarray], fps: int = FPS, rim_pairs=None,
+                       rim_weights=None) -> bytes:
     """F (m,3) int64 triangles shared by every frame; frames: list of (n,3) float64 vertex
-    positions (at least 1); rim_pairs (r,2) int64, an assembled model's, whose normals are
-    shared (:func:`sketchforge.plugin_api.vertex_normals`). Returns the .glb file's bytes."""
+    positions (at least 1); rim_pairs (r,2) int64 and rim_weights (r,) float64, an assembled
+    model's, whose normals are shared (:func:`sketchforge.plugin_api.vertex_normals`). Returns
+    the .glb file's bytes."""
     F = np.asarray(F, dtype=np.int64)
     base = np.asarray(frames[0], dtype=np.float64)
     n = len(base)
@@ -63,14 +65,14 @@ def animated_glb_bytes(F: np.ndarray, frames: list[np.ndarray], fps: int = FPS, 
         "SCALAR",
         ELEMENT_ARRAY_BUFFER,
     )
-    base_n = vertex_normals(base, F, rim_pairs)
+    base_n = vertex_normals(base, F, rim_pairs, rim_weights)
     pos = blob.add(base.astype("<f4"), FLOAT, "VEC3", ARRAY_BUFFER, minmax=True)
     nrm = blob.add(base_n.astype("<f4"), FLOAT, "VEC3", ARRAY_BUFFER)
     targets = []
     for P in frames[1:]:
         P = np.asarray(P, dtype=np.float64)
         dp = (P - base).astype("<f4")
-        dn = (vertex_normals(P, F, rim_pairs) - base_n).astype("<f4")
+        dn = (vertex_normals(P, F, rim_pairs, rim_weights) - base_n).astype("<f4")
         targets.append(
             {
                 "POSITION": blob.add(dp, FLOAT, "VEC3", ARRAY_BUFFER, minmax=True),

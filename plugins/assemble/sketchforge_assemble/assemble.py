@@ -58,8 +58,8 @@ from .fair import (
     wide_zone,
 )
 from .remesh import insert_chains
-from .sheet import THIN_HEIGHT_EDGES, refine_thin, sheet_from_mesh, taper
-from .stitch import build_mesh
+from .sheet import THIN_HEIGHT_EDGES, refine_thin, rim_lift, sheet_from_mesh, taper
+from .stitch import build_mesh, rim_share
 from .thickness import full_thickness
 
 #: Assembly options. ``margin``: front/back separation at the rim, in edge lengths of the
@@ -114,8 +114,11 @@ class AssemblyResult:
     face_kind : (m,) int8
         0 front face, 1 back face, 2 rim bridge.
     rim_pairs : (r, 2) int64
-        Each part's front and back vertex at a point of its rim (kept the margin apart): the
-        display shares their normals (:attr:`sketchforge.geometry.mesh.AssembledMesh.rim_pairs`).
+        Each part's front and back vertex at a point of its rim (kept apart by the margin and
+        the rim's lift): the display shares their normals
+        (:attr:`sketchforge.geometry.mesh.AssembledMesh.rim_pairs`).
+    rim_weights : (r,) float64
+        How much (:func:`.stitch.rim_share`).
     attachments : list of Attachment
         In input indices.
     components : int
@@ -147,6 +150,7 @@ class AssemblyResult:
     face_layer: np.ndarray
     face_kind: np.ndarray
     rim_pairs: np.ndarray
+    rim_weights: np.ndarray
     attachments: list
     components: int
     n_equalities: int
@@ -362,6 +366,7 @@ def _result(res: _Stages, run: _Run, sheets: list, t0: float) -> AssemblyResult:
         face_layer=keep_arr[res.face_layer],
         face_kind=res.face_kind,
         rim_pairs=res.rim_pairs,
+        rim_weights=res.rim_weights,
         attachments=[Attachment(keep[a.upper], keep[a.lower], a.side, a.keep) for a in res.attachments],
         components=res.components,
         n_equalities=res.n_equalities,
@@ -403,6 +408,7 @@ class _Stages:
     face_layer: np.ndarray
     face_kind: np.ndarray
     rim_pairs: np.ndarray
+    rim_weights: np.ndarray
     attachments: list
     components: int
     n_equalities: int
@@ -433,7 +439,8 @@ def _assemble(sheets: list, knames: list[str], p: dict, cache, freed: dict[int, 
     timings["remesh"] = time.perf_counter() - t
 
     t = time.perf_counter()
-    front_off = [s.z + p["margin"] * s.h * taper(s) for s in sheets]
+    # the margin everywhere, and the rim lifted to round a part's outline seen edge-on (sheet.rim_lift)
+    front_off = [s.z + (p["margin"] * s.h + rim_lift(s)) * taper(s) for s in sheets]
     back_off = list(front_off)
     lips = glue = springs = None
     locators: dict = {}  # per sheet face, for the fillets' springs and the depth rows alike
@@ -457,15 +464,18 @@ def _assemble(sheets: list, knames: list[str], p: dict, cache, freed: dict[int, 
 
     t = time.perf_counter()
     delta = [x[offsets[k]:offsets[k + 1]] for k in range(len(sheets))]
-    V, F, face_layer, face_kind, seam, ends, rim_pairs, twins = build_mesh(sheets, attachments, delta, front_off,
-                                                                           back_off, lips)
+    V, F, face_layer, face_kind, seam, ends, rims, twins = build_mesh(sheets, attachments, delta, front_off, back_off,
+                                                                      lips)
     timings["stitch"] = time.perf_counter() - t
+    V_stitched = V
     faired = None
     sinfo["fair_zone"] = sinfo["fair_rings"] = None
     if lips is not None and p["fair"] > 0:
         V, faired, sinfo["fair_zone"], sinfo["fair_rings"] = _fair(V, F, face_layer, face_kind, seam, ends, sheets,
                                                                    in_att, p, cache, timings, attachments, twins)
-    return _Stages(V, F, face_layer, face_kind, rim_pairs, attachments, _components(len(sheets), attachments),
+    rim_pairs = rims[0]
+    rim_weights = rim_share(V_stitched, V, rim_pairs, np.array([s.h for s in sheets])[rims[1]])
+    return _Stages(V, F, face_layer, face_kind, rim_pairs, rim_weights, attachments, _components(len(sheets), attachments),
                    int(len(beq)), int(len(bin_)), viol, glue_error, warnings, notes, timings, sinfo, faired)
 
 

@@ -15,7 +15,8 @@ CACHE = AssemblyCache()
 #: 2: issue 34 (sides, stretches, free parts, full thickness, thin parts refined); 3: finer parts
 #: faired by edge length; 4: thin hosts faired over their glued face, a try that squashes a limb not kept;
 #: 5: a limb's hold let go at the stitching's creases; 6: a limb the fairing thinned under 0.8 of
-#: mid-limb faired again with its hold starting inside its host's outline (the neck try)
+#: mid-limb faired again with its hold starting inside its host's outline (the neck try), and
+#: every part's rim lifted to a fifth of its first ring's height (sheet.rim_lift)
 VERSION = "6"
 
 
@@ -33,7 +34,8 @@ def assemble_layers(layers, params):
     # what the person should know: the parts shown free and why, the parts glued by a
     # stretch of their junction only (issue 34)
     return AssembledMesh(result.mesh.V, result.mesh.F, free=tuple(layers[i].id for i in result.free + result.left_out),
-                         warnings=tuple(result.warnings), notes=tuple(result.notes), rim_pairs=result.rim_pairs)
+                         warnings=tuple(result.warnings), notes=tuple(result.notes), rim_pairs=result.rim_pairs,
+                         rim_weights=result.rim_weights)
 
 
 #: The parameters as the app's form shows them: the ranges and options ``_params`` checks

@@ -91,10 +91,10 @@ def build_mesh(sheets: list[Sheet], attachments: list[Attachment], delta: list[n
     ends : (e,) int64
         The two ends of every glued junction, where the part's front and back faces meet the
         slit's end (:func:`.fair.seam_zone` fairs more rings around them).
-    rim_pairs : (r, 2) int64
+    rim_pairs : (r, 2) int64, (r,) int64
         A part's front and back vertex at each point of its bridged rim (outline and holes,
-        not a glued junction): one point of the smooth surface the mesh stands for, kept the
-        margin apart (see :attr:`sketchforge.geometry.mesh.AssembledMesh.rim_pairs`).
+        not a glued junction), kept apart by the margin and the rim's lift (see
+        :attr:`sketchforge.geometry.mesh.AssembledMesh.rim_pairs`), and the sheet's index.
     twins : (t, 2) int64, (t,) int64
         Every sheet vertex's front and back vertex (same xy as stitched; not where they are
         one vertex, at a junction's ends), and the sheet's index: where a part is thick.
@@ -170,7 +170,7 @@ def build_mesh(sheets: list[Sheet], attachments: list[Attachment], delta: list[n
 
     # Rim bridges along the outline, except along a glued junction.
     bridges = []
-    rims = []  # (k, 2) front and back vertex of each bridged rim point
+    rims, rim_of = [], []  # (k, 2) front and back vertex of each bridged rim point, its sheet
     for i, s in enumerate(sheets):
         b = s.boundary
         a_, b_ = b, np.roll(b, -1)
@@ -189,6 +189,7 @@ def build_mesh(sheets: list[Sheet], attachments: list[Attachment], delta: list[n
         af, bf, ab, bb = front[i][a_], front[i][b_], back[i][a_], back[i][b_]
         rim = np.unique(np.r_[a_, b_])
         rims.append(np.c_[front[i][rim], back[i][rim]])
+        rim_of.append(np.full(len(rim), i))
         bridges.append(np.c_[bf, af, ab])
         bridges.append(np.c_[bf, ab, bb])
 
@@ -220,8 +221,34 @@ def build_mesh(sheets: list[Sheet], attachments: list[Attachment], delta: list[n
         ok = (pairs[:, 0] != pairs[:, 1]) & used[pairs].all(axis=1)
         return new[pairs[ok]].astype(np.int64), ok
 
-    rim_pairs, _ = kept(np.vstack(rims) if rims else np.zeros((0, 2), np.int64))
+    rim_pairs, ok = kept(np.vstack(rims) if rims else np.zeros((0, 2), np.int64))
+    rim_sheet = np.concatenate(rim_of)[ok] if rims else np.zeros(0, np.int64)
     twins, ok = kept(np.vstack([np.c_[front[i], back[i]] for i in range(len(sheets))]))
     twin_sheet = np.repeat(np.arange(len(sheets)), sizes)[ok]
     return (V[used], new[F].astype(np.int64), face_layer.astype(np.int64), face_kind, new[seam].astype(np.int64),
-            new[ends].astype(np.int64), rim_pairs, (twins, twin_sheet))
+            new[ends].astype(np.int64), (rim_pairs, rim_sheet), (twins, twin_sheet))
+
+
+#: A rim pair shares its normals (:attr:`sketchforge.geometry.mesh.AssembledMesh.rim_weights`)
+#: fully while the assembly after the stitching (the junctions' fairing) changed the vector
+#: between its two vertices by at most the first of these, not at all from the second on, in
+#: the part's edge lengths (see :func:`rim_share`).
+RIM_KEPT = (0.05, 0.25)
+
+
+def rim_share(V0: np.ndarray, V: np.ndarray, pairs: np.ndarray, h: np.ndarray) -> np.ndarray:
+    """(r,) float64 in [0, 1]: how much each rim pair (r, 2) of the stitched V0 (n, 3) shares
+    its normals in V (n, 3), the same mesh after fairing: 1 where the rim is as stitched (a
+    band straight across the rim, standing for its round profile), 0 where the fairing has
+    reshaped it into a surface of its own (its own normals are right there), a smoothstep of
+    how far the vector across the pair moved, in edge lengths ``h`` (r,) of its part, between
+    :data:`RIM_KEPT`'s two values. A part moved as a whole (a free part reseated) keeps 1."""
+    pairs = np.asarray(pairs, np.int64).reshape(-1, 2)
+    if len(pairs) == 0:
+        return np.zeros(0)
+    across0 = V0[pairs[:, 1]] - V0[pairs[:, 0]]
+    across = V[pairs[:, 1]] - V[pairs[:, 0]]
+    moved = np.linalg.norm(across - across0, axis=1) / np.asarray(h, np.float64)
+    lo, hi = RIM_KEPT
+    t = np.clip((hi - moved) / (hi - lo), 0.0, 1.0)
+    return t * t * (3.0 - 2.0 * t)
