@@ -357,6 +357,25 @@ def test_a_shifted_limb_hold_starts_inside_the_outline_and_stays_continuous():
     assert np.all(w >= plain) and np.all(np.diff(w) >= 0) and np.max(np.diff(w)) < 0.1 * LIMB_HOLD
 
 
+def test_rim_pairs_share_where_the_rim_is_as_stitched_and_let_go_where_faired():
+    # stitch.rim_share (issue 34): 1 for a rim pair as stitched, or moved whole (a free part
+    # reseated); 0 once the fairing changed the vector across it by RIM_KEPT[1] edge lengths;
+    # monotone and without a step in between (a decision continuous in the input)
+    from sketchforge_assemble.stitch import RIM_KEPT, rim_share
+
+    V0 = np.array([[0.0, 0.0, 0.1], [0.0, 0.0, -0.1]])
+    pairs, h = np.array([[0, 1]]), np.array([0.05])
+    assert rim_share(V0, V0, pairs, h)[0] == 1.0
+    assert rim_share(V0, V0 + [0.3, -0.2, 0.5], pairs, h)[0] == 1.0  # moved whole
+    w = []
+    for d in np.linspace(0.0, 2.0 * RIM_KEPT[1], 81):
+        V = V0.copy()
+        V[0, 2] += d * h[0]
+        w.append(rim_share(V0, V, pairs, h)[0])
+    w = np.array(w)
+    assert w[0] == 1.0 and w[-1] == 0.0 and np.all(np.diff(w) <= 0) and np.max(-np.diff(w)) < 0.1
+
+
 def test_outline_distance_measures_past_the_outline_as_shapely_does_within_its_bound():
     # fair.outline_distance (the neck measure's, 6x faster than shapely.distance): never less
     # than the true distance, and at most spacing²/(8d) (spacing/2 at the outline) more, on

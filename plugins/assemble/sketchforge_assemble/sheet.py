@@ -226,8 +226,9 @@ RIM_LIFT = 0.2
 def rim_lift(sheet: Sheet) -> np.ndarray:
     """(n,) float64 >= 0: how far each vertex of ``sheet`` is lifted off its plane on both faces
     for its rim (:data:`RIM_LIFT` times the mean height of a rim vertex's neighbours off the
-    rim, or of its neighbours where all of them are on it), 0 off the rim and on the junction's
-    inner vertices (glued, not bridged); apply :func:`taper` on top, as for the margin."""
+    rim; at an ear's tip, with every neighbour on the rim, the highest of them), 0 off the rim
+    and on the junction's inner vertices (glued, not bridged); apply :func:`taper` on top, as
+    for the margin."""
     n = sheet.n
     rim = np.zeros(n, bool)
     rim[sheet.boundary] = True
@@ -241,7 +242,6 @@ def rim_lift(sheet: Sheet) -> np.ndarray:
     inner = ~rim[E[:, 1]]
     total = np.bincount(E[inner, 0], weights=sheet.z[E[inner, 1]], minlength=n)
     count = np.bincount(E[inner, 0], minlength=n)
-    # an ear's tip (every neighbour on the rim): the highest of them
     top = np.zeros(n)
     np.maximum.at(top, E[:, 0], sheet.z[E[:, 1]])
     ring = np.where(count > 0, total / np.maximum(count, 1), top)
