@@ -137,9 +137,9 @@ class AssembledMesh(Mesh):
         One sentence per part glued by a stretch of its junction only (it runs off its host,
         spans two layers or touches another part's junction on the same face).
     rim_pairs : (r, 2) int64
-        Pairs of vertices that stand for one point of the smooth surface: a part's front and
-        back vertex at a point of its rim, which the assembly keeps apart (joined by a band
-        of triangles). Renderers and exporters share their normals by ``rim_weights``
+        A part's front and back vertex at each point of its rim, which the assembly keeps
+        apart (joined by a band of triangles across the rim) and which stand for one round
+        rim. Renderers and exporters share their normals by ``rim_weights``
         (:func:`sketchforge.geometry.normals.vertex_normals`); empty when the assembler has
         none (its rims are single vertices, or it does not say).
     rim_weights : (r,) float64 in [0, 1]

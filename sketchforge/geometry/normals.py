@@ -330,9 +330,10 @@ def shading_vertices(F: np.ndarray, groups) -> tuple[np.ndarray, np.ndarray, obj
     mesh of about as many vertices as the mesh has, instead of three per triangle.
 
     Two corners merge when they lie on the same vertex and their rows of ``groups`` hold the
-    same faces (with the same weights, where there are any); their normals (:func:`group_normals` of those rows) are then the same sums in
-    the same order, so the merged mesh shades bit for bit as the corners did. Pose-independent:
-    computed once per model, reused for every posed frame.
+    same faces (with the same weights, where there are any); their normals
+    (:func:`group_normals` of those rows) are then the same sums in the same order, so the
+    merged mesh shades bit for bit as the corners did. Pose-independent: computed once per
+    model, reused for every posed frame.
 
     Parameters
     ----------

@@ -62,10 +62,10 @@ from .sheet import THIN_HEIGHT_EDGES, refine_thin, rim_lift, sheet_from_mesh, ta
 from .stitch import build_mesh, rim_share
 from .thickness import full_thickness
 
-#: Assembly options. ``margin``: front/back separation at the rim, in edge lengths of the
-#: layer (thesis 4.7's "small margin"); ``gap``: clearance between overlapping layers, in
-#: median edge lengths; ``reg``: pull of the parts towards the drawing plane (relative, see
-#: :mod:`.depth`); ``stiffness``: how much stiffer a layer with parts glued to it is than
+#: Assembly options. ``margin``: front/back separation of every part, in edge lengths of the
+#: layer (thesis 4.7's "small margin"; the rim is lifted further, :func:`.sheet.rim_lift`);
+#: ``gap``: clearance between overlapping layers, in median edge lengths; ``reg``: pull of the
+#: parts towards the drawing plane (relative, see :mod:`.depth`); ``stiffness``: how much stiffer a layer with parts glued to it is than
 #: the parts (see :func:`.depth.build_problem`); ``solver``: "osqp" (a dual active set finishes
 #: if a row is left violated) or "active_set" (the active set alone, see
 #: :func:`.depth.solve_depth`); ``on_bad_junction``: "raise" or "free"; ``fillet``: width, in edge

@@ -54,7 +54,7 @@ FORM = {
 HELP = {
     "fillet": "Width of the blended junction, in edge lengths of the part (0: a plain fold)",
     "fair": "Rings of edges smoothed around the ends of a blended junction",
-    "margin": "Front/back separation at the rim, in edge lengths",
+    "margin": "Front/back separation of every part, in edge lengths (the rim is lifted further to round it)",
     "gap": "Clearance between overlapping layers, in edge lengths",
     "reg": "Pull of the parts towards the drawing plane (relative)",
     "stiffness": "How much stiffer a layer with parts glued to it is than the parts",
